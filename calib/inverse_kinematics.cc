@@ -39,6 +39,39 @@ JointVector Clamp(const KinematicModel& model, JointVector q) {
   return q;
 }
 
+// Levenberg-Marquardt step (JtJ + lambda (1 + diag JtJ)) dq = g.
+JointVector LmStep(const Eigen::Matrix<double, kNumJoints, kNumJoints>& JtJ,
+                   const JointVector& g, double lambda) {
+  Eigen::Matrix<double, kNumJoints, kNumJoints> A = JtJ;
+  A.diagonal().array() += lambda * (1.0 + JtJ.diagonal().array());
+  return A.ldlt().solve(g);
+}
+
+// LM step that holds joints resting on a limit the step would push through, so the others
+// keep moving along the boundary instead of the whole step being clamped away.
+JointVector ActiveSetStep(const KinematicModel& model, const JointVector& q,
+                          Eigen::Matrix<double, kNumJoints, kNumJoints> JtJ, JointVector g,
+                          double lambda) {
+  JointVector dq = LmStep(JtJ, g, lambda);
+  for (int pass = 0; pass < kNumJoints; ++pass) {
+    bool changed = false;
+    for (int i = 0; i < kNumJoints; ++i) {
+      const JointLimits& l = model.links[i].limits;
+      const bool blocked = (q(i) <= l.lower && dq(i) < 0.0) || (q(i) >= l.upper && dq(i) > 0.0);
+      if (blocked && g(i) != 0.0) {
+        JtJ.row(i).setZero();
+        JtJ.col(i).setZero();
+        JtJ(i, i) = 1.0;
+        g(i) = 0.0;
+        changed = true;
+      }
+    }
+    if (!changed) break;
+    dq = LmStep(JtJ, g, lambda);
+  }
+  return dq;
+}
+
 // Levenberg-Marquardt on the weighted pose error from one start; `limits` clamps each iterate.
 Attempt Descend(const KinematicModel& model, const Transform& X_target, JointVector q,
                 const IkOptions& o, bool limits) {
@@ -63,9 +96,7 @@ Attempt Descend(const KinematicModel& model, const Transform& X_target, JointVec
     const JointVector g = J.transpose() * ew;
     bool improved = false;
     for (int tries = 0; tries < 10 && !improved; ++tries) {
-      Eigen::Matrix<double, kNumJoints, kNumJoints> A = JtJ;
-      A.diagonal().array() += lambda * (1.0 + JtJ.diagonal().array());
-      JointVector dq = A.ldlt().solve(g);
+      JointVector dq = limits ? ActiveSetStep(model, q, JtJ, g, lambda) : LmStep(JtJ, g, lambda);
       const double n = dq.cwiseAbs().maxCoeff();
       if (n > o.max_step) dq *= o.max_step / n;
       JointVector q_new = q + dq;
@@ -193,14 +224,23 @@ IkResult SolveIk(const KinematicModel& model, const Transform& X_BE_target,
       return r;
     }
     r.status = IkStatus::kJointLimits;
-    r.reason = "target is reachable only outside the joint limits: " + os.str();
+    r.reason = "no solution found inside the joint limits; the nearest solution outside them "
+               "has " + os.str();
     return r;
   }
   r.status = IkStatus::kNotConverged;
   std::ostringstream os;
   os << "no solution within tolerance after " << r.starts << " starts; best position error "
      << best.position_error * 1e3 << " mm, orientation error "
-     << RadToDeg(best.orientation_error) << " deg (target likely out of reach)";
+     << RadToDeg(best.orientation_error) << " deg";
+  const double sigma_min = JacobianSingularValues(model, best.q)(kNumJoints - 1);
+  if (best.position_error < 1e-3 && sigma_min < 1e-2) {
+    os << " (converging slowly next to a singular configuration, smallest Jacobian singular "
+          "value "
+       << sigma_min << ")";
+  } else {
+    os << " (target likely out of reach)";
+  }
   r.reason = os.str();
   return r;
 }

@@ -19,7 +19,7 @@ struct IkOptions {
   double max_step = 0.3;                ///< largest joint change per iteration [rad]
   double orientation_weight = 0.5;      ///< metres of error counted per radian of orientation
   bool position_only = false;           ///< ignore the orientation of the target
-  int random_restarts = 8;              ///< extra starts drawn uniformly inside the limits
+  int random_restarts = 24;             ///< extra starts drawn uniformly inside the limits
   std::uint64_t seed = 1;               ///< seed of the restart generator (reproducible)
 };
 
@@ -29,7 +29,7 @@ void ValidateIkOptions(const IkOptions& options);
 enum class IkStatus {
   kSuccess,              ///< within tolerance and inside the joint limits
   kNotConverged,         ///< no start reached the tolerance (target likely unreachable)
-  kJointLimits,          ///< the target is reachable only with a joint outside its limits
+  kJointLimits,          ///< no start converged inside the limits, one outside them did
   kInvalidInput,         ///< non-finite target or seed, or seed outside the limits
 };
 

@@ -20,3 +20,12 @@ function(twinbench_assert_no_mujoco target)
     endif()
   endforeach()
 endfunction()
+
+# Puts a poisoned mujoco/mujoco.h first on the target's include path, so that any include of
+# MuJoCo from the target's sources stops compilation with a message, whatever the grep missed.
+function(twinbench_poison_mujoco_include target)
+  set(_dir ${CMAKE_BINARY_DIR}/poison_include)
+  file(WRITE ${_dir}/mujoco/mujoco.h
+       "#error \"calib/ must not include MuJoCo: the estimator never sees the twin (DESIGN.md)\"\n")
+  target_include_directories(${target} BEFORE PRIVATE ${_dir})
+endfunction()

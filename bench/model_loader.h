@@ -1,0 +1,17 @@
+// Loads a robot model from a file, choosing the format by extension (.yaml/.yml or .urdf).
+#pragma once
+
+#include <string>
+
+#include "calib/kinematic_model.h"
+
+namespace twin {
+
+/// Loads models/*.yaml or a URDF; any other extension is an InputError naming the path.
+KinematicModel LoadRobotModel(const std::string& path);
+
+/// Writes `text` to `path` atomically (a temporary file renamed into place), so a failure
+/// never leaves a half-written file. Throws InputError naming the path on failure.
+void WriteFileAtomically(const std::string& path, const std::string& text);
+
+}  // namespace twin

@@ -1,0 +1,206 @@
+// twinbench: the command-line entry point. User errors (InputError, bad arguments) exit 2.
+#include <cstdio>
+#include <iostream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "bench/model_loader.h"
+#include "bench/urdf_model.h"
+#include "calib/errors.h"
+#include "calib/forward_kinematics.h"
+#include "calib/inverse_kinematics.h"
+#include "calib/parameters.h"
+
+namespace twin {
+namespace {
+
+constexpr int kExitUserError = 2;
+
+// Parses "a,b,c" into exactly n numbers; `option` names the flag in the message.
+std::vector<double> ParseList(const std::string& text, int n, const std::string& option) {
+  std::vector<double> v;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    try {
+      size_t used = 0;
+      v.push_back(std::stod(item, &used));
+      if (item.find_first_not_of(" \t", used) != std::string::npos) throw std::invalid_argument("");
+    } catch (const std::exception&) {
+      throw InputError(option, "expected a number, got '" + item + "'");
+    }
+  }
+  if (static_cast<int>(v.size()) != n) {
+    throw InputError(option, "expected " + std::to_string(n) + " comma-separated numbers, got '" +
+                                 text + "'");
+  }
+  return v;
+}
+
+JointVector ParseJointsDeg(const std::string& text, const std::string& option) {
+  const std::vector<double> v = ParseList(text, kNumJoints, option);
+  JointVector q;
+  for (int i = 0; i < kNumJoints; ++i) q(i) = DegToRad(v[i]);
+  return q;
+}
+
+// Roll-pitch-yaw about fixed axes (URDF convention): R = Rz(yaw) Ry(pitch) Rx(roll).
+Matrix3 RpyToMatrix(double r, double p, double y) {
+  return (Eigen::AngleAxisd(y, Vector3::UnitZ()) * Eigen::AngleAxisd(p, Vector3::UnitY()) *
+          Eigen::AngleAxisd(r, Vector3::UnitX()))
+      .toRotationMatrix();
+}
+
+void PrintPose(const char* label, const Transform& X) {
+  const Vector3 p = X.translation() * 1e3;
+  const Vector3 ypr = X.linear().eulerAngles(2, 1, 0);
+  std::printf("%s: xyz [%.4f, %.4f, %.4f] mm, rpy [%.4f, %.4f, %.4f] deg\n", label, p.x(), p.y(),
+              p.z(), RadToDeg(ypr(2)), RadToDeg(ypr(1)), RadToDeg(ypr(0)));
+}
+
+int RunInfo(const std::string& path) {
+  const KinematicModel m = LoadRobotModel(path);
+  std::printf("robot %s (%s)\n%-18s %12s\n", m.name.c_str(), path.c_str(), "parameter", "value");
+  for (int i = 0; i < kNumParams; ++i) {
+    const double v = GetParameters(m)(i);
+    std::printf("%-18s %12.4f %s\n", ParameterName(m.name, i).c_str(),
+                IsLengthParameter(i) ? v * 1e3 : RadToDeg(v), IsLengthParameter(i) ? "mm" : "deg");
+  }
+  double mass = 0.0;
+  for (int i = 0; i < kNumJoints; ++i) {
+    const Link& l = m.links[i];
+    mass += l.inertia.mass;
+    std::printf("joint %d limits [%.1f, %.1f] deg, link mass %.2f kg\n", i + 1,
+                RadToDeg(l.limits.lower), RadToDeg(l.limits.upper), l.inertia.mass);
+  }
+  std::printf("moving mass %.2f kg\n", mass);
+  PrintPose("end frame at q = 0", EndPose(m, JointVector::Zero()));
+  return 0;
+}
+
+int RunFk(const std::string& path, const std::string& q_text) {
+  const KinematicModel m = LoadRobotModel(path);
+  const JointVector q = ParseJointsDeg(q_text, "--q");
+  if (!WithinLimits(m, q)) throw InputError("--q", "joint angles outside the model's limits");
+  PrintPose("end frame", EndPose(m, q));
+  std::printf("smallest Jacobian singular value: %.6f\n", JacobianSingularValues(m, q)(5));
+  return 0;
+}
+
+int RunIk(const std::string& path, const std::string& xyz, const std::string& rpy,
+          const std::string& seed, bool position_only) {
+  const KinematicModel m = LoadRobotModel(path);
+  const std::vector<double> p = ParseList(xyz, 3, "--xyz");
+  const std::vector<double> r = ParseList(rpy, 3, "--rpy");
+  Transform target = Transform::Identity();
+  target.translation() = Vector3(p[0], p[1], p[2]) * 1e-3;
+  target.linear() = RpyToMatrix(DegToRad(r[0]), DegToRad(r[1]), DegToRad(r[2]));
+  const JointVector q0 = seed.empty() ? MidRange(m) : ParseJointsDeg(seed, "--seed");
+  IkOptions options;
+  options.position_only = position_only;
+  const IkResult res = SolveIk(m, target, q0, options);
+  if (res.status != IkStatus::kSuccess) {
+    throw InputError("--xyz/--rpy", std::string("target not solvable (") + ToString(res.status) +
+                                        "): " + res.reason);
+  }
+  std::printf("q [deg]:");
+  for (int i = 0; i < kNumJoints; ++i) std::printf(" %.6f", RadToDeg(res.q(i)));
+  std::printf("\nposition error %.3g m, orientation error %.3g rad, %d iterations, %d starts\n",
+              res.position_error, res.orientation_error, res.iterations, res.starts);
+  return 0;
+}
+
+int RunExportUrdf(const std::string& path, const std::string& out) {
+  WriteFileAtomically(out, ModelToUrdf(LoadRobotModel(path)));
+  std::printf("wrote %s\n", out.c_str());
+  return 0;
+}
+
+// The kinematic demo run by scripts/run.sh until the twin exists: both robots' YAML and URDF
+// descriptions agree, IK round trips, Jacobian conditioning over the workspace.
+int RunDemo(const std::string& model_dir, int samples, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  for (const char* robot : {"reinovo_r1", "reinovo_r2"}) {
+    const std::string base = model_dir + "/" + robot;
+    const KinematicModel yaml = LoadRobotModel(base + ".yaml");
+    const KinematicModel urdf = LoadRobotModel(base + ".urdf");
+    double fk_max = 0.0, ik_max = 0.0, sv_min = 1e9;
+    int solved = 0;
+    for (int k = 0; k < samples; ++k) {
+      JointVector q;
+      for (int i = 0; i < kNumJoints; ++i) {
+        q(i) = std::uniform_real_distribution<double>(yaml.links[i].limits.lower,
+                                                      yaml.links[i].limits.upper)(rng);
+      }
+      const Transform X = EndPose(yaml, q);
+      fk_max = std::max(fk_max, (X.translation() - EndPose(urdf, q).translation()).norm());
+      sv_min = std::min(sv_min, JacobianSingularValues(yaml, q)(5));
+      const IkResult r = SolveIk(yaml, X, MidRange(yaml));
+      if (r.status == IkStatus::kSuccess) {
+        ++solved;
+        ik_max = std::max(ik_max, (EndPose(yaml, r.q).translation() - X.translation()).norm());
+      } else {
+        std::printf("  IK failed (%s): %s\n", ToString(r.status), r.reason.c_str());
+      }
+    }
+    std::printf("%s: YAML vs URDF FK max %.2e m over %d random poses; IK solved %d/%d, max "
+                "position error %.2e m; smallest Jacobian singular value seen %.4f\n",
+                robot, fk_max, samples, solved, samples, ik_max, sv_min);
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace twin
+
+int main(int argc, char** argv) {
+  using namespace twin;
+  CLI::App app{"twinbench: digital-twin test bench for dual-robot kinematic calibration"};
+  app.require_subcommand(1);
+
+  std::string model, q, xyz, rpy = "0,0,0", seed, out, model_dir = "models";
+  bool position_only = false;
+  int samples = 200;
+  unsigned rng_seed = 1;
+
+  auto* info = app.add_subcommand("info", "print a robot model's parameters (mm, deg)");
+  info->add_option("model", model, "model file (.yaml or .urdf)")->required();
+  auto* fk = app.add_subcommand("fk", "forward kinematics of a model at joint angles");
+  fk->add_option("model", model, "model file (.yaml or .urdf)")->required();
+  fk->add_option("--q", q, "six joint angles in degrees, comma-separated")->required();
+  auto* ik = app.add_subcommand("ik", "inverse kinematics of a model for an end-frame pose");
+  ik->add_option("model", model, "model file (.yaml or .urdf)")->required();
+  ik->add_option("--xyz", xyz, "target position in mm, comma-separated")->required();
+  ik->add_option("--rpy", rpy, "target roll,pitch,yaw in degrees (fixed axes)");
+  ik->add_option("--seed", seed, "start joint angles in degrees (default: mid-range)");
+  ik->add_flag("--position-only", position_only, "ignore the target orientation");
+  auto* export_urdf = app.add_subcommand("export-urdf", "write a model as URDF");
+  export_urdf->add_option("model", model, "model file (.yaml or .urdf)")->required();
+  export_urdf->add_option("--out", out, "output URDF path")->required();
+  auto* demo = app.add_subcommand("demo", "kinematic demo on the two Reinovo-like models");
+  demo->add_option("--model-dir", model_dir, "folder with reinovo_r{1,2}.{yaml,urdf}");
+  demo->add_option("--samples", samples, "random poses per robot")->check(CLI::Range(1, 100000));
+  demo->add_option("--seed", rng_seed, "random seed");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? 0 : kExitUserError;
+  }
+  try {
+    if (*info) return RunInfo(model);
+    if (*fk) return RunFk(model, q);
+    if (*ik) return RunIk(model, xyz, rpy, seed, position_only);
+    if (*export_urdf) return RunExportUrdf(model, out);
+    if (*demo) return RunDemo(model_dir, samples, rng_seed);
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return kExitUserError;
+  }
+  return 1;
+}

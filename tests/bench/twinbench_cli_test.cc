@@ -1,0 +1,101 @@
+// Runs the built twinbench binary: user errors must exit with code 2 and a message naming the
+// bad input; good input exits 0.
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace {
+
+struct CliRun {
+  int code;
+  std::string output;  // stdout and stderr
+};
+
+CliRun Twinbench(const std::string& args) {
+  const std::string cmd = std::string(TWINBENCH_BIN) + " " + args + " 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+  CliRun r{-1, ""};
+  if (!pipe) return r;
+  std::array<char, 512> buf;
+  while (fgets(buf.data(), buf.size(), pipe.get())) r.output += buf.data();
+  const int status = pclose(pipe.release());
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+const std::string kModel = std::string(TWIN_SOURCE_DIR) + "/models/reinovo_r1.yaml";
+
+TEST(TwinbenchCli, HelpListsTheSubcommands) {
+  const CliRun r = Twinbench("--help");
+  EXPECT_EQ(r.code, 0);
+  for (const char* verb : {"info", "fk", "ik", "export-urdf", "demo"}) {
+    EXPECT_NE(r.output.find(verb), std::string::npos) << verb;
+  }
+}
+
+TEST(TwinbenchCli, UnknownSubcommandExitsTwo) {
+  EXPECT_EQ(Twinbench("frobnicate").code, 2);
+}
+
+TEST(TwinbenchCli, MissingModelFileExitsTwoNamingIt) {
+  const CliRun r = Twinbench("info /nonexistent/model.yaml");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("/nonexistent/model.yaml"), std::string::npos) << r.output;
+}
+
+TEST(TwinbenchCli, WrongJointCountExitsTwo) {
+  const CliRun r = Twinbench("fk " + kModel + " --q 0,0,0");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("expected 6 comma-separated numbers"), std::string::npos) << r.output;
+}
+
+TEST(TwinbenchCli, NonNumericJointExitsTwo) {
+  const CliRun r = Twinbench("fk " + kModel + " --q 0,0,abc,0,0,0");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("expected a number, got 'abc'"), std::string::npos) << r.output;
+}
+
+TEST(TwinbenchCli, UnreachableIkTargetExitsTwoWithTheReason) {
+  const CliRun r = Twinbench("ik " + kModel + " --xyz 3000,0,0");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("target not solvable"), std::string::npos) << r.output;
+}
+
+// Reads "xyz [x, y, z] mm, rpy [r, p, y] deg" from fk's output.
+bool ParsePose(const std::string& out, double v[6]) {
+  const size_t at = out.find("xyz [");
+  return at != std::string::npos &&
+         std::sscanf(out.c_str() + at, "xyz [%lf, %lf, %lf] mm, rpy [%lf, %lf, %lf]", &v[0], &v[1],
+                     &v[2], &v[3], &v[4], &v[5]) == 6;
+}
+
+TEST(TwinbenchCli, IkOfAnFkPoseReproducesIt) {
+  const CliRun fk = Twinbench("fk " + kModel + " --q 10,20,30,40,50,60");
+  ASSERT_EQ(fk.code, 0) << fk.output;
+  double pose[6];
+  ASSERT_TRUE(ParsePose(fk.output, pose)) << fk.output;
+  char args[256];
+  std::snprintf(args, sizeof(args), " --xyz %.4f,%.4f,%.4f --rpy %.4f,%.4f,%.4f", pose[0], pose[1],
+                pose[2], pose[3], pose[4], pose[5]);
+  const CliRun ik = Twinbench("ik " + kModel + args);
+  ASSERT_EQ(ik.code, 0) << ik.output;
+  const size_t at = ik.output.find("q [deg]:");
+  ASSERT_NE(at, std::string::npos) << ik.output;
+  double q[6];
+  ASSERT_EQ(std::sscanf(ik.output.c_str() + at, "q [deg]: %lf %lf %lf %lf %lf %lf", &q[0], &q[1],
+                        &q[2], &q[3], &q[4], &q[5]), 6);
+  std::snprintf(args, sizeof(args), " --q %.6f,%.6f,%.6f,%.6f,%.6f,%.6f", q[0], q[1], q[2], q[3],
+                q[4], q[5]);
+  const CliRun back = Twinbench("fk " + kModel + args);
+  double pose2[6];
+  ASSERT_TRUE(ParsePose(back.output, pose2)) << back.output;
+  // 2e-3 mm: the poses are printed with 4 decimals (mm, deg) and the joints with 6 (deg).
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(pose[i], pose2[i], 2e-3) << i;
+}
+
+}  // namespace
