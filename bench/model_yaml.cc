@@ -13,7 +13,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "bench/text_format.h"
+#include "calib/text_format.h"
 #include "calib/errors.h"
 
 namespace twin {

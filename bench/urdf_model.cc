@@ -11,7 +11,7 @@
 
 #include <urdf_parser/urdf_parser.h>
 
-#include "bench/text_format.h"
+#include "calib/text_format.h"
 #include "calib/errors.h"
 #include "calib/forward_kinematics.h"
 

@@ -1,4 +1,4 @@
-#include "bench/text_format.h"
+#include "calib/text_format.h"
 
 #include <charconv>
 

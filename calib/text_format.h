@@ -1,4 +1,4 @@
-// Number formatting shared by the model writers (YAML, URDF).
+// Number formatting shared by the writers of model files, MJCF and reports.
 #pragma once
 
 #include <string>

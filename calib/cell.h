@@ -1,0 +1,45 @@
+// The Cell interface: everything the calibration procedure may ask of a robot cell, exactly
+// what a hardware cell offers. sim/ implements it with the MuJoCo twin; a hardware driver
+// would implement it with the robot controllers and the camera. Nothing of the truth crosses
+// it (DESIGN.md: the estimator never sees the truth).
+#pragma once
+
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "calib/kinematic_model.h"
+
+namespace twin {
+
+enum class MoveStatus {
+  kSettled,       ///< reached the targets and came to rest
+  kCollision,     ///< stopped: a link, tool or the other robot was hit (reason names them)
+  kNotSettled,    ///< still moving after the step limit
+  kOutOfLimits,   ///< the targets are outside the joint limits; nothing moved
+  kInvalidInput,  ///< unknown robot index or non-finite targets; nothing moved
+};
+
+/// Name of a status for messages ("settled", "collision", ...).
+const char* ToString(MoveStatus status);
+
+/// Outcome of Cell::MoveTo.
+struct MoveResult {
+  MoveStatus status = MoveStatus::kSettled;
+  std::string reason;      ///< what went wrong, empty when settled
+  double duration_s = 0;   ///< motion time of the move (simulated time on the twin) [s]
+};
+
+/// A cell with two robots (indices 0 and 1) and one hand camera.
+class Cell {
+ public:
+  virtual ~Cell() = default;
+  /// Moves robot `robot` to motor-side joint targets [rad] and waits until it has settled.
+  virtual MoveResult MoveTo(int robot, const JointVector& q_target) = 0;
+  /// Joint encoder reading of robot `robot` (motor side, as the controller reports it) [rad].
+  virtual JointVector ReadEncoders(int robot) = 0;
+  /// One frame of the hand camera: 8-bit BGR, OpenCV row order (row 0 at the top).
+  virtual cv::Mat GrabImage() = 0;
+};
+
+}  // namespace twin
