@@ -1,25 +1,25 @@
 #include "bench/model_yaml.h"
 
-#include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
-#include <iterator>
-#include <map>
-#include <optional>
 #include <sstream>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
 
-#include "calib/text_format.h"
+#include "bench/yaml_util.h"
 #include "calib/errors.h"
+#include "calib/text_format.h"
 
 namespace twin {
 namespace {
 
-using Keys = std::vector<std::string>;
+using Keys = YamlKeys;
+using Field = YamlField;
+using Reader = YamlReader;
+using MapFields = YamlMap;
 
 const Keys kRootKeys = {"robot"};
 const Keys kRobotKeys = {"name", "angle_unit", "base", "links", "tool", "end"};
@@ -49,117 +49,6 @@ constexpr double kRadPerDeg = kPi / 180.0;  // the reader's scale for angle_unit
 constexpr std::pair<int, int> kInertiaEntries[] = {{0, 0}, {1, 1}, {2, 2},
                                                    {0, 1}, {0, 2}, {1, 2}};
 
-std::string Join(const Keys& keys) {
-  std::string out;
-  for (const std::string& k : keys) out += (out.empty() ? "" : ", ") + k;
-  return out;
-}
-
-std::string Describe(const YAML::Node& node) {
-  if (node.IsScalar()) return "'" + node.Scalar() + "'";
-  if (node.IsSequence()) return "a sequence of " + std::to_string(node.size()) + " items";
-  if (node.IsMap()) return "a map";
-  return "nothing";
-}
-
-std::string WhereText(const std::string& source, const YAML::Mark& mark,
-                      const std::string& path) {
-  std::string where = source;
-  if (mark.line >= 0) where += ":" + std::to_string(mark.line + 1);
-  if (!path.empty()) where += " " + path;
-  return where;
-}
-
-// A YAML node with its key path (e.g. "robot.links[2].alpha") for messages.
-struct Field {
-  YAML::Node node;
-  std::string path;
-
-  Field Child(const std::string& key, const YAML::Node& child) const {
-    return {child, path.empty() ? key : path + "." + key};
-  }
-  Field Item(std::size_t i) const { return {node[i], path + "[" + std::to_string(i) + "]"}; }
-};
-
-// Reads typed values from fields; every failure is an InputError naming source:line path.
-class Reader {
- public:
-  explicit Reader(std::string source) : source_(std::move(source)) {}
-
-  [[noreturn]] void Fail(const Field& f, const std::string& message) const {
-    throw InputError(WhereText(source_, f.node.Mark(), f.path), message);
-  }
-
-  std::string String(const Field& f) const {
-    if (!f.node.IsScalar()) Fail(f, "expected a string, got " + Describe(f.node));
-    return f.node.Scalar();
-  }
-
-  double Number(const Field& f) const {
-    double v = 0.0;
-    if (!f.node.IsScalar() || !YAML::convert<double>::decode(f.node, v)) {
-      Fail(f, "expected a number, got " + Describe(f.node));
-    }
-    if (!std::isfinite(v)) Fail(f, "expected a finite number, got " + Describe(f.node));
-    return v;
-  }
-
-  std::vector<double> Numbers(const Field& f, std::size_t n) const {
-    if (!f.node.IsSequence() || f.node.size() != n) {
-      Fail(f, "expected a sequence of " + std::to_string(n) + " numbers, got " +
-                  Describe(f.node));
-    }
-    std::vector<double> out;
-    for (std::size_t i = 0; i < n; ++i) out.push_back(Number(f.Item(i)));
-    return out;
-  }
-
-  Vector3 Vector(const Field& f) const {
-    const std::vector<double> v = Numbers(f, 3);
-    return Vector3(v[0], v[1], v[2]);
-  }
-
- private:
-  std::string source_;
-};
-
-// The entries of a YAML map, checked against the allowed keys (unknown or repeated keys fail).
-class MapFields {
- public:
-  MapFields(const Reader& reader, Field map, const Keys& allowed)
-      : reader_(reader), map_(std::move(map)) {
-    if (!map_.node.IsMap()) {
-      reader_.Fail(map_, "expected a map with keys (" + Join(allowed) + "), got " +
-                             Describe(map_.node));
-    }
-    for (const auto& kv : map_.node) {
-      const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "?";
-      const Field key_field = map_.Child(key, kv.first);
-      if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-        reader_.Fail(key_field, "unknown key '" + key + "' (allowed: " + Join(allowed) + ")");
-      }
-      if (!entries_.emplace(key, kv.second).second) {
-        reader_.Fail(key_field, "duplicate key '" + key + "'");
-      }
-    }
-  }
-
-  /// The field under key; absent: nullopt, or an InputError when required.
-  std::optional<Field> Find(const std::string& key, bool required) const {
-    const auto it = entries_.find(key);
-    if (it != entries_.end()) return map_.Child(key, it->second);
-    if (required) reader_.Fail(map_, "missing required key '" + key + "'");
-    return std::nullopt;
-  }
-
-  Field Get(const std::string& key) const { return *Find(key, true); }
-
- private:
-  const Reader& reader_;
-  Field map_;
-  std::map<std::string, YAML::Node> entries_;
-};
-
 JointLimits ParseLimits(const Reader& r, const Field& f, double angle_scale) {
   const std::vector<double> v = r.Numbers(f, 2);
   if (!(v[0] < v[1])) {
@@ -174,7 +63,7 @@ LinkInertia ParseInertia(const Reader& r, const MapFields& m, bool required) {
   LinkInertia in;
   if (const auto f = m.Find("mass", required)) {
     in.mass = r.Number(*f);
-    if (in.mass < 0.0) r.Fail(*f, "mass must be >= 0 kg, got " + Describe(f->node));
+    if (in.mass < 0.0) r.Fail(*f, "mass must be >= 0 kg, got " + DescribeNode(f->node));
   }
   if (const auto f = m.Find("com", required)) in.p_LiCom = r.Vector(*f);
   if (const auto f = m.Find("inertia", required)) {
@@ -197,14 +86,6 @@ Link ParseLink(const Reader& r, const Field& f, double angle_scale, bool is_tool
   if (!is_tool) link.limits = ParseLimits(r, m.Get("limits"), angle_scale);
   link.inertia = ParseInertia(r, m, !is_tool);
   return link;
-}
-
-// R = Rz(y) Ry(p) Rx(r), fixed-axis roll-pitch-yaw as in URDF.
-Matrix3 RpyToRotation(const Vector3& rpy) {
-  return (Eigen::AngleAxisd(rpy.z(), Vector3::UnitZ()) *
-          Eigen::AngleAxisd(rpy.y(), Vector3::UnitY()) *
-          Eigen::AngleAxisd(rpy.x(), Vector3::UnitX()))
-      .toRotationMatrix();
 }
 
 // Inverse of RpyToRotation. Yaw comes from the first column; roll and pitch are then read
@@ -238,7 +119,7 @@ double ParseAngleScale(const Reader& r, const Field& f) {
 void ParseLinks(const Reader& r, const Field& f, double angle_scale, KinematicModel* model) {
   if (!f.node.IsSequence() || f.node.size() != static_cast<std::size_t>(kNumJoints)) {
     r.Fail(f, "expected " + std::to_string(kNumJoints) + " links, got " +
-                  (f.node.IsSequence() ? std::to_string(f.node.size()) : Describe(f.node)));
+                  (f.node.IsSequence() ? std::to_string(f.node.size()) : DescribeNode(f.node)));
   }
   for (int i = 0; i < kNumJoints; ++i) {
     model->links[i] = ParseLink(r, f.Item(static_cast<std::size_t>(i)), angle_scale, false);
@@ -331,12 +212,7 @@ void WriteTransform(std::ostream& os, const std::string& key, const Transform& X
 }  // namespace
 
 KinematicModel ParseModelYaml(const std::string& text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw InputError(WhereText(source, e.mark, ""), "malformed YAML: " + e.msg);
-  }
+  const YAML::Node root = LoadYamlText(text, source);
   const Reader reader(source);
   const MapFields top(reader, Field{root, ""}, kRootKeys);
   KinematicModel model = ParseRobot(reader, top.Get("robot"));
@@ -345,16 +221,7 @@ KinematicModel ParseModelYaml(const std::string& text, const std::string& source
 }
 
 KinematicModel LoadModelYaml(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "cannot open file");
-  std::string text;
-  try {  // reading a directory throws from the stream buffer
-    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  } catch (const std::ios_base::failure& e) {
-    throw InputError(path, std::string("cannot read file: ") + e.what());
-  }
-  if (in.bad()) throw InputError(path, "cannot read file");
-  return ParseModelYaml(text, path);
+  return ParseModelYaml(ReadTextFile(path), path);
 }
 
 std::string ModelToYaml(const KinematicModel& model) {

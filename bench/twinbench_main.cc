@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include "bench/model_loader.h"
+#include "bench/twin_commands.h"
 #include "bench/urdf_model.h"
 #include "calib/errors.h"
 #include "calib/forward_kinematics.h"
@@ -186,6 +187,17 @@ int main(int argc, char** argv) {
   demo->add_option("--samples", samples, "random poses per robot")->check(CLI::Range(1, 100000));
   demo->add_option("--seed", rng_seed, "random seed");
 
+  RenderOptions render_options;
+  auto* render = app.add_subcommand("render", "write PNGs of the hand camera and of the cell");
+  render->add_option("scenario", render_options.scenario, "scenario file")->required();
+  render->add_option("--out", render_options.out_dir, "output folder")->required();
+  render->add_option("--poses", render_options.poses, "number of poses")->check(CLI::Range(1, 20));
+  TwinBenchmarkOptions bench_options;
+  auto* bench = app.add_subcommand("benchmark-twin", "time rendering and settled moves");
+  bench->add_option("scenario", bench_options.scenario, "scenario file")->required();
+  bench->add_option("--frames", bench_options.frames, "frames per figure")->check(CLI::Range(1, 100000));
+  bench->add_option("--moves", bench_options.moves, "settled moves")->check(CLI::Range(2, 100000));
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -198,9 +210,14 @@ int main(int argc, char** argv) {
     if (*ik) return RunIk(model, xyz, rpy, seed, position_only);
     if (*export_urdf) return RunExportUrdf(model, out);
     if (*demo) return RunDemo(model_dir, samples, rng_seed);
+    if (*render) return RunRender(render_options);
+    if (*bench) return RunTwinBenchmark(bench_options);
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitUserError;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "internal error: %s\n", e.what());
+    return 1;
   }
   return 1;
 }

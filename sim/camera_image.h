@@ -20,6 +20,10 @@ class DistortionMapper {
   const Intrinsics& canvas() const { return canvas_; }
   /// The distorted image from an ideal canvas render (bilinear remap).
   cv::Mat Apply(const cv::Mat& canvas_image) const;
+  /// Remap tables (CV_32FC1, distorted image size): the canvas x / y [px] that each distorted
+  /// pixel samples (empty without distortion, where Apply returns a copy of its input).
+  const cv::Mat& map_x() const { return map_x_; }
+  const cv::Mat& map_y() const { return map_y_; }
 
  private:
   Intrinsics canvas_;

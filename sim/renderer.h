@@ -14,12 +14,18 @@ namespace twin {
 
 class OffscreenRenderer {
  public:
-  /// Creates an OSMesa context and MuJoCo render context for `model` with a framebuffer of
-  /// width x height pixels (must not exceed the model's offwidth/offheight) and `msaa` samples.
+  /// Creates an OSMesa context and MuJoCo render context for `model` with an offscreen
+  /// framebuffer of width x height pixels and `msaa` samples; these override the model's
+  /// <global offwidth/offheight> and <quality offsamples> (set on a private copy of the model).
   OffscreenRenderer(const mjModel* model, int width, int height, int msaa);
   ~OffscreenRenderer();
   OffscreenRenderer(const OffscreenRenderer&) = delete;
   OffscreenRenderer& operator=(const OffscreenRenderer&) = delete;
+
+  /// Near and far clipping distances [m] for RenderPinhole; until called, the model's
+  /// <map znear/zfar> times its extent are used. Throws std::invalid_argument unless
+  /// 0 < near < far.
+  void SetClipPlanes(double near_m, double far_m);
 
   /// Renders MJCF camera `camera_id` as an ideal pinhole with `K` (width/height of K must equal
   /// the renderer's). Returns 8-bit BGR in OpenCV row order.

@@ -1,0 +1,71 @@
+// The effect registry: the one table from type names to factories (DESIGN.md: no string
+// dispatch chains). Adding an effect adds one line here.
+#include <string>
+
+#include "calib/errors.h"
+#include "sim/effect.h"
+#include "sim/effects/effects.h"
+#include "sim/effects/params.h"
+
+namespace twin {
+namespace {
+
+struct Registration {
+  const char* type;                                        ///< EffectSpec::type
+  std::unique_ptr<Effect> (*make)(const EffectSpec& spec);  ///< checks params, builds
+};
+
+constexpr Registration kRegistry[] = {
+    {"geometry_errors", effects::MakeGeometryErrors},
+    {"thermal_growth", effects::MakeThermalGrowth},
+    {"joint_compliance", effects::MakeJointCompliance},
+    {"transmission_error", effects::MakeTransmissionError},
+    {"backlash", effects::MakeBacklash},
+    {"encoder_quantization", effects::MakeEncoderQuantization},
+    {"encoder_noise", effects::MakeEncoderNoise},
+    {"image_noise", effects::MakeImageNoise},
+};
+
+// Checks the fields every effect shares: robot -1, 0..kNumRobots-1; joint -1, 0..kNumJoints-1.
+void ValidateTargets(const EffectSpec& spec) {
+  if (spec.robot < -1 || spec.robot >= kNumRobots) {
+    throw InputError(spec.where, effects::EffectLabel(spec) + "robot = " +
+                                     std::to_string(spec.robot) + ", expected -1 (both) or 0.." +
+                                     std::to_string(kNumRobots - 1));
+  }
+  if (spec.joint < -1 || spec.joint >= kNumJoints) {
+    throw InputError(spec.where, effects::EffectLabel(spec) + "joint = " +
+                                     std::to_string(spec.joint) +
+                                     ", expected -1 (every joint) or 0.." +
+                                     std::to_string(kNumJoints - 1));
+  }
+}
+
+std::string KnownTypes() {
+  std::string text;
+  for (const Registration& r : kRegistry) {
+    text += (text.empty() ? "" : ", ") + std::string(r.type);
+  }
+  return text;
+}
+
+}  // namespace
+
+std::unique_ptr<Effect> MakeEffect(const EffectSpec& spec) {
+  for (const Registration& r : kRegistry) {
+    if (spec.type == r.type) {
+      ValidateTargets(spec);
+      return r.make(spec);
+    }
+  }
+  throw InputError(spec.where,
+                   "unknown effect type \"" + spec.type + "\"; known types: " + KnownTypes());
+}
+
+std::vector<std::string> EffectTypes() {
+  std::vector<std::string> types;
+  for (const Registration& r : kRegistry) types.emplace_back(r.type);
+  return types;
+}
+
+}  // namespace twin
