@@ -11,9 +11,14 @@
 #include <gtest/gtest.h>
 
 #include "calib/errors.h"
+#include "text_edit.h"
 
 namespace twin {
 namespace {
+
+using testing::LineOf;
+using testing::ReadFile;
+using testing::Replaced;
 
 const std::string kR1Path = std::string(TWIN_SOURCE_DIR) + "/models/reinovo_r1.yaml";
 const std::string kR2Path = std::string(TWIN_SOURCE_DIR) + "/models/reinovo_r2.yaml";
@@ -22,31 +27,7 @@ const std::string kSource = "models/test.yaml";
 // Parsing and degree conversion are exact to a few ulp of values of order 1..300.
 constexpr double kExact = 1e-12;
 
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 std::string R1Text() { return ReadFile(kR1Path); }
-
-/// text with the first occurrence of `from` replaced by `to` (a test failure if absent).
-std::string Replaced(std::string text, const std::string& from, const std::string& to) {
-  const std::size_t pos = text.find(from);
-  if (pos == std::string::npos) {
-    ADD_FAILURE() << "test input lacks '" << from << "'";
-    return text;
-  }
-  return text.replace(pos, from.size(), to);
-}
-
-/// 1-based line of the first occurrence of needle in text.
-int LineOf(const std::string& text, const std::string& needle) {
-  const std::size_t pos = text.find(needle);
-  EXPECT_NE(pos, std::string::npos) << needle;
-  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + pos, '\n'));
-}
 
 /// "models/test.yaml:<line>", the location prefix the parser must report.
 std::string At(int line) { return kSource + ":" + std::to_string(line); }

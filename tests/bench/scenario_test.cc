@@ -10,11 +10,16 @@
 #include <gtest/gtest.h>
 
 #include "calib/errors.h"
+#include "text_edit.h"
 #include "calib/forward_kinematics.h"
 #include "sim/effect.h"
 
 namespace twin {
 namespace {
+
+using testing::LineOf;
+using testing::ReadFile;
+using testing::Replaced;
 
 const std::string kRoot = TWIN_SOURCE_DIR;
 const std::string kDemoPath = kRoot + "/scenarios/twin_demo.yaml";
@@ -26,31 +31,7 @@ const std::string kHandEye = "hand_eye: {xyz_mm: [0, 0, 50], rpy_deg: [0, 0, 0]}
 // of order 1..1000, far below 1e-12.
 constexpr double kExact = 1e-12;
 
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
 std::string DemoText() { return ReadFile(kDemoPath); }
-
-/// text with the first occurrence of `from` replaced by `to` (a test failure if absent).
-std::string Replaced(std::string text, const std::string& from, const std::string& to) {
-  const std::size_t pos = text.find(from);
-  if (pos == std::string::npos) {
-    ADD_FAILURE() << "test input lacks '" << from << "'";
-    return text;
-  }
-  return text.replace(pos, from.size(), to);
-}
-
-/// 1-based line of the first occurrence of needle in text.
-int LineOf(const std::string& text, const std::string& needle) {
-  const std::size_t pos = text.find(needle);
-  EXPECT_NE(pos, std::string::npos) << needle;
-  return 1 + static_cast<int>(std::count(text.begin(), text.begin() + pos, '\n'));
-}
 
 /// "scenarios/test.yaml:<line>", the location prefix the parser must report.
 std::string At(int line) { return kSource + ":" + std::to_string(line); }

@@ -3,6 +3,8 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <filesystem>
+#include <fstream>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -96,6 +98,45 @@ TEST(TwinbenchCli, IkOfAnFkPoseReproducesIt) {
   ASSERT_TRUE(ParsePose(back.output, pose2)) << back.output;
   // 2e-3 mm: the poses are printed with 4 decimals (mm, deg) and the joints with 6 (deg).
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(pose[i], pose2[i], 2e-3) << i;
+}
+
+TEST(TwinbenchCli, RenderWritesHandCameraAndOverviewPngs) {
+  namespace fs = std::filesystem;
+  const fs::path out = fs::path(::testing::TempDir()) / "render_cli_test";
+  fs::remove_all(out);
+  const CliRun r = Twinbench("render " + std::string(TWIN_SOURCE_DIR) +
+                             "/scenarios/twin_demo.yaml --poses 2 --out " + out.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  for (const char* f : {"hand_camera_00.png", "overview_00.png", "hand_camera_01.png"}) {
+    EXPECT_GT(fs::file_size(out / f), 1000u) << f;  // a real image, not an empty file
+  }
+  EXPECT_FALSE(fs::exists(out.string() + ".partial"));
+  fs::remove_all(out);
+}
+
+TEST(TwinbenchCli, RenderOfABadScenarioExitsTwoAndWritesNothing) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(::testing::TempDir()) / "render_bad_scenario";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ifstream in(std::string(TWIN_SOURCE_DIR) + "/scenarios/twin_demo.yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const size_t at = text.find("square_mm: 20");
+  ASSERT_NE(at, std::string::npos);
+  text.replace(at, 13, "square_mm: -20");
+  const size_t models = text.find("../models/");
+  ASSERT_NE(models, std::string::npos);
+  // model paths are relative to the scenario's folder: point them back at the repository
+  for (size_t p = 0; (p = text.find("../models/", p)) != std::string::npos; p += 10) {
+    text.replace(p, 10, std::string(TWIN_SOURCE_DIR) + "/models/");
+  }
+  std::ofstream(dir / "bad.yaml") << text;
+  const CliRun r = Twinbench("render " + (dir / "bad.yaml").string() + " --out " +
+                             (dir / "out").string());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("board.square"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
 }
 
 }  // namespace
