@@ -60,7 +60,7 @@ Transform LinkM(const DhParameters& dh) {
   return LinkTransform(no_theta, 0.0);
 }
 
-std::string Prefix(int robot) { return "r" + std::to_string(robot) + "_"; }
+std::string Prefix(int robot) { return "robot" + std::to_string(robot + 1) + "_"; }
 
 // Collision bits: robot k's links and tools are type 1 << k and collide with both robots and
 // with the other robot's measuring tip (type 4 << (1 - k)); a tip collides with neither its own
@@ -164,10 +164,10 @@ std::string Assets() {
          " rgb2=\"0.35 0.38 0.44\" width=\"64\" height=\"64\"/>\n"
          "<material name=\"floor\" rgba=\"0.62 0.63 0.65 1\" specular=\"0\" shininess=\"0\"/>\n"
          "<material name=\"base\" rgba=\"0.22 0.23 0.25 1\" specular=\"0.2\"/>\n"
-         "<material name=\"r0_orange\" rgba=\"0.93 0.42 0.08 1\" specular=\"0.3\"/>\n"
-         "<material name=\"r1_orange\" rgba=\"0.96 0.62 0.18 1\" specular=\"0.3\"/>\n"
-         "<material name=\"r0_grey\" rgba=\"0.45 0.46 0.48 1\" specular=\"0.3\"/>\n"
-         "<material name=\"r1_grey\" rgba=\"0.62 0.63 0.66 1\" specular=\"0.3\"/>\n"
+         "<material name=\"robot1_orange\" rgba=\"0.93 0.42 0.08 1\" specular=\"0.3\"/>\n"
+         "<material name=\"robot2_orange\" rgba=\"0.96 0.62 0.18 1\" specular=\"0.3\"/>\n"
+         "<material name=\"robot1_grey\" rgba=\"0.45 0.46 0.48 1\" specular=\"0.3\"/>\n"
+         "<material name=\"robot2_grey\" rgba=\"0.62 0.63 0.66 1\" specular=\"0.3\"/>\n"
          "<material name=\"camera\" rgba=\"0.08 0.08 0.09 1\" specular=\"0.4\"/>\n"
          "<material name=\"tip\" rgba=\"0.8 0.8 0.82 1\" specular=\"0.6\"/>\n";
 }

@@ -1,14 +1,15 @@
 // The MJCF text of a whole twin cell: both arms built from their true (perturbed) geometry,
 // the hand camera, the chessboard, the measuring tips, floor and lights.
 //
-// Body frames (calib/frames.h letters): robot k's base body "r<k>_base" sits at X_WB; link body
-// "r<k>_link<i>" (i = 1..6) has the frame U_i = L(i-1) * RotZ(theta_offset_i) at q = 0, so its
-// hinge "r<k>_j<i>" is the body's z axis through its origin and qpos is the link-side angle q_i.
-// Sites "r<k>_L<i>" (i = 0..7) are the DH frames L0..L7 and "r<k>_tip" the measuring tip point;
-// they carry the geometry exactly (every number is written as its shortest round-trip decimal).
-// The MJCF camera "hand_camera" looks along -z with y up; the optical frame C is that frame
-// turned by RotX(pi). Camera housing, board and tip are welded child bodies of link 6
-// ("r<k>_camera", "r<k>_board", "r<k>_tip").
+// Names: robot k (k = 1, 2, the scenario's first and second robot) prefixes its elements with
+// "robot<k>_". Body frames (calib/frames.h letters): the base body "robot<k>_base" sits at
+// X_WB; link body "robot<k>_link<i>" (i = 1..6) has the frame U_i = L(i-1) RotZ(theta_offset_i)
+// at q = 0, so its hinge "robot<k>_j<i>" is the body's z axis through its origin and qpos is the
+// link-side angle q_i. Sites "robot<k>_L<i>" (i = 0..7) are the DH frames L0..L7 and
+// "robot<k>_tip" the measuring tip point; they carry the geometry exactly (every number is
+// written as its shortest round-trip decimal). The MJCF camera "hand_camera" looks along -z
+// with y up; the optical frame C is that frame turned by RotX(pi). Camera housing, board and
+// tip are welded child bodies of link 6 ("robot<k>_camera", "robot<k>_board", "robot<k>_tip").
 // Contacts: every link, base and tool geom collides with both robots (bodies of one robot only
 // when not adjacent); a tip collides with the other robot only, never with the other tip
 // (handclasp contacts). Excluded pairs: base-link1 (MuJoCo's parent filter skips static

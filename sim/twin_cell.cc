@@ -55,7 +55,7 @@ Transform FromMj(const mjtNum* pos, const mjtNum* mat) {
   return X;
 }
 
-std::string Prefix(int robot) { return "r" + std::to_string(robot) + "_"; }
+std::string Prefix(int robot) { return "robot" + std::to_string(robot + 1) + "_"; }
 
 }  // namespace
 

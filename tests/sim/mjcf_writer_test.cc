@@ -51,7 +51,7 @@ struct World {
   // Sets robot `k`'s hinge angles (link side) to q.
   void SetJoints(int k, const JointVector& q) {
     for (int i = 0; i < kNumJoints; ++i) {
-      const int j = Id(mjOBJ_JOINT, "r" + std::to_string(k) + "_j" + std::to_string(i + 1));
+      const int j = Id(mjOBJ_JOINT, "robot" + std::to_string(k + 1) + "_j" + std::to_string(i + 1));
       d->qpos[m->jnt_qposadr[j]] = q(i);
     }
   }
@@ -122,7 +122,7 @@ TEST_F(MjcfWriterTest, SitesMatchCalibForwardKinematicsForEveryInstallation) {
         const FrameSet f = ForwardKinematics(spec.robots[k].model, q[k]);
         const Transform& X_WB = spec.robots[k].X_WB;
         for (int i = 0; i <= kNumLinks; ++i) {
-          const std::string site = "r" + std::to_string(k) + "_L" + std::to_string(i);
+          const std::string site = "robot" + std::to_string(k + 1) + "_L" + std::to_string(i);
           const Transform expected = X_WB * f.X_BL[i];
           const Transform got = w.SitePose(site);
           const double dp = (got.translation() - expected.translation()).norm();
@@ -134,7 +134,7 @@ TEST_F(MjcfWriterTest, SitesMatchCalibForwardKinematicsForEveryInstallation) {
         }
         // Tip, camera and board hang off the flange F = L6.
         const Transform X_WF = X_WB * f.flange();
-        const Transform tip = w.SitePose("r" + std::to_string(k) + "_tip");
+        const Transform tip = w.SitePose("robot" + std::to_string(k + 1) + "_tip");
         EXPECT_LT((tip.translation() - X_WF * spec.tips[k].X_FTip.translation()).norm(), kTol);
         if (k == spec.camera.robot) {
           const int cam = w.Id(mjOBJ_CAMERA, kHandCameraName);
@@ -146,7 +146,7 @@ TEST_F(MjcfWriterTest, SitesMatchCalibForwardKinematicsForEveryInstallation) {
           EXPECT_LT(AngleBetween(X_WC, expected), kTol);
         }
         if (k == spec.board.robot) {
-          const int b = w.Id(mjOBJ_BODY, "r" + std::to_string(k) + "_board");
+          const int b = w.Id(mjOBJ_BODY, "robot" + std::to_string(k + 1) + "_board");
           const Transform X_WT = World::FromMj(w.d->xpos + 3 * b, w.d->xmat + 9 * b);
           const Transform expected = X_WF * spec.board.X_FT;
           EXPECT_LT((X_WT.translation() - expected.translation()).norm(), kTol);
@@ -172,7 +172,7 @@ TEST_F(MjcfWriterTest, InertialsAreTheModelsExpressedInTheBodyFrames) {
     const FrameSet f = ForwardKinematics(model, q);
     for (int i = 0; i < kNumJoints; ++i) {
       const LinkInertia& in = model.links[i].inertia;
-      const int b = w.Id(mjOBJ_BODY, "r" + std::to_string(k) + "_link" + std::to_string(i + 1));
+      const int b = w.Id(mjOBJ_BODY, "robot" + std::to_string(k + 1) + "_link" + std::to_string(i + 1));
       EXPECT_DOUBLE_EQ(w.m->body_mass[b], in.mass);
       const Transform X_WL = spec.robots[k].X_WB * f.X_BL[i + 1];
       const Vector3 com(w.d->xipos + 3 * b);
@@ -186,9 +186,9 @@ TEST_F(MjcfWriterTest, InertialsAreTheModelsExpressedInTheBodyFrames) {
       EXPECT_LT((got - expected).norm(), 1e-12) << "body " << b;
     }
   }
-  const int cam = w.Id(mjOBJ_BODY, "r0_camera");
+  const int cam = w.Id(mjOBJ_BODY, "robot1_camera");
   EXPECT_DOUBLE_EQ(w.m->body_mass[cam], 0.3);
-  const int board = w.Id(mjOBJ_BODY, "r1_board");
+  const int board = w.Id(mjOBJ_BODY, "robot2_board");
   EXPECT_NEAR(w.m->body_mass[board], spec.board.mass_kg, 1e-12);
 }
 
@@ -209,7 +209,7 @@ TEST_F(MjcfWriterTest, DrivesJointsAndOptionsFollowTheSpec) {
   ASSERT_EQ(m->nu, 2 * kNumJoints);
   for (int k = 0; k < kNumRobots; ++k) {
     for (int i = 0; i < kNumJoints; ++i) {
-      const std::string s = "r" + std::to_string(k) + "_";
+      const std::string s = "robot" + std::to_string(k + 1) + "_";
       const int a = mj_name2id(m.get(), mjOBJ_ACTUATOR, (s + "a" + std::to_string(i + 1)).c_str());
       const int j = mj_name2id(m.get(), mjOBJ_JOINT, (s + "j" + std::to_string(i + 1)).c_str());
       ASSERT_GE(a, 0);
@@ -272,7 +272,7 @@ TEST_F(MjcfWriterTest, CellAtRestHasNoContactsAndWristNeighboursAreExcluded) {
   // the static base (MuJoCo's parent filter skips static bodies): excluded, nothing else is
   // (every other middle link is longer than the two radii).
   EXPECT_EQ(w.m->nexclude, 4);
-  for (const char* k : {"r0_", "r1_"}) {
+  for (const char* k : {"robot1_", "robot2_"}) {
     const std::string s(k);
     EXPECT_NE(w.mjcf.find("<exclude body1=\"" + s + "link4\" body2=\"" + s + "link6\"/>"),
               std::string::npos);
@@ -316,21 +316,21 @@ TEST_F(MjcfWriterTest, RobotRobotToolAndSelfContactsAreDetected) {
   mj_forward(w.m.get(), w.d.get());
   const auto robot_robot = ContactBodies(w);
   ASSERT_GT(w.d->ncon, 0);
-  EXPECT_TRUE(HasPair(robot_robot, "r0_camera", "r1_board"));
+  EXPECT_TRUE(HasPair(robot_robot, "robot1_camera", "robot2_board"));
   // Elbow folded onto the upper arm: links 2 and 4 of the same robot.
   JointVector folded = spec.robots[0].q_initial;
   folded(2) = DegToRad(-139);
   w.SetJoints(0, folded);
   w.SetJoints(1, JointVector::Zero());
   mj_forward(w.m.get(), w.d.get());
-  EXPECT_TRUE(HasPair(ContactBodies(w), "r0_link2", "r0_link4")) << w.d->ncon << " contacts";
+  EXPECT_TRUE(HasPair(ContactBodies(w), "robot1_link2", "robot1_link4")) << w.d->ncon << " contacts";
   // Wrist folded back: the camera (its own body, so the link 4 / link 6 exclusion does not
   // cover it) hits the forearm.
   JointVector wrist = spec.robots[0].q_initial;
   wrist(4) = -kPi / 2;
   w.SetJoints(0, wrist);
   mj_forward(w.m.get(), w.d.get());
-  EXPECT_TRUE(HasPair(ContactBodies(w), "r0_link4", "r0_camera")) << w.d->ncon << " contacts";
+  EXPECT_TRUE(HasPair(ContactBodies(w), "robot1_link4", "robot1_camera")) << w.d->ncon << " contacts";
 }
 
 TEST_F(MjcfWriterTest, TipsCollideWithTheOtherRobotButNotWithEachOther) {
@@ -340,13 +340,13 @@ TEST_F(MjcfWriterTest, TipsCollideWithTheOtherRobotButNotWithEachOther) {
     return (m->geom_contype[g1] & m->geom_conaffinity[g2]) ||
            (m->geom_contype[g2] & m->geom_conaffinity[g1]);
   };
-  const int tip0 = w.Id(mjOBJ_GEOM, "r0_tip"), tip1 = w.Id(mjOBJ_GEOM, "r1_tip");
+  const int tip0 = w.Id(mjOBJ_GEOM, "robot1_tip"), tip1 = w.Id(mjOBJ_GEOM, "robot2_tip");
   EXPECT_FALSE(collide(tip0, tip1));
-  EXPECT_TRUE(collide(tip0, w.Id(mjOBJ_GEOM, "r1_link6_d")));
-  EXPECT_TRUE(collide(tip1, w.Id(mjOBJ_GEOM, "r0_camera_housing")));
-  EXPECT_FALSE(collide(tip0, w.Id(mjOBJ_GEOM, "r0_link4_d")));
-  EXPECT_TRUE(collide(w.Id(mjOBJ_GEOM, "r0_link3_a"), w.Id(mjOBJ_GEOM, "r1_board_plate")));
-  EXPECT_FALSE(collide(w.Id(mjOBJ_GEOM, "floor"), w.Id(mjOBJ_GEOM, "r0_link3_a")));
+  EXPECT_TRUE(collide(tip0, w.Id(mjOBJ_GEOM, "robot2_link6_d")));
+  EXPECT_TRUE(collide(tip1, w.Id(mjOBJ_GEOM, "robot1_camera_housing")));
+  EXPECT_FALSE(collide(tip0, w.Id(mjOBJ_GEOM, "robot1_link4_d")));
+  EXPECT_TRUE(collide(w.Id(mjOBJ_GEOM, "robot1_link3_a"), w.Id(mjOBJ_GEOM, "robot2_board_plate")));
+  EXPECT_FALSE(collide(w.Id(mjOBJ_GEOM, "floor"), w.Id(mjOBJ_GEOM, "robot1_link3_a")));
 }
 
 }  // namespace

@@ -185,12 +185,12 @@ TEST_F(TwinCellTest, CompliantJointSagsByGravityTorqueOverStiffness) {
   MjDataPtr d(mj_makeData(m.get()));
   for (int k = 0; k < kNumRobots; ++k) {
     for (int i = 0; i < kNumJoints; ++i) {
-      const std::string name = "r" + std::to_string(k) + "_j" + std::to_string(i + 1);
+      const std::string name = "robot" + std::to_string(k + 1) + "_j" + std::to_string(i + 1);
       d->qpos[m->jnt_qposadr[mj_name2id(m.get(), mjOBJ_JOINT, name.c_str())]] = t.q_link[k](i);
     }
   }
   mj_forward(m.get(), d.get());
-  const int dof = m->jnt_dofadr[mj_name2id(m.get(), mjOBJ_JOINT, "r0_j2")];
+  const int dof = m->jnt_dofadr[mj_name2id(m.get(), mjOBJ_JOINT, "robot1_j2")];
   const double expected = d->qfrc_bias[dof] / kStiffness;
   const double ratio_error = std::abs(sag / expected - 1.0);
   std::printf("[ measured ] joint-2 sag %.6g rad, gravity torque / k %.6g rad, ratio error %.2g\n",
@@ -247,8 +247,8 @@ TEST_F(TwinCellTest, CollisionStopsTheMoveAndNamesTheBodies) {
   into(2) = 1.1;
   const MoveResult r = cell.MoveTo(0, into);
   ASSERT_EQ(r.status, MoveStatus::kCollision) << r.reason;
-  EXPECT_NE(r.reason.find("r0_"), std::string::npos) << r.reason;
-  EXPECT_NE(r.reason.find("r1_"), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("robot1_"), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("robot2_"), std::string::npos) << r.reason;
   EXPECT_GT(r.duration_s, 0.0);
   // The robot stopped where it hit: the encoders read that (between start and target).
   const JointVector stopped = cell.ReadEncoders(0);
@@ -319,8 +319,8 @@ TEST_F(TwinCellTest, InitialPoseInCollisionIsAnInputErrorNamingTheBodies) {
   } catch (const InputError& e) {
     const std::string what = e.what();
     EXPECT_EQ(e.where(), "scenario.yaml");
-    EXPECT_NE(what.find("r0_"), std::string::npos) << what;
-    EXPECT_NE(what.find("r1_"), std::string::npos) << what;
+    EXPECT_NE(what.find("robot1_"), std::string::npos) << what;
+    EXPECT_NE(what.find("robot2_"), std::string::npos) << what;
   }
 }
 
