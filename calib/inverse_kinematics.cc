@@ -211,8 +211,8 @@ IkResult SolveIk(const KinematicModel& model, const Transform& X_BE_target,
       if (wrapped <= l.upper) {
         q(i) = wrapped;
       } else {
-        os << (os.tellp() > 0 ? "; " : "") << "joint " << i + 1 << " needs "
-           << RadToDeg(q(i)) << " deg, limits [" << RadToDeg(l.lower) << ", "
+        os << (os.tellp() > 0 ? "; " : "") << "joint " << i + 1 << " at "
+           << RadToDeg(q(i)) << " deg, outside its limits [" << RadToDeg(l.lower) << ", "
            << RadToDeg(l.upper) << "] deg";
       }
     }
@@ -224,8 +224,8 @@ IkResult SolveIk(const KinematicModel& model, const Transform& X_BE_target,
       return r;
     }
     r.status = IkStatus::kJointLimits;
-    r.reason = "no solution found inside the joint limits; the nearest solution outside them "
-               "has " + os.str();
+    r.reason = "no solution found inside the joint limits; an unconstrained solution puts " +
+               os.str();
     return r;
   }
   r.status = IkStatus::kNotConverged;

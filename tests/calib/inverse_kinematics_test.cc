@@ -100,7 +100,7 @@ TEST(SolveIk, TargetOutsideJointLimitsNamesTheJoint) {
   seed(0) = 0.0;
   const IkResult r = SolveIk(m, target, seed);
   EXPECT_EQ(r.status, IkStatus::kJointLimits) << r.reason;
-  EXPECT_TRUE(Contains(r.reason, "joint 1 needs")) << r.reason;
+  EXPECT_TRUE(Contains(r.reason, "joint 1 at")) << r.reason;
 }
 
 TEST(SolveIk, InvalidInputsAreReportedNotSolved) {
