@@ -10,6 +10,7 @@
 
 #include "bench/model_loader.h"
 #include "bench/yaml_util.h"
+#include "calib/base_calibration.h"
 #include "calib/errors.h"
 #include "sim/effect.h"
 
@@ -116,7 +117,7 @@ class ScenarioParser {
     Transform X = Transform::Identity();
     X.translation() = r_.Vector(m.Get("xyz_mm")) / 1000.0;
     X.linear() = rpy ? RpyToRotation(DegToRad3(r_.Vector(*rpy)))
-                     : ZyzToRotation(DegToRad3(r_.Vector(*zyz)));
+                     : RotationFromZyz(DegToRad3(r_.Vector(*zyz)));
     return X;
   }
 

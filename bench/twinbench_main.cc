@@ -11,6 +11,7 @@
 #include "bench/model_loader.h"
 #include "bench/twin_commands.h"
 #include "bench/urdf_model.h"
+#include "bench/yaml_util.h"
 #include "calib/errors.h"
 #include "calib/forward_kinematics.h"
 #include "calib/inverse_kinematics.h"
@@ -47,13 +48,6 @@ JointVector ParseJointsDeg(const std::string& text, const std::string& option) {
   JointVector q;
   for (int i = 0; i < kNumJoints; ++i) q(i) = DegToRad(v[i]);
   return q;
-}
-
-// Roll-pitch-yaw about fixed axes (URDF convention): R = Rz(yaw) Ry(pitch) Rx(roll).
-Matrix3 RpyToMatrix(double r, double p, double y) {
-  return (Eigen::AngleAxisd(y, Vector3::UnitZ()) * Eigen::AngleAxisd(p, Vector3::UnitY()) *
-          Eigen::AngleAxisd(r, Vector3::UnitX()))
-      .toRotationMatrix();
 }
 
 void PrintPose(const char* label, const Transform& X) {
@@ -99,7 +93,7 @@ int RunIk(const std::string& path, const std::string& xyz, const std::string& rp
   const std::vector<double> r = ParseList(rpy, 3, "--rpy");
   Transform target = Transform::Identity();
   target.translation() = Vector3(p[0], p[1], p[2]) * 1e-3;
-  target.linear() = RpyToMatrix(DegToRad(r[0]), DegToRad(r[1]), DegToRad(r[2]));
+  target.linear() = RpyToRotation(Vector3(DegToRad(r[0]), DegToRad(r[1]), DegToRad(r[2])));
   const JointVector q0 = seed.empty() ? MidRange(m) : ParseJointsDeg(seed, "--seed");
   IkOptions options;
   options.position_only = position_only;

@@ -178,11 +178,4 @@ Matrix3 RpyToRotation(const Vector3& rpy) {
       .toRotationMatrix();
 }
 
-Matrix3 ZyzToRotation(const Vector3& zyz) {
-  return (Eigen::AngleAxisd(zyz.x(), Vector3::UnitZ()) *
-          Eigen::AngleAxisd(zyz.y(), Vector3::UnitY()) *
-          Eigen::AngleAxisd(zyz.z(), Vector3::UnitZ()))
-      .toRotationMatrix();
-}
-
 }  // namespace twin

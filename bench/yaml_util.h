@@ -105,8 +105,4 @@ class YamlMap {
 /// R = Rz(y) Ry(p) Rx(r) for rpy = (r, p, y) [rad]: roll-pitch-yaw about fixed axes, as URDF.
 Matrix3 RpyToRotation(const Vector3& rpy);
 
-/// R = Rz(a) Ry(b) Rz(c) for zyz = (a, b, c) [rad]: the ZYZ Euler angles of Gan et al. 2014,
-/// eq. 31 (as Yaskawa controllers report them).
-Matrix3 ZyzToRotation(const Vector3& zyz);
-
 }  // namespace twin

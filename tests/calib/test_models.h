@@ -1,5 +1,5 @@
-// Models for calib/ tests, built in code so calib tests need no file loading. The numbers are
-// those of models/reinovo_r1.yaml (bench tests check that the file loads to the same model).
+// Models for calib/ and sim/ tests, built in code so these tests need no file loading. The
+// numbers are those of models/reinovo_r1.yaml and reinovo_r2.yaml.
 #pragma once
 
 #include <random>
@@ -8,19 +8,34 @@
 
 namespace twin::testing {
 
-inline KinematicModel ReinovoLikeModel() {
+/// Reinovo-like arm `robot` (0: r1, 1: r2; they differ only in d6 and link 6's mass data).
+inline KinematicModel ReinovoLikeModel(int robot = 0) {
   KinematicModel m;
-  m.name = "r1";
-  struct Row { double th, d, a, al, lo, hi; };
-  const Row rows[kNumLinks] = {{0, 0.1365, 0.100, 90, -170, 170}, {90, 0, 0.290, 0, -120, 120},
-                               {0, 0, 0.121, 90, -140, 140},     {0, 0.310, 0, -90, -180, 180},
-                               {-90, 0, 0, 90, -120, 120},       {0, 0.1215, 0, 0, -270, 270},
-                               {-90, 0, 0.060, 0, 0, 0}};
+  m.name = robot == 0 ? "r1" : "r2";
+  struct Row {
+    double th, d, a, al, lo, hi, mass, cx, cy, cz, ixx, iyy, izz, ixy, ixz, iyz;
+  };
+  const double d6 = robot == 0 ? 0.1215 : 0.131;
+  const double c6 = robot == 0 ? -0.0607 : -0.0655;
+  const double i6 = robot == 0 ? 0.00065 : 0.00073;
+  const Row rows[kNumLinks] = {
+      {0, 0.1365, 0.100, 90, -170, 170, 7.0, -0.05, -0.0683, 0, 0.02598, 0.02432, 0.0279,
+       -0.00262, 0, 0},
+      {90, 0, 0.290, 0, -120, 120, 7.5, -0.145, 0, 0, 0.01838, 0.06175, 0.06175, 0, 0, 0},
+      {0, 0, 0.121, 90, -140, 140, 4.5, -0.0605, 0, 0, 0.0081, 0.00954, 0.00954, 0, 0, 0},
+      {0, 0.310, 0, -90, -180, 180, 2.5, 0, 0.155, 0, 0.02158, 0.00313, 0.02158, 0, 0, 0},
+      {-90, 0, 0, 90, -120, 120, 1.5, 0, 0, 0, 0.00177, 0.00177, 0.00152, 0, 0, 0},
+      {0, d6, 0, 0, -270, 270, 0.4, 0, 0, c6, i6, i6, 0.00032, 0, 0, 0},
+      {-90, 0, 0.060, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}};
   for (int i = 0; i < kNumLinks; ++i) {
+    const Row& r = rows[i];
     Link& l = m.links[i];
     l.name = i < kNumJoints ? "link" + std::to_string(i + 1) : "tool";
-    l.dh = {DegToRad(rows[i].th), rows[i].d, rows[i].a, DegToRad(rows[i].al), 0.0};
-    l.limits = {DegToRad(rows[i].lo), DegToRad(rows[i].hi)};
+    l.dh = {DegToRad(r.th), r.d, r.a, DegToRad(r.al), 0.0};
+    if (i < kNumJoints) l.limits = {DegToRad(r.lo), DegToRad(r.hi)};
+    l.inertia.mass = r.mass;
+    l.inertia.p_LiCom = Vector3(r.cx, r.cy, r.cz);
+    l.inertia.I_Com << r.ixx, r.ixy, r.ixz, r.ixy, r.iyy, r.iyz, r.ixz, r.iyz, r.izz;
   }
   return m;
 }
