@@ -182,7 +182,10 @@ std::string LinkGeoms(const KinematicModel& m, int robot, int i) {
   const std::string contact = RobotContact(robot);
   const std::string name = p + "link" + std::to_string(i + 1);
   const bool flange = i == kNumJoints - 1;
-  const bool has_a = std::abs(dh.a) > kMinSegment;
+  // On the flange link an `a` shorter than the radius (a geometry error, not a real offset) is
+  // covered by the flange disc, which sits at the true face; a capsule along it would end in a
+  // rounded cap in front of the face.
+  const bool has_a = std::abs(dh.a) > (flange ? r : kMinSegment);
   Vector3 p0 = Vector3::Zero(), p1(0, 0, dh.d), p2(dh.a, 0, dh.d);
   // The flange link ends in a flat disc at L6: its capsule stops one radius short of the face
   // so that no rounded cap pokes through a tool mounted on the face.
