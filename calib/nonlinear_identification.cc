@@ -83,27 +83,6 @@ struct AxisResidualFunctor {
   }
 };
 
-void CheckSamples(const std::vector<AxisSample>& samples, int* num_axes) {
-  std::vector<int> count;
-  for (size_t n = 0; n < samples.size(); ++n) {
-    const AxisSample& s = samples[n];
-    const std::string where = "samples[" + std::to_string(n) + "]";
-    if (s.axis < 0) throw InputError(where + ".axis", "negative: " + std::to_string(s.axis));
-    if (!s.q.allFinite()) throw InputError(where + ".q", "not finite");
-    if (static_cast<int>(count.size()) <= s.axis) count.resize(s.axis + 1, 0);
-    ++count[s.axis];
-  }
-  if (count.empty()) throw InputError("samples", "empty");
-  for (size_t k = 0; k < count.size(); ++k) {
-    if (count[k] < 3) {
-      throw InputError("samples", "axis " + std::to_string(k) + " has " +
-                                      std::to_string(count[k]) +
-                                      " samples; each axis 0..q-1 needs >= 3");
-    }
-  }
-  *num_axes = static_cast<int>(count.size());
-}
-
 double RmsDistance(const KinematicModel& model, const std::vector<AxisSample>& samples,
                    const std::vector<Line3>& axes) {
   double sum = 0.0;
@@ -162,8 +141,7 @@ NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
                                                 const std::vector<AxisSample>& samples,
                                                 const NonlinearIdentificationOptions& options) {
   ValidateNonlinearIdentificationOptions(options);
-  int num_axes = 0;
-  CheckSamples(samples, &num_axes);
+  const int num_axes = ValidateAxisSamples(samples);
   NonlinearIdentificationResult res;
   res.model = nominal;
   const ParameterVector phi0 = GetParameters(nominal);

@@ -90,6 +90,27 @@ Eigen::Matrix<double, 3, kNumParams> ErrorJacobian(const KinematicModel& model, 
   return Skew(mu) * (Ji - Jj);
 }
 
+int ValidateAxisSamples(const std::vector<AxisSample>& samples) {
+  std::vector<int> count;
+  for (size_t n = 0; n < samples.size(); ++n) {
+    const AxisSample& s = samples[n];
+    const std::string where = "samples[" + std::to_string(n) + "]";
+    if (s.axis < 0) throw InputError(where + ".axis", "negative: " + std::to_string(s.axis));
+    if (!s.q.allFinite()) throw InputError(where + ".q", "not finite");
+    if (static_cast<int>(count.size()) <= s.axis) count.resize(s.axis + 1, 0);
+    ++count[s.axis];
+  }
+  if (count.empty()) throw InputError("samples", "empty");
+  for (size_t k = 0; k < count.size(); ++k) {
+    if (count[k] < 3) {
+      throw InputError("samples", "axis " + std::to_string(k) + " has " +
+                                      std::to_string(count[k]) +
+                                      " samples; each axis 0..q-1 needs >= 3");
+    }
+  }
+  return static_cast<int>(count.size());
+}
+
 std::vector<std::vector<Vector3>> AxisPoints(const KinematicModel& model,
                                              const std::vector<AxisSample>& samples) {
   std::vector<std::vector<Vector3>> pts;

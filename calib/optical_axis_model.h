@@ -77,6 +77,10 @@ MisalignedErrorStack StackMisalignedErrors(const KinematicModel& model,
 /// rotation of all points, for example, is absorbed by rotating the mu_k.
 Eigen::MatrixXd ProfiledPhi(const MisalignedErrorStack& stack);
 
+/// Checks recorded samples (axis indices 0..q-1, finite angles, >= 3 samples on every axis) and
+/// returns q. Throws InputError naming the sample or axis.
+int ValidateAxisSamples(const std::vector<AxisSample>& samples);
+
 /// Nominal feature-point positions of each axis (index k holds axis k's points in sample
 /// order) [m, in B].
 std::vector<std::vector<Vector3>> AxisPoints(const KinematicModel& model,
