@@ -20,8 +20,8 @@ namespace {
 using Keys = YamlKeys;
 
 const Keys kRootKeys = {"scenario"};
-const Keys kScenarioKeys = {"name",   "seed", "robots",  "camera",
-                            "board",  "tips", "physics", "effects"};
+const Keys kScenarioKeys = {"name",   "seed", "robots",  "camera",      "board",
+                            "tips",   "physics", "effects", "calibration", "handclasp"};
 const Keys kRobot1Keys = {"name", "model", "installation", "base", "initial_joints_deg"};
 const Keys kRobot2Keys = {"name", "model", "installation", "base_from_robot1",
                           "initial_joints_deg"};
@@ -94,6 +94,9 @@ class ScenarioParser {
     if (const auto f = m.Find("tips", false)) ParseTips(*f);
     if (const auto f = m.Find("physics", false)) ParsePhysics(*f);
     if (const auto f = m.Find("effects", false)) ParseEffects(*f);
+    // Procedure sections: kept as written, parsed by the procedures that own them.
+    if (const auto f = m.Find("calibration", false)) out_.calibration = *f;
+    if (const auto f = m.Find("handclasp", false)) out_.handclasp = *f;
     Validate();
     return out_;
   }

@@ -52,6 +52,9 @@
 //       settle_steps: 20
 //       max_steps: 20000
 //       gravity: true
+//     calibration: {...}                   # optional: the optical-axis procedure (see
+//                                          # bench/calibration_config.h)
+//     handclasp: {...}                     # optional: the handclasp base-frame procedure
 //     effects:                             # optional list, applied on the truth side
 //       - type: transmission_error         # required; one of EffectTypes()
 //         declared: false                  # optional (default true): told to the estimator?
@@ -72,6 +75,7 @@
 #include <array>
 #include <string>
 
+#include "bench/yaml_util.h"
 #include "sim/twin_spec.h"
 
 namespace twin {
@@ -83,6 +87,12 @@ struct Scenario {
   TwinSpec twin;                                     ///< the cell, in SI units, validated
   std::array<std::string, kNumRobots> robot_names;   ///< robot names, in file order
   std::array<std::string, kNumRobots> model_paths;   ///< model files as resolved and loaded
+  /// The optional procedure sections, as written (node empty when absent); each procedure
+  /// parses its own with YamlReader(path), so messages name file, line and key path:
+  /// `calibration:` (optical-axis calibration, bench/calibration_config.h) and `handclasp:`
+  /// (base-frame calibration by handclasp).
+  YamlField calibration;
+  YamlField handclasp;
 };
 
 /// Parses scenario text. `source` names it in messages; relative model paths are resolved

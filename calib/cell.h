@@ -40,6 +40,14 @@ class Cell {
   virtual JointVector ReadEncoders(int robot) = 0;
   /// One frame of the hand camera: 8-bit BGR, OpenCV row order (row 0 at the top).
   virtual cv::Mat GrabImage() = 0;
+  /// Exchanges the hand camera and the chessboard between the two flanges, each onto the
+  /// other's bracket (Zhu et al. 2019, section II: "the roles of the passive and active robots
+  /// are exchanged"); the robots hold still. On a hardware cell the operator does it and
+  /// confirms. Fails (status and reason, nothing changed) when the tools cannot be exchanged
+  /// where the robots stand.
+  virtual MoveResult ExchangeTools() = 0;
+  /// Index of the robot that carries the hand camera now; the other carries the board.
+  virtual int CameraRobot() = 0;
 };
 
 }  // namespace twin

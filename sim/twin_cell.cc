@@ -254,6 +254,31 @@ struct TwinCell::Impl {
     }
   }
 
+  // (Re)builds the MJCF, the MuJoCo model and data and the name lookups from spec and models;
+  // the renderers are dropped (their GL context holds the old model).
+  void Build() {
+    hand_renderer.reset();
+    overview_renderer.reset();
+    mjcf = WriteTwinMjcf(spec, models, drives);
+    d.reset();
+    m = LoadMjcfFromString(mjcf);
+    d.reset(mj_makeData(m.get()));
+    if (!d) throw std::runtime_error("MuJoCo could not allocate mjData");
+    for (int k = 0; k < kNumRobots; ++k) {
+      const std::string p = Prefix(k);
+      for (int i = 0; i < kNumJoints; ++i) {
+        const int j = Id(mjOBJ_JOINT, p + "j" + std::to_string(i + 1));
+        qadr[k][i] = m->jnt_qposadr[j];
+        dadr[k][i] = m->jnt_dofadr[j];
+        act[k][i] = Id(mjOBJ_ACTUATOR, p + "a" + std::to_string(i + 1));
+      }
+      for (int i = 0; i <= kNumLinks; ++i) site_L[k][i] = Id(mjOBJ_SITE, p + "L" + std::to_string(i));
+      site_tip[k] = Id(mjOBJ_SITE, p + "tip");
+    }
+    camera = Id(mjOBJ_CAMERA, kHandCameraName);
+    board_body = Id(mjOBJ_BODY, Prefix(spec.board.robot) + "board");
+  }
+
   OffscreenRenderer& HandRenderer() {
     if (!hand_renderer) {
       hand_renderer = std::make_unique<OffscreenRenderer>(m.get(), canvas.width, canvas.height,
@@ -279,35 +304,17 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
     s.drives[k].fill({spec.physics.stiffness, true});
     for (const auto& e : s.effects) e->ApplyToDrive(k, &s.drives[k]);
   }
-  s.mjcf = WriteTwinMjcf(spec, s.models, s.drives);
-  s.m = LoadMjcfFromString(s.mjcf);
-  s.d.reset(mj_makeData(s.m.get()));
-  if (!s.d) throw std::runtime_error("MuJoCo could not allocate mjData");
-  for (int k = 0; k < kNumRobots; ++k) {
-    const std::string p = Prefix(k);
-    for (int i = 0; i < kNumJoints; ++i) {
-      const int j = s.Id(mjOBJ_JOINT, p + "j" + std::to_string(i + 1));
-      s.qadr[k][i] = s.m->jnt_qposadr[j];
-      s.dadr[k][i] = s.m->jnt_dofadr[j];
-      s.act[k][i] = s.Id(mjOBJ_ACTUATOR, p + "a" + std::to_string(i + 1));
-    }
-    for (int i = 0; i <= kNumLinks; ++i) {
-      s.site_L[k][i] = s.Id(mjOBJ_SITE, p + "L" + std::to_string(i));
-    }
-    s.site_tip[k] = s.Id(mjOBJ_SITE, p + "tip");
-    s.motor[k] = spec.robots[k].q_initial;
-    s.direction[k] = JointVector::Zero();
-  }
-  s.camera = s.Id(mjOBJ_CAMERA, kHandCameraName);
-  s.board_body = s.Id(mjOBJ_BODY, Prefix(spec.board.robot) + "board");
   if (spec.camera.distortion.Any()) {
     s.distortion.emplace(spec.camera.intrinsics, spec.camera.distortion);
     s.canvas = s.distortion->canvas();
   } else {
     s.canvas = spec.camera.intrinsics;
   }
+  s.Build();
   // Start at rest at the link-side angles of the initial motor angles.
   for (int k = 0; k < kNumRobots; ++k) {
+    s.motor[k] = spec.robots[k].q_initial;
+    s.direction[k] = JointVector::Zero();
     const JointVector link = s.motor[k] + s.TransmissionOffset(k);
     for (int i = 0; i < kNumJoints; ++i) s.d->qpos[s.qadr[k][i]] = link(i);
   }
@@ -353,6 +360,43 @@ MoveResult TwinCell::MoveTo(int robot, const JointVector& q_target) {
   }
   return s.Run(robot, q_target);
 }
+
+MoveResult TwinCell::ExchangeTools() {
+  Impl& s = *impl_;
+  // The operator re-mounts both tools on the same brackets while the robots hold still: the
+  // state (link angles, motor commands) carries over to the rebuilt world.
+  std::array<JointVector, kNumRobots> link;
+  for (int k = 0; k < kNumRobots; ++k) {
+    for (int i = 0; i < kNumJoints; ++i) link[k](i) = s.d->qpos[s.qadr[k][i]];
+  }
+  const double time = s.d->time;
+  std::swap(s.spec.camera.robot, s.spec.board.robot);
+  s.Build();
+  s.d->time = time;
+  for (int k = 0; k < kNumRobots; ++k) {
+    for (int i = 0; i < kNumJoints; ++i) s.d->qpos[s.qadr[k][i]] = link[k](i);
+  }
+  mj_forward(s.m.get(), s.d.get());
+  MoveResult result;
+  if (const mjContact* c = s.Collision({})) {
+    // Put the tools back: a cell never stays in an inconsistent state.
+    std::swap(s.spec.camera.robot, s.spec.board.robot);
+    s.Build();
+    s.d->time = time;
+    for (int k = 0; k < kNumRobots; ++k) {
+      for (int i = 0; i < kNumJoints; ++i) s.d->qpos[s.qadr[k][i]] = link[k](i);
+    }
+    mj_forward(s.m.get(), s.d.get());
+    result.status = MoveStatus::kCollision;
+    result.reason = "after exchanging the tools " + s.ContactText(*c) +
+                    "; tools left where they were (move the robots apart first)";
+    return result;
+  }
+  result = s.Run(-1, JointVector::Zero());
+  return result;
+}
+
+int TwinCell::CameraRobot() { return impl_->spec.camera.robot; }
 
 JointVector TwinCell::ReadEncoders(int robot) {
   Impl& s = *impl_;

@@ -38,6 +38,8 @@ class TwinCell : public Cell {
   MoveResult MoveTo(int robot, const JointVector& q_target) override;
   JointVector ReadEncoders(int robot) override;
   cv::Mat GrabImage() override;
+  MoveResult ExchangeTools() override;
+  int CameraRobot() override;
 
   /// Ground truth for scoring (bench/ only).
   TwinTruth Truth() const;
