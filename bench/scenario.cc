@@ -38,10 +38,6 @@ const Keys kEffectKeys = {"type", "declared", "robot", "joint"};  // any other k
 
 double MmToM(double mm) { return mm / 1000.0; }  // division: the nearest double to mm/1000
 
-Vector3 DegToRad3(const Vector3& deg) {
-  return Vector3(DegToRad(deg.x()), DegToRad(deg.y()), DegToRad(deg.z()));
-}
-
 bool IsIdentifier(const std::string& s) {
   const auto alpha = [](char c) {
     return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_';
@@ -106,24 +102,7 @@ class ScenarioParser {
     locations_.Add(spec_field, r_.Where(f));
   }
 
-  // A pose from the xyz_mm, rpy_deg and zyz_deg entries of a map.
-  Transform PoseFrom(const YamlMap& m) const {
-    const std::optional<YamlField> rpy = m.Find("rpy_deg", false);
-    const std::optional<YamlField> zyz = m.Find("zyz_deg", false);
-    if (rpy && zyz) {
-      r_.Fail(*zyz, "expected exactly one of rpy_deg and zyz_deg, got both");
-    }
-    if (!rpy && !zyz) {
-      r_.Fail(m.field(), "missing rotation: expected exactly one of rpy_deg (fixed axes, "
-                         "R = Rz(y) Ry(p) Rx(r)) or zyz_deg (R = Rz(a) Ry(b) Rz(c))");
-    }
-    Transform X = Transform::Identity();
-    X.translation() = r_.Vector(m.Get("xyz_mm")) / 1000.0;
-    X.linear() = rpy ? RpyToRotation(DegToRad3(r_.Vector(*rpy)))
-                     : RotationFromZyz(DegToRad3(r_.Vector(*zyz)));
-    return X;
-  }
-
+  Transform PoseFrom(const YamlMap& m) const { return ReadPose(r_, m); }
   Transform Pose(const YamlField& f) const { return PoseFrom(YamlMap(r_, f, kPoseKeys)); }
 
   // The index of the robot named by f (a robot name of this scenario).

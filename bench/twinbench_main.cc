@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "bench/calibration_run.h"
 #include "bench/model_loader.h"
 #include "bench/twin_commands.h"
 #include "bench/urdf_model.h"
@@ -192,6 +193,26 @@ int main(int argc, char** argv) {
   bench->add_option("--frames", bench_options.frames, "frames per figure")->check(CLI::Range(1, 100000));
   bench->add_option("--moves", bench_options.moves, "settled moves")->check(CLI::Range(2, 100000));
 
+  RunOptions run_options;
+  auto* run = app.add_subcommand(
+      "run", "run a scenario's calibration on the twin, score it against truth, write a report");
+  run->add_option("scenario", run_options.scenario, "scenario file")->required();
+  run->add_option("--out", run_options.out_dir, "output folder (replaced when complete)")
+      ->required();
+  run->add_flag("--quiet", run_options.quiet, "no progress lines");
+  IdentifyOptions identify_options;
+  auto* identify = app.add_subcommand(
+      "identify", "identify a robot's parameters from recorded measurements (no twin)");
+  identify->add_option("--model", identify_options.model, "nominal model (.yaml/.urdf)")
+      ->required();
+  identify->add_option("--measurements", identify_options.measurements, "measurements.csv")
+      ->required();
+  identify->add_option("--robot", identify_options.robot,
+                       "rows of this robot (default: the first row's)");
+  identify->add_option("--board-mount", identify_options.board_mount,
+                       "board frame in the flange: x,y,z,roll,pitch,yaw [mm, deg] (default 0)");
+  identify->add_option("--out", identify_options.out_dir, "output folder")->required();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -206,6 +227,8 @@ int main(int argc, char** argv) {
     if (*demo) return RunDemo(model_dir, samples, rng_seed);
     if (*render) return RunRender(render_options);
     if (*bench) return RunTwinBenchmark(bench_options);
+    if (*run) return RunCalibrationScenario(run_options);
+    if (*identify) return RunIdentify(identify_options);
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitUserError;

@@ -7,6 +7,7 @@
 #include <ios>
 #include <iterator>
 
+#include "calib/base_calibration.h"
 #include "calib/errors.h"
 
 namespace twin {
@@ -169,6 +170,22 @@ std::optional<YamlField> YamlMap::Find(const std::string& key, bool required) co
   if (it != entries_.end()) return map_.Child(key, it->second);
   if (required) reader_.Fail(map_, "missing required key '" + key + "'");
   return std::nullopt;
+}
+
+Transform ReadPose(const YamlReader& r, const YamlMap& m) {
+  const std::optional<YamlField> rpy = m.Find("rpy_deg", false);
+  const std::optional<YamlField> zyz = m.Find("zyz_deg", false);
+  if (rpy && zyz) r.Fail(*zyz, "expected exactly one of rpy_deg and zyz_deg, got both");
+  if (!rpy && !zyz) {
+    r.Fail(m.field(), "missing rotation: expected exactly one of rpy_deg (fixed axes, "
+                      "R = Rz(y) Ry(p) Rx(r)) or zyz_deg (R = Rz(a) Ry(b) Rz(c))");
+  }
+  const Vector3 deg = r.Vector(rpy ? *rpy : *zyz);
+  const Vector3 rad(DegToRad(deg.x()), DegToRad(deg.y()), DegToRad(deg.z()));
+  Transform X = Transform::Identity();
+  X.translation() = r.Vector(m.Get("xyz_mm")) / 1000.0;
+  X.linear() = rpy ? RpyToRotation(rad) : RotationFromZyz(rad);
+  return X;
 }
 
 Matrix3 RpyToRotation(const Vector3& rpy) {

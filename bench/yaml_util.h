@@ -102,6 +102,10 @@ class YamlMap {
   std::vector<std::pair<std::string, YamlField>> extra_;
 };
 
+/// A pose from the xyz_mm entry and exactly one of rpy_deg (R = Rz(y) Ry(p) Rx(r)) or zyz_deg
+/// (R = Rz(a) Ry(b) Rz(c)) of a map; the caller checked the map's keys.
+Transform ReadPose(const YamlReader& r, const YamlMap& m);
+
 /// R = Rz(y) Ry(p) Rx(r) for rpy = (r, p, y) [rad]: roll-pitch-yaw about fixed axes, as URDF.
 Matrix3 RpyToRotation(const Vector3& rpy);
 

@@ -48,6 +48,19 @@ class Cell {
   virtual MoveResult ExchangeTools() = 0;
   /// Index of the robot that carries the hand camera now; the other carries the board.
   virtual int CameraRobot() = 0;
+  /// Asks the operator to jog robot `jogged_robot`'s measuring tip onto the other robot's tip
+  /// and to confirm the contact (the "handclasp" of Gan et al. 2014, section 3); the other robot
+  /// holds still, and the jogged robot stays at the contact. Fails with a status and a reason
+  /// (kInvalidInput: bad index or no handclasp on this cell; kOutOfLimits: the other tip is out
+  /// of reach; kCollision; kNotSettled: the tips could not be brought together). The default
+  /// is a cell without measuring tips.
+  virtual MoveResult JogTipToContact(int jogged_robot) {
+    MoveResult result;
+    result.status = MoveStatus::kInvalidInput;
+    result.reason = "this cell has no handclasp (robot " + std::to_string(jogged_robot) +
+                    " cannot be jogged onto the other tip)";
+    return result;
+  }
 };
 
 }  // namespace twin

@@ -1,5 +1,6 @@
 #include "calib/nonlinear_identification.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -62,6 +63,7 @@ struct AxisResidualFunctor {
   const ParameterVector& phi0;
   const Eigen::MatrixXd& SV;  // kNumParams x rank: column_scale .* identifiable_basis
   JointVector q;
+  Vector3 offset;
   Vector3 c0;
   Eigen::Matrix<double, 3, 2> N;
 
@@ -75,7 +77,7 @@ struct AxisResidualFunctor {
       phi[i] = T(phi0(i));
       for (int j = 0; j < SV.cols(); ++j) phi[i] += SV(i, j) * z[j];
     }
-    const Vec3<T> p = EndPositionT(model, phi, q);
+    const Vec3<T> p = EndPositionT(model, phi, q) - offset.cast<T>();
     const Vec3<T> c = c0.cast<T>() + N.col(0).cast<T>() * s[0] + N.col(1).cast<T>() * s[1];
     const Vec3<T> r = PerpendicularPart(p, c, Vec3<T>(mu[0], mu[1], mu[2]));
     for (int i = 0; i < 3; ++i) residual[i] = r(i);
@@ -83,13 +85,69 @@ struct AxisResidualFunctor {
   }
 };
 
+// The scale measurement (header): w (mu_k . (p_i - c_k) / |mu_k| - t_k - z_i), 1 row [m].
+// Parameter blocks: z (rank), s_k (2), mu_k (3), t_k (1).
+struct DepthResidualFunctor {
+  const KinematicModel& model;
+  const ParameterVector& phi0;
+  const Eigen::MatrixXd& SV;
+  JointVector q;
+  Vector3 offset;
+  Vector3 c0;
+  Eigen::Matrix<double, 3, 2> N;
+  double depth;
+  const double& weight;  // shared, so a second solve can reweight
+
+  template <typename T>
+  bool operator()(T const* const* blocks, T* residual) const {
+    const T* z = blocks[0];
+    const T* s = blocks[1];
+    const T* mu = blocks[2];
+    const T* t = blocks[3];
+    T phi[kNumParams];
+    for (int i = 0; i < kNumParams; ++i) {
+      phi[i] = T(phi0(i));
+      for (int j = 0; j < SV.cols(); ++j) phi[i] += SV(i, j) * z[j];
+    }
+    const Vec3<T> p = EndPositionT(model, phi, q) - offset.cast<T>();
+    const Vec3<T> c = c0.cast<T>() + N.col(0).cast<T>() * s[0] + N.col(1).cast<T>() * s[1];
+    const Vec3<T> m(mu[0], mu[1], mu[2]);
+    residual[0] = T(weight) * ((p - c).dot(m) / m.norm() - t[0] - T(depth));
+    return true;
+  }
+};
+
+bool AllHaveDepth(const std::vector<AxisSample>& samples) {
+  for (const AxisSample& s : samples) {
+    if (!std::isfinite(s.depth)) return false;
+  }
+  return !samples.empty();
+}
+
+// Rows mu_k^T (J_j - J_i) for consecutive samples of each axis: how the distance between
+// positions along the axis changes with the parameters (what the depths measure).
+Eigen::MatrixXd DepthRows(const KinematicModel& model, const std::vector<AxisSample>& samples,
+                          const std::vector<Line3>& axes) {
+  std::vector<std::vector<Eigen::Matrix<double, 3, kNumParams>>> J(axes.size());
+  for (const AxisSample& s : samples) {
+    J[s.axis].push_back(IdentificationJacobian(model, s.q).topRows<3>());
+  }
+  std::vector<Eigen::RowVectorXd> rows;
+  for (size_t k = 0; k < axes.size(); ++k) {
+    const Vector3 mu = axes[k].direction.normalized();
+    for (size_t i = 1; i < J[k].size(); ++i) rows.push_back(mu.transpose() * (J[k][i] - J[k][i - 1]));
+  }
+  Eigen::MatrixXd D(rows.size(), kNumParams);
+  for (size_t r = 0; r < rows.size(); ++r) D.row(r) = rows[r];
+  return D;
+}
+
 double RmsDistance(const KinematicModel& model, const std::vector<AxisSample>& samples,
                    const std::vector<Line3>& axes) {
   double sum = 0.0;
   for (const AxisSample& s : samples) {
     const Line3& l = axes[s.axis];
-    sum += PerpendicularPart<double>(EndPose(model, s.q).translation(), l.point, l.direction)
-               .squaredNorm();
+    sum += PerpendicularPart<double>(AxisPoint(model, s), l.point, l.direction).squaredNorm();
   }
   return std::sqrt(sum / static_cast<double>(samples.size()));
 }
@@ -146,14 +204,41 @@ NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
   res.model = nominal;
   const ParameterVector phi0 = GetParameters(nominal);
 
-  // Identifiable subspace exactly as the linearized method computes it (profiled Phi).
-  const std::vector<Line3> axes0 = FitAxes(nominal, samples);
+  // Identifiable subspace exactly as the linearized method computes it (profiled Phi), plus
+  // the depth rows when the scale is measured.
+  std::vector<Line3> axes0 = FitAxes(nominal, samples);
+  const bool depth = options.use_depth && AllHaveDepth(samples);
+  res.depth_used = depth;
+  if (depth) {
+    // Orient each mu0_k so that the measured depth grows along it.
+    std::vector<std::vector<std::pair<double, double>>> along(num_axes);
+    for (const AxisSample& smp : samples) {
+      const Line3& l = axes0[smp.axis];
+      along[smp.axis].push_back({(AxisPoint(nominal, smp) - l.point).dot(l.direction), smp.depth});
+    }
+    for (int k = 0; k < num_axes; ++k) {
+      double ms = 0, mz = 0, c = 0;
+      for (const auto& [a, zz] : along[k]) { ms += a; mz += zz; }
+      ms /= along[k].size();
+      mz /= along[k].size();
+      for (const auto& [a, zz] : along[k]) c += (a - ms) * (zz - mz);
+      if (c < 0) axes0[k].direction = -axes0[k].direction;
+    }
+  }
   std::vector<Vector3> directions;
   for (const Line3& l : axes0) directions.push_back(l.direction);
   const MisalignedErrorStack stack = StackMisalignedErrors(nominal, samples, directions);
-  res.observability = AnalyseObservability(ProfiledPhi(stack), nominal.name,
-                                           options.rank_tolerance,
-                                           LineConstraintInvariants(nominal));
+  std::vector<ParameterVector> invariants = LineConstraintInvariants(nominal);
+  Eigen::MatrixXd Phi = ProfiledPhi(stack);
+  if (depth) {
+    invariants.pop_back();  // the uniform scale: measured now
+    const Eigen::MatrixXd D = DepthRows(nominal, samples, axes0);
+    Eigen::MatrixXd stacked(Phi.rows() + D.rows(), kNumParams);
+    stacked << Phi, D;
+    Phi = stacked;
+  }
+  res.observability =
+      AnalyseObservability(Phi, nominal.name, options.rank_tolerance, invariants);
   const int rank = res.observability.rank;
   res.axes = axes0;
   res.rms_distance_before = RmsDistance(nominal, samples, axes0);
@@ -167,23 +252,37 @@ NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
   const Eigen::MatrixXd SV =
       res.observability.column_scale.asDiagonal() * res.observability.identifiable_basis;
 
-  // Line blocks: s_k (point offset in the plane perpendicular to mu0_k) and mu_k.
+  // Line blocks: s_k (point offset in the plane perpendicular to mu0_k), mu_k and, with
+  // depths, t_k (the along-line position of the camera centre).
   std::vector<Eigen::Vector2d> s(num_axes, Eigen::Vector2d::Zero());
   std::vector<Vector3> mu(num_axes);
   std::vector<Eigen::Matrix<double, 3, 2>> N(num_axes);
+  std::vector<double> t(num_axes, 0.0);
+  std::vector<int> count(num_axes, 0);
   for (int k = 0; k < num_axes; ++k) {
     mu[k] = axes0[k].direction.normalized();
     const Vector3 any = std::abs(mu[k].x()) < 0.9 ? Vector3::UnitX() : Vector3::UnitY();
     N[k].col(0) = mu[k].cross(any).normalized();
     N[k].col(1) = mu[k].cross(N[k].col(0));
   }
+  if (depth) {
+    for (const AxisSample& smp : samples) {
+      t[smp.axis] += (AxisPoint(nominal, smp) - axes0[smp.axis].point).dot(mu[smp.axis]) - smp.depth;
+      ++count[smp.axis];
+    }
+    for (int k = 0; k < num_axes; ++k) t[k] /= count[k];
+  }
+  // A first guess of sigma_perpendicular / sigma_depth: ~0.02 mm of servo residual against
+  // ~0.1 mm of depth from a small board (DESIGN.md corner accuracy); re-estimated below.
+  double weight = options.depth_weight > 0.0 ? options.depth_weight : 0.2;
 
   ceres::Problem problem;
+  std::vector<ceres::ResidualBlockId> depth_blocks;
   for (const AxisSample& smp : samples) {
     const int k = smp.axis;
     // Dynamic autodiff because the size of z (the rank) is only known at run time.
     auto* cost = new ceres::DynamicAutoDiffCostFunction<AxisResidualFunctor, 4>(
-        new AxisResidualFunctor{nominal, phi0, SV, smp.q, axes0[k].point, N[k]});
+        new AxisResidualFunctor{nominal, phi0, SV, smp.q, smp.offset, axes0[k].point, N[k]});
     cost->AddParameterBlock(rank);
     cost->AddParameterBlock(2);
     cost->AddParameterBlock(3);
@@ -192,6 +291,18 @@ NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
                                     ? new ceres::HuberLoss(options.huber_scale)
                                     : nullptr;
     problem.AddResidualBlock(cost, loss, {res.z.data(), s[k].data(), mu[k].data()});
+    if (depth) {
+      auto* dcost = new ceres::DynamicAutoDiffCostFunction<DepthResidualFunctor, 4>(
+          new DepthResidualFunctor{nominal, phi0, SV, smp.q, smp.offset, axes0[k].point, N[k],
+                                   smp.depth, weight});
+      dcost->AddParameterBlock(rank);
+      dcost->AddParameterBlock(2);
+      dcost->AddParameterBlock(3);
+      dcost->AddParameterBlock(1);
+      dcost->SetNumResiduals(1);
+      depth_blocks.push_back(
+          problem.AddResidualBlock(dcost, nullptr, {res.z.data(), s[k].data(), mu[k].data(), &t[k]}));
+    }
   }
   for (int k = 0; k < num_axes; ++k) {
     problem.SetManifold(mu[k].data(), new ceres::SphereManifold<3>());
@@ -206,6 +317,38 @@ NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
   so.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
+  const int n = static_cast<int>(samples.size());
+  auto depth_rms = [&]() {
+    double sum = 0.0;
+    for (ceres::ResidualBlockId id : depth_blocks) {
+      double r = 0.0;
+      problem.EvaluateResidualBlock(id, false, nullptr, &r, nullptr);
+      sum += r * r;
+    }
+    return std::sqrt(sum / std::max<int>(1, n)) / weight;
+  };
+  if (depth && options.depth_weight <= 0.0 && summary.IsSolutionUsable()) {
+    // Variance components: per-component perpendicular sigma (2 dof per sample, 4 per line)
+    // against depth sigma (1 dof per sample, 1 per axis offset), then solve again.
+    std::vector<Line3> lines = axes0;
+    for (int k = 0; k < num_axes; ++k) {
+      lines[k].direction = mu[k].normalized();
+      lines[k].point = axes0[k].point + N[k] * s[k];
+    }
+    const KinematicModel m1 = WithParameters(nominal, phi0 + SV * res.z);
+    const double rms_perp = RmsDistance(m1, samples, lines);
+    const double sigma_perp =
+        rms_perp * std::sqrt(static_cast<double>(n) / std::max(1, 2 * n - 4 * num_axes));
+    const double d = depth_rms();
+    const double sigma_depth =
+        d * std::sqrt(static_cast<double>(n) / std::max(1, n - num_axes));
+    if (sigma_perp > 0.0 && sigma_depth > 0.0) {
+      weight = std::clamp(sigma_perp / sigma_depth, 1e-3, 1e3);
+      ceres::Solve(so, &problem, &summary);
+    }
+  }
+  res.depth_weight = depth ? weight : 0.0;
+  if (depth) res.rms_depth_residual = depth_rms();
 
   res.brief_report = summary.BriefReport();
   res.reason = summary.message;
@@ -226,6 +369,8 @@ NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
     res.axes[k].point = axes0[k].point + N[k] * s[k];
   }
   res.rms_distance_after = RmsDistance(res.model, samples, res.axes);
+  const ParameterVector v = LineConstraintInvariants(nominal).back();
+  res.scale = 1.0 + v.dot(res.correction) / v.squaredNorm();
   return res;
 }
 

@@ -11,8 +11,18 @@
 // line in exactly one point while mu_k stays away from perpendicular to mu0_k, so the slide of
 // the point along the line (a gauge the residual cannot see) is removed. Both are initialised
 // by FitLine on the nominal positions.
-// Residual per sample i on axis k (3 rows, metres): (I - mu_k mu_k^T)(p_BE(phi, q_i) - c_k),
-// the component of the feature point's offset from the line perpendicular to the line.
+// Residual per sample i on axis k (3 rows, metres): (I - mu_k mu_k^T)(p_BE(phi, q_i) - o_i - c_k),
+// the component of the feature point's offset from the line perpendicular to the line, with
+// o_i the offset the camera measured when the servo stopped (AxisSample::offset).
+//
+// Beyond the paper: the scale measurement. The collinearity constraint cannot see a uniform
+// scale of the arm (lines stay lines). When the samples carry depths z_i (distance of P from
+// the camera along the axis, from the board pose and the known square length), each adds one
+// residual w (mu_k . (p_i - c_k) - t_k - z_i): the position of P along the line must follow the
+// measured depth up to one unknown offset t_k per axis (where the camera centre lies on it).
+// mu_k's sign is fixed at the start so that depth grows along it. The scale of the arm then
+// enters the data, and the uniform-scale direction leaves the unidentifiable set; rotation
+// about and translation along base z (link1.theta, link1.d) stay unidentifiable.
 #pragma once
 
 #include <string>
@@ -41,6 +51,12 @@ struct NonlinearIdentificationOptions {
   double rank_tolerance = 1e-6;        ///< relative singular-value cut of AnalyseObservability
   NonlinearLoss loss = NonlinearLoss::kNone;  ///< robust loss per sample
   double huber_scale = 1e-4;           ///< Huber threshold on the distance [m] (> 0), if kHuber
+  /// Use the samples' measured depths (AxisSample::depth) when every sample has one: the
+  /// scale measurement that makes the uniform scale of the arm identifiable (see above).
+  bool use_depth = true;
+  /// Weight of a depth residual relative to a perpendicular one, sigma_perpendicular /
+  /// sigma_depth [-]; 0 estimates it from the data (variance components, two solves).
+  double depth_weight = 0.0;
 };
 
 /// Throws InputError naming the bad field and value.
@@ -67,6 +83,12 @@ struct NonlinearIdentificationResult {
   std::vector<Line3> axes;            ///< the fitted optical axes in B (unit directions)
   double rms_distance_before = 0.0;   ///< RMS point-to-line distance, nominal, FitLine axes [m]
   double rms_distance_after = 0.0;    ///< RMS point-to-line distance at the solution [m]
+  bool depth_used = false;            ///< depth residuals entered the problem
+  double depth_weight = 0.0;          ///< weight used (given or estimated) [-]
+  double rms_depth_residual = 0.0;    ///< RMS of (along-line position - t_k - z_i) [m]
+  /// Length ratio identified / nominal along the uniform-scale direction: 1 + (projection
+  /// of the correction onto the scale direction) [-]; exactly 1 without depth.
+  double scale = 1.0;
   /// Identifiability of the nominal model (as in the linearized method); its null space gets
   /// exactly zero correction.
   ObservabilityReport observability;

@@ -97,6 +97,7 @@ int ValidateAxisSamples(const std::vector<AxisSample>& samples) {
     const std::string where = "samples[" + std::to_string(n) + "]";
     if (s.axis < 0) throw InputError(where + ".axis", "negative: " + std::to_string(s.axis));
     if (!s.q.allFinite()) throw InputError(where + ".q", "not finite");
+    if (!s.offset.allFinite()) throw InputError(where + ".offset", "not finite");
     if (static_cast<int>(count.size()) <= s.axis) count.resize(s.axis + 1, 0);
     ++count[s.axis];
   }
@@ -117,7 +118,7 @@ std::vector<std::vector<Vector3>> AxisPoints(const KinematicModel& model,
   for (const AxisSample& s : samples) {
     if (s.axis < 0) throw InputError("AxisSample.axis", "negative: " + std::to_string(s.axis));
     if (static_cast<int>(pts.size()) <= s.axis) pts.resize(s.axis + 1);
-    pts[s.axis].push_back(EndPose(model, s.q).translation());
+    pts[s.axis].push_back(AxisPoint(model, s));
   }
   return pts;
 }
@@ -126,6 +127,10 @@ std::vector<Line3> FitAxes(const KinematicModel& model, const std::vector<AxisSa
   std::vector<Line3> lines;
   for (const auto& pts : AxisPoints(model, samples)) lines.push_back(FitLine(pts));
   return lines;
+}
+
+Vector3 AxisPoint(const KinematicModel& model, const AxisSample& sample) {
+  return EndPose(model, sample.q).translation() - sample.offset;
 }
 
 MisalignedErrorStack StackMisalignedErrors(const KinematicModel& model,
@@ -142,7 +147,7 @@ MisalignedErrorStack StackMisalignedErrors(const KinematicModel& model,
                                               " given)");
     }
     const FrameSet frames = ForwardKinematics(model, s.q);
-    p[s.axis].push_back(frames.X_BE.translation());
+    p[s.axis].push_back(frames.X_BE.translation() - s.offset);
     J[s.axis].push_back(IdentificationJacobian(model, s.q).topRows<3>());
   }
   MisalignedErrorStack out;

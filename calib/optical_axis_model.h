@@ -8,6 +8,7 @@
 // only if the model is right; their transversal scatter is the misaligned error.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -22,7 +23,18 @@ namespace twin {
 struct AxisSample {
   int axis = 0;                        ///< optical axis index k (0-based)
   JointVector q = JointVector::Zero(); ///< recorded joint angles [rad]
+  /// Residual offset of the feature point from the axis when the servo stopped, in B [m]: the
+  /// servo stops within a pixel tolerance (0.1 px is 0.06 mm at 0.5 m), and the camera
+  /// measures what is left; the point on the axis is p_BE(q) - offset. Zero: exactly on it.
+  Vector3 offset = Vector3::Zero();
+  /// Distance of the feature point from the camera along the axis [m], measured from the
+  /// board's pose (known square length); NaN when not measured. Only differences between
+  /// samples of one axis are used (the scale measurement of IdentifyNonlinear).
+  double depth = std::numeric_limits<double>::quiet_NaN();
 };
+
+/// The point on the axis for a sample: p_BE(q) - offset [m, in B].
+Vector3 AxisPoint(const KinematicModel& model, const AxisSample& sample);
 
 /// A straight line in B: a point on it [m] and a unit direction [-].
 struct Line3 {

@@ -1,5 +1,8 @@
 #include "calib/pose_planner.h"
 
+#include <atomic>
+#include <thread>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -185,6 +188,7 @@ const char* ToString(PosePlannerStatus status) {
 
 void ValidatePosePlannerOptions(const PosePlannerOptions& o) {
   Require(o.num_axes >= 1, "num_axes", o.num_axes, ">= 1");
+  Require(o.threads >= 0, "threads", o.threads, ">= 0 (0: one per hardware thread)");
   Require(o.positions_per_axis >= 3, "positions_per_axis", o.positions_per_axis, ">= 3");
   Require(o.swarm_size >= 1, "swarm_size", o.swarm_size, ">= 1");
   Require(o.iterations >= 0, "iterations", o.iterations, ">= 0");
@@ -304,8 +308,17 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
   const Eigen::VectorXd v_max = o.max_velocity_fraction * range;
   const int q = o.num_axes;
 
-  double best_overall = kInf;
-  for (int run = 0; run < o.runs; ++run) {
+  // One PSO run (eq. 35-41); runs are independent (own seed), so they run in parallel.
+  struct RunOutput {
+    std::vector<double> history;
+    std::vector<PlannedAxis> axes;
+    double best = kInf;
+    RejectionCounts rejections;
+    int evaluations = 0;
+    std::string failure;  // non-empty: no feasible start
+  };
+  auto run_swarm = [&](int run) {
+    RunOutput out;
     std::seed_seq seq{static_cast<std::uint32_t>(o.seed), static_cast<std::uint32_t>(o.seed >> 32),
                       static_cast<std::uint32_t>(run)};
     std::mt19937_64 rng(seq);
@@ -316,13 +329,13 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
       Eigen::VectorXd x(pl.dim);
       for (int a = 0; a < attempts; ++a) {
         for (int i = 0; i < pl.dim; ++i) x(i) = pl.lo(i) + u01(rng) * range(i);
-        ++result.evaluations;
+        ++out.evaluations;
         const Cause c = pl.Evaluate(x.data(), &p->axes[k]);
         if (c == Cause::kNone) {
           p->x.segment(k * pl.dim, pl.dim) = x;
           return true;
         }
-        Count(c, &result.rejections);
+        Count(c, &out.rejections);
       }
       return false;
     };
@@ -337,13 +350,11 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
       p.axes.resize(q);
       for (int k = 0; k < q; ++k) {
         if (!draw(&p, k, o.max_draws_per_axis)) {
-          result.status = PosePlannerStatus::kNoFeasiblePoses;
           std::ostringstream s;
           s << "no feasible pose for axis " << k << " of run " << run << " in "
-            << o.max_draws_per_axis << " draws; " << CountsText(result.rejections);
-          result.reason = s.str();
-          result.axes.clear();
-          return result;
+            << o.max_draws_per_axis << " draws";
+          out.failure = s.str();
+          return out;
         }
       }
       p.f = pl.Fitness(p.axes);
@@ -360,7 +371,7 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
       g_x = swarm[0].x;
       g_axes = swarm[0].axes;
     }
-    std::vector<double> history{g_f};
+    out.history.push_back(g_f);
 
     for (int it = 0; it < o.iterations; ++it) {
       for (Particle& p : swarm) {
@@ -376,10 +387,10 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
           p.x(i) = std::clamp(p.x(i) + vi, pl.lo(j), pl.hi(j));
         }
         for (int k = 0; k < q; ++k) {  // step 3: infeasible sub-particles are redrawn
-          ++result.evaluations;
+          ++out.evaluations;
           const Cause c = pl.Evaluate(p.x.data() + k * pl.dim, &p.axes[k]);
           if (c == Cause::kNone) continue;
-          Count(c, &result.rejections);
+          Count(c, &out.rejections);
           if (draw(&p, k, o.redraws_after_update)) continue;
           p.x.segment(k * pl.dim, pl.dim) = x_old.segment(k * pl.dim, pl.dim);
           p.v.segment(k * pl.dim, pl.dim).setZero();
@@ -397,13 +408,54 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
           g_axes = p.axes;
         }
       }
-      history.push_back(g_f);
+      out.history.push_back(g_f);
     }
-    result.fitness_history.push_back(history);
-    if (g_f < best_overall || result.best_run < 0) {
-      best_overall = g_f;
+    out.best = g_f;
+    out.axes = g_axes;
+    return out;
+  };
+
+  std::vector<RunOutput> runs(o.runs);
+  const int threads = std::max(1, std::min(o.threads > 0 ? o.threads
+                                                         : static_cast<int>(std::thread::hardware_concurrency()),
+                                           o.runs));
+  std::atomic<int> next{0};
+  auto worker = [&] {
+    for (int r = next++; r < o.runs; r = next++) runs[r] = run_swarm(r);
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+
+  double best_overall = kInf;
+  for (int run = 0; run < o.runs; ++run) {
+    RunOutput& r = runs[run];
+    RejectionCounts& c = result.rejections;
+    c.active_ik += r.rejections.active_ik;
+    c.passive_ik += r.rejections.passive_ik;
+    c.c1_joint_limits += r.rejections.c1_joint_limits;
+    c.c2_singularity += r.rejections.c2_singularity;
+    c.c3_visibility += r.rejections.c3_visibility;
+    c.c4_min_distance += r.rejections.c4_min_distance;
+    c.c5_max_distance += r.rejections.c5_max_distance;
+    result.evaluations += r.evaluations;
+    if (!r.failure.empty()) break;  // counts as if the runs had run one after the other
+  }
+  for (int run = 0; run < o.runs; ++run) {  // the first failing run decides, as if sequential
+    if (!runs[run].failure.empty()) {
+      result.status = PosePlannerStatus::kNoFeasiblePoses;
+      result.reason = runs[run].failure + "; " + CountsText(result.rejections);
+      result.axes.clear();
+      return result;
+    }
+  }
+  for (int run = 0; run < o.runs; ++run) {
+    result.fitness_history.push_back(runs[run].history);
+    if (runs[run].best < best_overall || result.best_run < 0) {
+      best_overall = runs[run].best;
       result.best_run = run;
-      result.axes = g_axes;
+      result.axes = runs[run].axes;
     }
   }
   result.best_fitness = best_overall;

@@ -59,6 +59,9 @@ struct PosePlannerOptions {
     return o;
   }();                                 ///< IK options for both robots
   std::uint64_t seed = 1;              ///< seed of all random numbers (reproducible)
+  /// Threads running the independent PSO runs (0: one per hardware thread). The result does
+  /// not depend on it: every run has its own seed.
+  int threads = 0;
 };
 
 /// Throws InputError naming the bad field and value. Geometric infeasibility (for example

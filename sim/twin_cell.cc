@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -10,6 +11,9 @@
 #include <mujoco/mujoco.h>
 
 #include "calib/errors.h"
+#include "calib/forward_kinematics.h"
+#include "calib/handclasp_procedure.h"
+#include "calib/inverse_kinematics.h"
 #include "sim/camera_image.h"
 #include "sim/mjcf_writer.h"
 #include "sim/mujoco_handles.h"
@@ -30,6 +34,13 @@ constexpr double kBackOutSlack = 1e-4;
 // dt = 2 ms holds kp = 5.5e5 (4.69) and diverges at 6e5 (4.90). The margin covers the inertia
 // changing with the pose.
 constexpr double kMaxOmegaDt = 4.5;
+
+// The simulated operator's handclasp: stand-off in front of the other tip [m], straight
+// approach waypoints from there, corrective jogs before giving up, tip-axis rolls tried.
+constexpr double kHandclaspStandoff = 0.05;
+constexpr int kApproachWaypoints = 5;
+constexpr int kMaxCorrectiveJogs = 8;
+constexpr int kHandclaspRolls = 8;
 
 // An independent random stream per purpose, so that grabbing images does not change encoder
 // noise and vice versa.
@@ -68,7 +79,9 @@ struct TwinCell::Impl {
   std::string mjcf;
   MjModelPtr m;
   MjDataPtr d;
-  std::mt19937_64 encoder_rng, image_rng;
+  std::mt19937_64 encoder_rng, image_rng, operator_rng;
+  double operator_sigma = 0.0;   // operator alignment error per axis [m]
+  double last_gap = 0.0;         // jogged tip to aim point after the last contact [m]
   std::array<JointVector, kNumRobots> motor;      // commanded motor angles [rad]
   std::array<JointVector, kNumRobots> direction;  // sign of each joint's last motion
   std::array<std::array<int, kNumJoints>, kNumRobots> qadr, dadr, act;
@@ -298,6 +311,7 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
   std::mt19937_64 geometry_rng = Stream(spec.seed, 0);
   s.encoder_rng = Stream(spec.seed, 1);
   s.image_rng = Stream(spec.seed, 2);
+  s.operator_rng = Stream(spec.seed, 3);
   for (int k = 0; k < kNumRobots; ++k) {
     s.models[k] = spec.robots[k].model;
     for (const auto& e : s.effects) e->ApplyToGeometry(k, &s.models[k], &geometry_rng);
@@ -397,6 +411,167 @@ MoveResult TwinCell::ExchangeTools() {
 }
 
 int TwinCell::CameraRobot() { return impl_->spec.camera.robot; }
+
+void TwinCell::SetOperatorAlignmentError(double sigma_m) {
+  if (!(std::isfinite(sigma_m) && sigma_m >= 0.0)) {
+    throw InputError("SetOperatorAlignmentError",
+                     "sigma must be a finite number >= 0 m, got " + std::to_string(sigma_m));
+  }
+  impl_->operator_sigma = sigma_m;
+}
+
+double TwinCell::last_contact_gap_m() const { return impl_->last_gap; }
+
+MoveResult TwinCell::JogTipToContact(int j) {
+  Impl& s = *impl_;
+  MoveResult result;
+  if (j < 0 || j >= kNumRobots) {
+    result.status = MoveStatus::kInvalidInput;
+    result.reason = "robot index " + std::to_string(j) + " is not 0 or 1";
+    return result;
+  }
+  const int o = 1 - j;
+  const std::string who = "handclasp of robot " + std::to_string(j) + " onto robot " +
+                          std::to_string(o) + "'s tip: ";
+  // The operator sees the true geometry (truth side): the true arm with the tip as its tool.
+  const KinematicModel model = WithTipTool(s.models[j], s.spec.tips[j].X_FTip);
+  const Transform X_BW = s.spec.robots[j].X_WB.inverse();
+  const Transform X_WTipO = FromMj(s.d->site_xpos + 3 * s.site_tip[o],
+                                   s.d->site_xmat + 9 * s.site_tip[o]);
+  // Aim point: the other tip plus the operator's alignment error (drawn for every contact, so
+  // the stream does not depend on sigma).
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Vector3 error;
+  for (int i = 0; i < 3; ++i) error(i) = normal(s.operator_rng);
+  const Vector3 p_W_aim = X_WTipO.translation() + s.operator_sigma * error;
+  const Vector3 z_o = X_WTipO.linear().col(2);
+
+  JointVector q_link;
+  for (int i = 0; i < kNumJoints; ++i) q_link(i) = s.d->qpos[s.qadr[j][i]];
+  const auto pose_B = [&](const Matrix3& R_W, const Vector3& p_W) {
+    Transform X = Transform::Identity();
+    X.linear() = R_W;
+    X.translation() = p_W;
+    return X_BW * X;
+  };
+  // Facing orientation and roll: IK solutions, the closest to the current pose first.
+  IkOptions ik;
+  ik.random_restarts = 8;
+  ik.seed = s.spec.seed;
+  IkOptions near = ik;
+  near.random_restarts = 0;
+  struct Candidate {
+    double cost;
+    JointVector standoff, goal;
+    Matrix3 R_W;
+  };
+  std::vector<Candidate> candidates;
+  std::string ik_reason;
+  for (int r = 0; r < kHandclaspRolls; ++r) {
+    const Matrix3 R_W = FacingTipRotation(X_WTipO.linear(), 2.0 * kPi * r / kHandclaspRolls);
+    const IkResult st =
+        SolveIk(model, pose_B(R_W, p_W_aim + kHandclaspStandoff * z_o), q_link, ik);
+    if (st.status != IkStatus::kSuccess) {
+      ik_reason = st.reason;
+      continue;
+    }
+    const IkResult goal = SolveIk(model, pose_B(R_W, p_W_aim), st.q, near);
+    if (goal.status != IkStatus::kSuccess) {
+      ik_reason = goal.reason;
+      continue;
+    }
+    candidates.push_back({(st.q - q_link).cwiseAbs().maxCoeff(), st.q, goal.q, R_W});
+  }
+  if (candidates.empty()) {
+    result.status = MoveStatus::kOutOfLimits;
+    result.reason = who + "the other tip is out of reach (IK: " + ik_reason + "); nothing moved";
+    return result;
+  }
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+  // Motor commands for link targets, and one settled move with the limits of MoveTo.
+  const auto move = [&](const JointVector& q_link_target, const std::string& stage) {
+    const JointVector motor = q_link_target - s.TransmissionOffset(j);
+    MoveResult m;
+    if (!WithinLimits(s.spec.robots[j].model, motor)) {
+      m.status = MoveStatus::kOutOfLimits;
+      m.reason = who + stage + ": a joint target is outside the joint limits";
+      return m;
+    }
+    m = s.Run(j, motor);
+    result.duration_s += m.duration_s;
+    if (m.status != MoveStatus::kSettled) m.reason = who + stage + ": " + m.reason;
+    return m;
+  };
+  // The operator tries the next roll when the way to the stand-off is blocked, backing out to
+  // the start pose first.
+  const JointVector motor_start = s.motor[j];
+  MoveResult m;
+  size_t chosen = 0;
+  for (; chosen < candidates.size(); ++chosen) {
+    m = move(candidates[chosen].standoff, "moving to the stand-off");
+    if (m.status == MoveStatus::kSettled) break;
+    if (m.status != MoveStatus::kCollision) return m;
+    const MoveResult back = s.Run(j, motor_start);
+    result.duration_s += back.duration_s;
+    if (back.status != MoveStatus::kSettled) {
+      m.reason += "; backing out: " + back.reason;
+      return m;
+    }
+  }
+  if (chosen == candidates.size()) {
+    m.reason += " (every one of " + std::to_string(candidates.size()) + " tip rolls blocked)";
+    return m;
+  }
+  const Candidate& best = candidates[chosen];
+  const Matrix3 R_W_goal = best.R_W;
+  // Straight approach along the other tip's axis.
+  JointVector q = best.standoff;
+  for (int k = 1; k <= kApproachWaypoints; ++k) {
+    const double back = kHandclaspStandoff * (1.0 - static_cast<double>(k) / kApproachWaypoints);
+    const IkResult step = SolveIk(model, pose_B(R_W_goal, p_W_aim + back * z_o), q, near);
+    if (step.status != IkStatus::kSuccess) {
+      m.status = MoveStatus::kOutOfLimits;
+      m.reason = who + "approach: " + step.reason;
+      return m;
+    }
+    q = step.q;
+    m = move(q, "approaching");
+    if (m.status != MoveStatus::kSettled) return m;
+  }
+  // Corrective jogs on what the operator sees (true site positions), by the true Jacobian.
+  const Transform X_BW_inv = X_BW;
+  for (int jog = 0;; ++jog) {
+    const Vector3 p_W = Vector3(s.d->site_xpos + 3 * s.site_tip[j]);
+    const Vector3 gap_W = p_W_aim - p_W;
+    if (gap_W.norm() <= kContactToleranceM) {
+      s.last_gap = gap_W.norm();
+      result.status = MoveStatus::kSettled;
+      return result;
+    }
+    if (jog >= kMaxCorrectiveJogs) {
+      std::ostringstream os;
+      os << who << "the tips are still " << gap_W.norm() * 1e3 << " mm from contact after "
+         << kMaxCorrectiveJogs << " corrective jogs";
+      result.status = MoveStatus::kNotSettled;
+      result.reason = os.str();
+      return result;
+    }
+    JointVector q_now;
+    for (int i = 0; i < kNumJoints; ++i) q_now(i) = s.d->qpos[s.qadr[j][i]];
+    const Matrix3 R_W_now = FromMj(s.d->site_xpos + 3 * s.site_tip[j],
+                                   s.d->site_xmat + 9 * s.site_tip[j]).linear();
+    Eigen::Matrix<double, 6, 1> twist;
+    twist.head<3>() = X_BW_inv.linear() * gap_W;
+    const Eigen::AngleAxisd w(R_W_goal * R_W_now.transpose());
+    twist.tail<3>() = X_BW_inv.linear() * (w.angle() * w.axis());
+    const JointVector dq =
+        ManipulatorJacobian(model, q_now).colPivHouseholderQr().solve(twist);
+    // The jog is relative to the current command (what the operator's pendant holds).
+    m = move(s.motor[j] + s.TransmissionOffset(j) + dq, "jogging");
+    if (m.status != MoveStatus::kSettled) return m;
+  }
+}
 
 JointVector TwinCell::ReadEncoders(int robot) {
   Impl& s = *impl_;

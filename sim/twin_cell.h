@@ -40,6 +40,24 @@ class TwinCell : public Cell {
   cv::Mat GrabImage() override;
   MoveResult ExchangeTools() override;
   int CameraRobot() override;
+  /// The simulated operator's handclasp (Gan et al. 2014, section 3): using the true
+  /// kinematics (a person looking at the tips), robot `jogged_robot` is driven by settled moves
+  /// to a stand-off in front of the other tip, then along the common tip axis, then by small
+  /// corrective jogs, until its true tip point is within kContactToleranceM of the other true
+  /// tip point plus the operator's alignment error (drawn per contact, N(0, sigma) per world
+  /// axis). Tips do not collide with each other in the MJCF, so contact is decided from the
+  /// MuJoCo site positions.
+  MoveResult JogTipToContact(int jogged_robot) override;
+
+  /// Standard deviation of the operator's alignment error per world axis [m] (default 0).
+  /// Throws InputError for a negative or non-finite value.
+  void SetOperatorAlignmentError(double sigma_m);
+  /// Distance between the jogged tip and the operator's aim point after the last successful
+  /// JogTipToContact [m] (tests: the settling floor of the contact).
+  double last_contact_gap_m() const;
+  /// Contact is confirmed when the jogged tip is this close to the aim point [m]: about the
+  /// servo settling floor (measured ~1e-11 m: settled below 1e-6 rad/s for 20 steps).
+  static constexpr double kContactToleranceM = 1e-9;
 
   /// Ground truth for scoring (bench/ only).
   TwinTruth Truth() const;
