@@ -16,6 +16,7 @@
 
 #include "bench/calibration_config.h"
 #include "bench/calibration_scoring.h"
+#include "bench/handclasp_run.h"
 #include "bench/model_loader.h"
 #include "bench/model_yaml.h"
 #include "bench/report_html.h"
@@ -169,9 +170,198 @@ void Publish(const fs::path& staging, const fs::path& out) {
 
 }  // namespace
 
+OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, CalibrationConfig config,
+                                    const fs::path& staging, bool quiet,
+                                    std::chrono::steady_clock::time_point t_start, json* report) {
+  config.options.progress = [&](const std::string& line) {
+    if (quiet) return;
+    std::printf("[%7.1f s] %s\n", Seconds(t_start), line.c_str());
+    std::fflush(stdout);
+  };
+  TimedCell timed(cell);
+  const OpticalAxisResult result = RunOpticalAxisCalibration(timed, config.knowledge,
+                                                             config.options);
+
+  // Scoring: estimates meet truth only here, after the procedure ended.
+  const auto t_score = Clock::now();
+  const TwinTruth truth = cell.Truth();
+  (*report)["scenario"] = {{"name", sc.name}, {"file", sc.path}, {"seed", sc.twin.seed}};
+  const Intrinsics& ti = truth.camera.intrinsics;
+  const Distortion& td = truth.camera.distortion;
+  const PinholeIntrinsics& ei = result.intrinsics.intrinsics;
+  (*report)["intrinsics"] = {
+      {"estimated", IntrinsicsJson(ei, result.intrinsics.distortion)},
+      {"true", IntrinsicsJson(PinholeIntrinsics{ti.fx, ti.fy, ti.cx, ti.cy},
+                          DistortionCoefficients{td.k1, td.k2, td.p1, td.p2, td.k3})},
+      {"error_px",
+       {{"fx", ei.fx - ti.fx}, {"fy", ei.fy - ti.fy}, {"cx", ei.cx - ti.cx}, {"cy", ei.cy - ti.cy}}},
+      {"rms_reprojection_px", result.intrinsics.rms_px},
+      {"views_used", result.intrinsics.views_used}};
+  std::ostringstream csv;
+  csv << kCsvHeader << '\n';
+  double planning = 0, servoing = 0, identification = 0;
+  json robots = json::object();
+  for (const RobotCalibration& rc : result.robots) {
+    const std::string name = sc.robot_names[rc.robot];
+    const std::string camera = sc.robot_names[rc.camera_robot];
+    planning += rc.planning_s;
+    servoing += rc.servoing_s;
+    identification += rc.identification_s;
+    const KinematicModel true_model = BoardRobotModel(truth.models[rc.robot], truth.board.X_FT);
+    const ObservabilityReport& obs = rc.method == "linearized" ? rc.linearized.observability
+                                                               : rc.nonlinear.observability;
+    const RobotScore score = ScoreRobot(rc.nominal, rc.identified, true_model, obs,
+                                        config.scoring_configurations, config.scoring_seed);
+    json r;
+    r["camera_robot"] = camera;
+    json history = json::array();
+    for (const auto& run : rc.plan.fitness_history) history.push_back(run);
+    const RejectionCounts& rej = rc.plan.rejections;
+    r["planning"] = {{"axes", rc.plan.axes.size()},
+                     {"positions_per_axis", config.options.planner.positions_per_axis},
+                     {"best_fitness", Num(rc.plan.best_fitness)},
+                     {"best_run", rc.plan.best_run},
+                     {"evaluations", rc.plan.evaluations},
+                     {"fitness_history", history},
+                     {"rejections",
+                      {{"active_ik", rej.active_ik}, {"passive_ik", rej.passive_ik},
+                       {"c1_joint_limits", rej.c1_joint_limits},
+                       {"c2_singularity", rej.c2_singularity},
+                       {"c3_visibility", rej.c3_visibility},
+                       {"c4_min_distance", rej.c4_min_distance},
+                       {"c5_max_distance", rej.c5_max_distance}}},
+                     {"time_s", rc.planning_s}};
+    int frames = 0;
+    double max_px = 0.0;
+    for (const AlignedPose& p : rc.aligned) {
+      frames += p.frames;
+      max_px = std::max({max_px, std::abs(p.pixel_error.x), std::abs(p.pixel_error.y)});
+    }
+    json failures = json::array();
+    for (const FailedPose& f : rc.failed) {
+      failures.push_back({{"axis", f.axis}, {"index", f.index}, {"status", f.status},
+                          {"reason", f.reason}, {"frames", f.frames}});
+    }
+    json images = json::array();
+    for (const ServoImages& im : rc.images) {
+      for (const bool after : {false, true}) {
+        const std::string file = "servo_" + name + "_axis" + std::to_string(im.axis) + "_" +
+                                 (after ? "after" : "before") + ".png";
+        const cv::Point2d e = after ? im.error_after : im.error_before;
+        WritePng(staging / file, Annotated(after ? im.after : im.before, ei, e));
+        std::ostringstream caption;
+        caption.precision(3);
+        caption << name << ", axis " << im.axis << ", position " << im.index << ", "
+                << (after ? "after" : "before") << " the visual servo: (du, dv) = (" << e.x
+                << ", " << e.y << ") px";
+        images.push_back({{"file", file}, {"caption", caption.str()}});
+      }
+    }
+    const int aligned = static_cast<int>(rc.aligned.size());
+    r["servo"] = {{"aligned_poses", aligned},
+                  {"failed_poses", rc.failed.size()},
+                  {"mean_frames_per_pose", aligned > 0 ? json(double(frames) / aligned) : json()},
+                  {"max_final_pixel_error_px", max_px},
+                  {"tolerance_px", config.options.servo.tolerance_px},
+                  {"failures", failures},
+                  {"images", images},
+                  {"time_s", rc.servoing_s}};
+    r["split"] = {{"calibration_axes", rc.calibration_axes},
+                  {"validation_axes", rc.validation_axes}};
+    json per_axis = json::array();
+    for (size_t k = 0; k < rc.per_axis.size(); ++k) {
+      const int axis = static_cast<int>(k);
+      const bool cal = std::find(rc.calibration_axes.begin(), rc.calibration_axes.end(),
+                                 axis) != rc.calibration_axes.end();
+      if (rc.per_axis[k].samples == 0) continue;
+      per_axis.push_back({{"axis", axis}, {"set", cal ? "calibration" : "validation"},
+                          {"before", Mm(rc.per_axis[k].before)},
+                          {"after", Mm(rc.per_axis[k].after)}});
+    }
+    r["misaligned_error_mm"] = {{"calibration", Misaligned(rc.calibration_error)},
+                                {"validation", Misaligned(rc.validation_error)},
+                                {"per_axis", per_axis}};
+    r["truth_position_error_mm"] = Gauges(score);
+    r["scale"] = {{"estimated", score.scale_estimated}, {"true", score.scale_true},
+                  {"identified_length_ratio", rc.nonlinear.scale}};
+    r["unidentifiable"] = obs.unidentifiable;
+    json combos = json::array();
+    for (size_t i = 0; i < score.combination_estimated.size(); ++i) {
+      combos.push_back({{"index", i}, {"estimated", 1000 * score.combination_estimated[i]},
+                        {"true", 1000 * score.combination_true[i]}});
+    }
+    r["identifiable_combinations"] = {{"count", obs.rank},
+                                      {"unit", "mm or mrad (scaled coordinates, 1 m)"},
+                                      {"rms_error", 1000 * score.combination_rms_error},
+                                      {"max_error", 1000 * score.combination_max_error},
+                                      {"items", combos}};
+    json params = json::array();
+    for (const ParameterComparison& p : score.parameters) {
+      const double f = p.length ? 1000.0 : RadToDeg(1.0);
+      params.push_back({{"name", p.name}, {"unit", p.length ? "mm" : "deg"},
+                        {"estimated", f * p.estimated}, {"true", f * p.truth}});
+    }
+    r["parameters"] = params;
+    const LinearizedIdentificationResult& lin = rc.linearized;
+    const NonlinearIdentificationResult& nl = rc.nonlinear;
+    json eps = json::array();
+    for (double e : lin.eps_history) eps.push_back(1000 * e);
+    r["identification"] = {
+        {"method", rc.method},
+        {"time_s", rc.identification_s},
+        {"linearized",
+         {{"status", ToString(lin.status)}, {"iterations", lin.iterations},
+          {"rank", lin.observability.rank}, {"eps_history_mm", eps},
+          {"calibration_after_mm", Mm(lin.mean_misaligned_error_after)}}},
+        {"nonlinear",
+         {{"status", ToString(nl.status)}, {"iterations", nl.iterations},
+          {"rank", nl.observability.rank}, {"depth_used", nl.depth_used},
+          {"singular_values", nl.observability.singular_values},
+          {"depth_weight", nl.depth_weight},
+          {"rms_distance_before_mm", Mm(nl.rms_distance_before)},
+          {"rms_distance_after_mm", Mm(nl.rms_distance_after)},
+          {"rms_depth_residual_mm", Mm(nl.rms_depth_residual)}}},
+        {"linearized_vs_ceres_max_parameter_difference",
+         {{"mm", 1000 * [&] {
+             double m = 0;
+             for (int i = 0; i < kNumParams; ++i)
+               if (IsLengthParameter(i))
+                 m = std::max(m, std::abs(lin.correction(i) - nl.correction(i)));
+             return m;
+           }()},
+          {"deg", RadToDeg([&] {
+             double m = 0;
+             for (int i = 0; i < kNumParams; ++i)
+               if (!IsLengthParameter(i))
+                 m = std::max(m, std::abs(lin.correction(i) - nl.correction(i)));
+             return m;
+           }())}}}};
+    robots[name] = r;
+    AppendRows(rc, name, camera, &csv);
+    // The identified model, ready to load (tool link = board mount, as identified).
+    std::ofstream(staging / ("identified_" + name + ".yaml")) << ModelToYaml(rc.identified);
+  }
+  (*report)["robots"] = robots;
+  std::ofstream(staging / "measurements.csv") << csv.str();
+  const double scoring = Seconds(t_score);
+  (*report)["timing_s"] = {{"total", Seconds(t_start)}, {"intrinsics", result.intrinsics_s},
+                        {"planning", planning},      {"servoing", servoing},
+                        {"identification", identification}, {"scoring", scoring},
+                        {"cell",
+                         {{"frames", timed.frames},
+                          {"grab_image", timed.grab_s},
+                          {"moves", timed.moves},
+                          {"move_to", timed.move_s}}}};
+  return result;
+}
+
 int RunCalibrationScenario(const RunOptions& o) {
   const auto t_start = Clock::now();
   const Scenario sc = LoadScenario(o.scenario);
+  const auto present = [](const YamlField& f) { return f.node.IsDefined() && !f.node.IsNull(); };
+  if (present(sc.handclasp) && !present(sc.calibration)) {
+    return RunHandclaspScenario(o.scenario, o.out_dir);  // base-frame calibration alone
+  }
   CalibrationConfig config = ParseCalibrationConfig(sc);
   const fs::path out(o.out_dir);
   const fs::path staging = out.string() + ".partial";
@@ -184,193 +374,16 @@ int RunCalibrationScenario(const RunOptions& o) {
     InstallMujocoErrorHandlers();
     std::printf("twinbench run: scenario %s (%s)\n", sc.name.c_str(), sc.path.c_str());
     TwinCell cell(sc.twin, sc.path);
-    config.options.progress = [&](const std::string& line) {
-      if (o.quiet) return;
-      std::printf("[%7.1f s] %s\n", Seconds(t_start), line.c_str());
-      std::fflush(stdout);
-    };
-    TimedCell timed(cell);
-    const OpticalAxisResult result = RunOpticalAxisCalibration(timed, config.knowledge,
-                                                               config.options);
-
-    // Scoring: estimates meet truth only here, after the procedure ended.
-    const auto t_score = Clock::now();
-    const TwinTruth truth = cell.Truth();
     json report;
-    report["scenario"] = {{"name", sc.name}, {"file", sc.path}, {"seed", sc.twin.seed}};
-    const Intrinsics& ti = truth.camera.intrinsics;
-    const Distortion& td = truth.camera.distortion;
-    const PinholeIntrinsics& ei = result.intrinsics.intrinsics;
-    report["intrinsics"] = {
-        {"estimated", IntrinsicsJson(ei, result.intrinsics.distortion)},
-        {"true", IntrinsicsJson(PinholeIntrinsics{ti.fx, ti.fy, ti.cx, ti.cy},
-                            DistortionCoefficients{td.k1, td.k2, td.p1, td.p2, td.k3})},
-        {"error_px",
-         {{"fx", ei.fx - ti.fx}, {"fy", ei.fy - ti.fy}, {"cx", ei.cx - ti.cx}, {"cy", ei.cy - ti.cy}}},
-        {"rms_reprojection_px", result.intrinsics.rms_px},
-        {"views_used", result.intrinsics.views_used}};
-    std::ostringstream csv;
-    csv << kCsvHeader << '\n';
-    double planning = 0, servoing = 0, identification = 0;
-    json robots = json::object();
-    for (const RobotCalibration& rc : result.robots) {
-      const std::string name = sc.robot_names[rc.robot];
-      const std::string camera = sc.robot_names[rc.camera_robot];
-      planning += rc.planning_s;
-      servoing += rc.servoing_s;
-      identification += rc.identification_s;
-      const KinematicModel true_model = BoardRobotModel(truth.models[rc.robot], truth.board.X_FT);
-      const ObservabilityReport& obs = rc.method == "linearized" ? rc.linearized.observability
-                                                                 : rc.nonlinear.observability;
-      const RobotScore score = ScoreRobot(rc.nominal, rc.identified, true_model, obs,
-                                          config.scoring_configurations, config.scoring_seed);
-      json r;
-      r["camera_robot"] = camera;
-      json history = json::array();
-      for (const auto& run : rc.plan.fitness_history) history.push_back(run);
-      const RejectionCounts& rej = rc.plan.rejections;
-      r["planning"] = {{"axes", rc.plan.axes.size()},
-                       {"positions_per_axis", config.options.planner.positions_per_axis},
-                       {"best_fitness", Num(rc.plan.best_fitness)},
-                       {"best_run", rc.plan.best_run},
-                       {"evaluations", rc.plan.evaluations},
-                       {"fitness_history", history},
-                       {"rejections",
-                        {{"active_ik", rej.active_ik}, {"passive_ik", rej.passive_ik},
-                         {"c1_joint_limits", rej.c1_joint_limits},
-                         {"c2_singularity", rej.c2_singularity},
-                         {"c3_visibility", rej.c3_visibility},
-                         {"c4_min_distance", rej.c4_min_distance},
-                         {"c5_max_distance", rej.c5_max_distance}}},
-                       {"time_s", rc.planning_s}};
-      int frames = 0;
-      double max_px = 0.0;
-      for (const AlignedPose& p : rc.aligned) {
-        frames += p.frames;
-        max_px = std::max({max_px, std::abs(p.pixel_error.x), std::abs(p.pixel_error.y)});
-      }
-      json failures = json::array();
-      for (const FailedPose& f : rc.failed) {
-        failures.push_back({{"axis", f.axis}, {"index", f.index}, {"status", f.status},
-                            {"reason", f.reason}, {"frames", f.frames}});
-      }
-      json images = json::array();
-      for (const ServoImages& im : rc.images) {
-        for (const bool after : {false, true}) {
-          const std::string file = "servo_" + name + "_axis" + std::to_string(im.axis) + "_" +
-                                   (after ? "after" : "before") + ".png";
-          const cv::Point2d e = after ? im.error_after : im.error_before;
-          WritePng(staging / file, Annotated(after ? im.after : im.before, ei, e));
-          std::ostringstream caption;
-          caption.precision(3);
-          caption << name << ", axis " << im.axis << ", position " << im.index << ", "
-                  << (after ? "after" : "before") << " the visual servo: (du, dv) = (" << e.x
-                  << ", " << e.y << ") px";
-          images.push_back({{"file", file}, {"caption", caption.str()}});
-        }
-      }
-      const int aligned = static_cast<int>(rc.aligned.size());
-      r["servo"] = {{"aligned_poses", aligned},
-                    {"failed_poses", rc.failed.size()},
-                    {"mean_frames_per_pose", aligned > 0 ? json(double(frames) / aligned) : json()},
-                    {"max_final_pixel_error_px", max_px},
-                    {"tolerance_px", config.options.servo.tolerance_px},
-                    {"failures", failures},
-                    {"images", images},
-                    {"time_s", rc.servoing_s}};
-      r["split"] = {{"calibration_axes", rc.calibration_axes},
-                    {"validation_axes", rc.validation_axes}};
-      json per_axis = json::array();
-      for (size_t k = 0; k < rc.per_axis.size(); ++k) {
-        const int axis = static_cast<int>(k);
-        const bool cal = std::find(rc.calibration_axes.begin(), rc.calibration_axes.end(),
-                                   axis) != rc.calibration_axes.end();
-        if (rc.per_axis[k].samples == 0) continue;
-        per_axis.push_back({{"axis", axis}, {"set", cal ? "calibration" : "validation"},
-                            {"before", Mm(rc.per_axis[k].before)},
-                            {"after", Mm(rc.per_axis[k].after)}});
-      }
-      r["misaligned_error_mm"] = {{"calibration", Misaligned(rc.calibration_error)},
-                                  {"validation", Misaligned(rc.validation_error)},
-                                  {"per_axis", per_axis}};
-      r["truth_position_error_mm"] = Gauges(score);
-      r["scale"] = {{"estimated", score.scale_estimated}, {"true", score.scale_true},
-                    {"identified_length_ratio", rc.nonlinear.scale}};
-      r["unidentifiable"] = obs.unidentifiable;
-      json combos = json::array();
-      for (size_t i = 0; i < score.combination_estimated.size(); ++i) {
-        combos.push_back({{"index", i}, {"estimated", 1000 * score.combination_estimated[i]},
-                          {"true", 1000 * score.combination_true[i]}});
-      }
-      r["identifiable_combinations"] = {{"count", obs.rank},
-                                        {"unit", "mm or mrad (scaled coordinates, 1 m)"},
-                                        {"rms_error", 1000 * score.combination_rms_error},
-                                        {"max_error", 1000 * score.combination_max_error},
-                                        {"items", combos}};
-      json params = json::array();
-      for (const ParameterComparison& p : score.parameters) {
-        const double f = p.length ? 1000.0 : RadToDeg(1.0);
-        params.push_back({{"name", p.name}, {"unit", p.length ? "mm" : "deg"},
-                          {"estimated", f * p.estimated}, {"true", f * p.truth}});
-      }
-      r["parameters"] = params;
-      const LinearizedIdentificationResult& lin = rc.linearized;
-      const NonlinearIdentificationResult& nl = rc.nonlinear;
-      json eps = json::array();
-      for (double e : lin.eps_history) eps.push_back(1000 * e);
-      r["identification"] = {
-          {"method", rc.method},
-          {"time_s", rc.identification_s},
-          {"linearized",
-           {{"status", ToString(lin.status)}, {"iterations", lin.iterations},
-            {"rank", lin.observability.rank}, {"eps_history_mm", eps},
-            {"calibration_after_mm", Mm(lin.mean_misaligned_error_after)}}},
-          {"nonlinear",
-           {{"status", ToString(nl.status)}, {"iterations", nl.iterations},
-            {"rank", nl.observability.rank}, {"depth_used", nl.depth_used},
-            {"depth_weight", nl.depth_weight},
-            {"rms_distance_before_mm", Mm(nl.rms_distance_before)},
-            {"rms_distance_after_mm", Mm(nl.rms_distance_after)},
-            {"rms_depth_residual_mm", Mm(nl.rms_depth_residual)}}},
-          {"linearized_vs_ceres_max_parameter_difference",
-           {{"mm", 1000 * [&] {
-               double m = 0;
-               for (int i = 0; i < kNumParams; ++i)
-                 if (IsLengthParameter(i))
-                   m = std::max(m, std::abs(lin.correction(i) - nl.correction(i)));
-               return m;
-             }()},
-            {"deg", RadToDeg([&] {
-               double m = 0;
-               for (int i = 0; i < kNumParams; ++i)
-                 if (!IsLengthParameter(i))
-                   m = std::max(m, std::abs(lin.correction(i) - nl.correction(i)));
-               return m;
-             }())}}}};
-      robots[name] = r;
-      AppendRows(rc, name, camera, &csv);
-      // The identified model, ready to load (tool link = board mount, as identified).
-      std::ofstream(staging / ("identified_" + name + ".yaml")) << ModelToYaml(rc.identified);
-    }
-    report["robots"] = robots;
-    const double scoring = Seconds(t_score);
-    report["timing_s"] = {{"total", Seconds(t_start)}, {"intrinsics", result.intrinsics_s},
-                          {"planning", planning},      {"servoing", servoing},
-                          {"identification", identification}, {"scoring", scoring},
-                          {"cell",
-                           {{"frames", timed.frames},
-                            {"grab_image", timed.grab_s},
-                            {"moves", timed.moves},
-                            {"move_to", timed.move_s}}}};
+    RunCalibrationStage(cell, sc, config, staging, o.quiet, t_start, &report);
     std::ofstream(staging / "report.json") << report.dump(2) << '\n';
-    std::ofstream(staging / "measurements.csv") << csv.str();
     std::ofstream(staging / "report.html") << RenderReportHtml(report);
     Publish(staging, out);
 
     // Summary.
     std::printf("\n%-6s %-22s %10s %10s %9s\n", "robot", "metric [mm]", "before", "after",
                 "decrease");
-    for (const auto& [name, r] : robots.items()) {
+    for (const auto& [name, r] : report["robots"].items()) {
       for (const char* set : {"calibration", "validation"}) {
         const json& m = r["misaligned_error_mm"][set];
         if (m["before"].is_null()) continue;
@@ -400,8 +413,10 @@ int RunCalibrationScenario(const RunOptions& o) {
                 t["total"].get<double>(), t["intrinsics"].get<double>(),
                 t["planning"].get<double>(), t["servoing"].get<double>(),
                 t["identification"].get<double>(), t["scoring"].get<double>());
+    const json& cell_t = report["timing_s"]["cell"];
     std::printf("cell: %d frames in %.1f s (GrabImage), %d moves in %.1f s (MoveTo)\n",
-                timed.frames, timed.grab_s, timed.moves, timed.move_s);
+                cell_t["frames"].get<int>(), cell_t["grab_image"].get<double>(),
+                cell_t["moves"].get<int>(), cell_t["move_to"].get<double>());
     std::printf("wrote %s/{report.json, report.html, measurements.csv, servo_*.png}\n",
                 out.string().c_str());
   } catch (...) {

@@ -3,7 +3,16 @@
 // recorded measurements, no twin: the path real data takes).
 #pragma once
 
+#include <chrono>
+#include <filesystem>
 #include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/calibration_config.h"
+#include "bench/scenario.h"
+#include "calib/optical_axis_procedure.h"
+#include "sim/twin_cell.h"
 
 namespace twin {
 
@@ -18,6 +27,16 @@ struct RunOptions {
 /// report.html; prints progress and a summary. Returns the exit code. Throws InputError for bad
 /// input (nothing is written then).
 int RunCalibrationScenario(const RunOptions& options);
+
+/// One optical-axis stage on an existing cell (also a step of the dual-arm workflow): runs the
+/// procedure with `config`, scores it against the cell's truth, writes servo_*.png,
+/// measurements.csv and identified_<robot>.yaml into `staging` and sets the report keys
+/// scenario, intrinsics, robots and timing_s. Progress lines carry the time since t_start.
+OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& scenario,
+                                      CalibrationConfig config,
+                                      const std::filesystem::path& staging, bool quiet,
+                                      std::chrono::steady_clock::time_point t_start,
+                                      nlohmann::json* report);
 
 /// Options of RunIdentify.
 struct IdentifyOptions {

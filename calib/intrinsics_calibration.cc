@@ -9,6 +9,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "calib/errors.h"
+#include "calib/inverse_kinematics.h"
 
 namespace twin {
 namespace {
@@ -163,6 +164,56 @@ std::vector<JointVector> IntrinsicsViewPoses(const KinematicModel& board_model,
     JointVector q = q_center;
     for (int j = 0; j < kNumJoints; ++j) q[j] += (j < 3 ? kArm : kWrist) * unit(rng);
     if (WithinLimits(board_model, q)) poses.push_back(q);
+  }
+  return poses;
+}
+
+std::vector<JointVector> PlannedIntrinsicsViews(const KinematicModel& board_model,
+                                                const JointVector& q_seed,
+                                                const Transform& X_BbC, int n, std::uint64_t seed,
+                                                const IntrinsicsViewSpec& spec) {
+  if (n < 1) {
+    throw InputError("PlannedIntrinsicsViews n", "must be >= 1, got " + std::to_string(n));
+  }
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  // A grid of directions over the field of view, visited in a shuffled order, jittered.
+  const int side = std::max(2, static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n)))));
+  std::vector<int> cells(side * side);
+  for (int i = 0; i < side * side; ++i) cells[i] = i;
+  std::shuffle(cells.begin(), cells.end(), rng);
+  IkOptions ik_options;
+  ik_options.random_restarts = 2;
+  std::vector<JointVector> poses;
+  for (int draw = 0; static_cast<int>(poses.size()) < n; ++draw) {
+    if (draw >= 50 * n) {
+      throw InputError("PlannedIntrinsicsViews",
+                       "found only " + std::to_string(poses.size()) + " of " + std::to_string(n) +
+                           " board poses reachable by " + board_model.name +
+                           " in front of the camera");
+    }
+    const int cell = cells[draw % cells.size()];
+    const double gx = ((cell % side) + u01(rng)) / side, gy = ((cell / side) + u01(rng)) / side;
+    const double ax = (2 * gx - 1) * spec.half_angle_x, ay = (2 * gy - 1) * spec.half_angle_y;
+    const double depth = spec.min_depth_m + u01(rng) * (spec.max_depth_m - spec.min_depth_m);
+    const Vector3 ray = Vector3(std::tan(ax), std::tan(ay), 1.0).normalized();
+    // Board normal (its +z, out of the printed face) towards the camera, tilted, then turned.
+    const double tilt = spec.min_tilt + u01(rng) * (spec.max_tilt - spec.min_tilt);
+    const double tilt_dir = 2 * kPi * u01(rng), roll = 2 * kPi * u01(rng);
+    const Vector3 a = ray.unitOrthogonal();
+    const Vector3 axis = std::cos(tilt_dir) * a + std::sin(tilt_dir) * ray.cross(a);
+    const Vector3 normal = Eigen::AngleAxisd(tilt, axis) * Vector3(-ray);
+    Matrix3 R_CT;
+    R_CT.col(2) = normal;
+    R_CT.col(0) = normal.unitOrthogonal();
+    R_CT.col(1) = normal.cross(R_CT.col(0));
+    R_CT = Eigen::AngleAxisd(roll, normal).toRotationMatrix() * R_CT;
+    Transform X_CT = Transform::Identity();
+    X_CT.linear() = R_CT;
+    X_CT.translation() = depth * ray / ray.z();
+    const IkResult ik = SolveIk(board_model, X_BbC * X_CT, q_seed, ik_options);
+    if (ik.status != IkStatus::kSuccess || !WithinLimits(board_model, ik.q)) continue;
+    poses.push_back(ik.q);
   }
   return poses;
 }

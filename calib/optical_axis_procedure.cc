@@ -202,8 +202,17 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
     const auto t0 = Clock::now();
     const int board_robot = 1 - cell.CameraRobot();
     say("intrinsics: " + std::to_string(options.intrinsics_views) + " board views (Zhang)");
-    const std::vector<JointVector> views = IntrinsicsViewPoses(
-        knowledge.nominal[board_robot], home[board_robot], options.intrinsics_views, options.seed);
+    // Views designed in the camera frame (spread over the image, tilted) from the rough
+    // knowledge: the camera in the board robot's base.
+    const int camera_robot = 1 - board_robot;
+    const Transform X_BbBa = board_robot == 1 ? Transform(knowledge.X_B1B2.inverse())
+                                              : knowledge.X_B1B2;
+    const Transform X_BbC =
+        X_BbBa * ForwardKinematics(knowledge.nominal[camera_robot], home[camera_robot]).flange() *
+        knowledge.X_FC;
+    const std::vector<JointVector> views = PlannedIntrinsicsViews(
+        BoardRobotModel(knowledge.nominal[board_robot], knowledge.X_FT), home[board_robot], X_BbC,
+        options.intrinsics_views, options.seed);
     out.intrinsics = CalibrateIntrinsics(cell, board_robot, views, knowledge.board,
                                          options.intrinsics);
     go_home(board_robot);

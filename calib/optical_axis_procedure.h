@@ -50,7 +50,7 @@ struct CellKnowledge {
 /// Options of RunOpticalAxisCalibration. Defaults are the paper's where it gives them.
 struct OpticalAxisOptions {
   std::vector<int> robots = {1, 0};  ///< robots to calibrate (passive), in this order
-  int intrinsics_views = 25;         ///< board views for Zhang's method [-]
+  int intrinsics_views = 40;         ///< board views for Zhang's method [-]
   IntrinsicsOptions intrinsics;      ///< options of CalibrateIntrinsics
   std::uint64_t seed = 1;            ///< seed of the intrinsics view poses
   PosePlannerOptions planner;        ///< PSO (q, p, swarm, iterations, runs, C1-C5)
