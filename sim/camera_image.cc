@@ -105,17 +105,13 @@ cv::Mat DistortionMapper::Apply(const cv::Mat& canvas_image) const {
 
 void AddImageNoise(cv::Mat* image, double sigma, std::uint64_t seed) {
   if (image == nullptr || image->empty() || sigma <= 0) return;
-  // One channel view so that every channel of every pixel gets its own sample.
-  const cv::Mat flat = image->reshape(1);
-  cv::Mat noisy;
-  flat.convertTo(noisy, CV_32F);
-  cv::Mat noise(noisy.size(), CV_32F);
+  // The pixels are whole numbers, so round(pixel + n) = pixel + round(n): the noise is drawn
+  // already rounded, as 16-bit integers (one sample per channel of every pixel), and added
+  // with saturation, which avoids two float conversions of the whole image.
+  cv::Mat noise(image->size(), CV_MAKETYPE(CV_16S, image->channels()));
   cv::RNG rng(seed);
   rng.fill(noise, cv::RNG::NORMAL, 0.0, sigma);
-  noisy += noise;
-  cv::Mat out;
-  noisy.convertTo(out, image->depth());  // rounds and saturates (0..255 for 8-bit)
-  out.reshape(image->channels()).copyTo(*image);
+  cv::add(*image, noise, *image, cv::noArray(), image->type());
 }
 
 }  // namespace twin
