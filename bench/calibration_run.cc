@@ -513,7 +513,9 @@ int RunIdentify(const IdentifyOptions& o) {
       const std::string key = "q" + std::to_string(i + 1) + "_deg";
       s.q(i) = DegToRad(CsvNumber(f[col[key]], where + " " + key));
     }
-    if (has_depth) s.depth = CsvNumber(f[col["depth_mm"]], where + " depth_mm") / 1000.0;
+    if (has_depth && !f[col["depth_mm"]].empty()) {
+      s.depth = CsvNumber(f[col["depth_mm"]], where + " depth_mm") / 1000.0;  // empty: none
+    }
     if (has_offset) {
       s.offset = Vector3(CsvNumber(f[col["offset_x_mm"]], where + " offset_x_mm"),
                          CsvNumber(f[col["offset_y_mm"]], where + " offset_y_mm"),
