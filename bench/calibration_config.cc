@@ -35,7 +35,7 @@ const YamlKeys kScoringKeys = {"configurations", "seed"};
 
 CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
   const YamlReader r(sc.path);
-  if (!sc.calibration.node.IsDefined() || sc.calibration.node.IsNull()) {
+  if (!IsPresent(sc.calibration)) {
     throw InputError(sc.path + " scenario.calibration",
                      "missing: `twinbench run` needs a calibration section (see "
                      "scenarios/paper_reinovo.yaml)");

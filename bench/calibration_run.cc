@@ -17,6 +17,7 @@
 #include "bench/calibration_config.h"
 #include "bench/calibration_scoring.h"
 #include "bench/handclasp_run.h"
+#include "bench/workflow_run.h"
 #include "bench/model_loader.h"
 #include "bench/model_yaml.h"
 #include "bench/report_html.h"
@@ -157,16 +158,6 @@ class TimedCell : public Cell {
  private:
   Cell& cell_;
 };
-
-// Replaces `out` by `staging` (both folders).
-void Publish(const fs::path& staging, const fs::path& out) {
-  std::error_code ec;
-  const fs::path old = out.string() + ".old";
-  fs::remove_all(old, ec);
-  if (fs::exists(out)) fs::rename(out, old);
-  fs::rename(staging, out);
-  fs::remove_all(old, ec);
-}
 
 }  // namespace
 
@@ -358,10 +349,10 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
 int RunCalibrationScenario(const RunOptions& o) {
   const auto t_start = Clock::now();
   const Scenario sc = LoadScenario(o.scenario);
-  const auto present = [](const YamlField& f) { return f.node.IsDefined() && !f.node.IsNull(); };
-  if (present(sc.handclasp) && !present(sc.calibration)) {
+  if (IsPresent(sc.handclasp) && !IsPresent(sc.calibration)) {
     return RunHandclaspScenario(o.scenario, o.out_dir);  // base-frame calibration alone
   }
+  if (IsPresent(sc.handclasp) && IsPresent(sc.calibration)) return RunWorkflowScenario(o);
   CalibrationConfig config = ParseCalibrationConfig(sc);
   const fs::path out(o.out_dir);
   const fs::path staging = out.string() + ".partial";
@@ -378,7 +369,7 @@ int RunCalibrationScenario(const RunOptions& o) {
     RunCalibrationStage(cell, sc, config, staging, o.quiet, t_start, &report);
     std::ofstream(staging / "report.json") << report.dump(2) << '\n';
     std::ofstream(staging / "report.html") << RenderReportHtml(report);
-    Publish(staging, out);
+    PublishDirectory(staging.string(), out.string());
 
     // Summary.
     std::printf("\n%-6s %-22s %10s %10s %9s\n", "robot", "metric [mm]", "before", "after",
@@ -481,10 +472,10 @@ int RunIdentify(const IdentifyOptions& o) {
   const std::vector<std::string> header = SplitCsv(line);
   std::map<std::string, size_t> col;
   for (size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
-  for (const std::string& need : {"robot", "axis", "index", "set", "q1_deg", "q2_deg", "q3_deg",
+  for (const char* need : {"robot", "axis", "index", "set", "q1_deg", "q2_deg", "q3_deg",
                                   "q4_deg", "q5_deg", "q6_deg"}) {
     if (!col.count(need)) {
-      throw InputError(o.measurements + ":1", "missing column '" + need + "' (expected the "
+      throw InputError(o.measurements + ":1", "missing column '" + std::string(need) + "' (expected the "
                                               "header of `twinbench run`'s measurements.csv)");
     }
   }

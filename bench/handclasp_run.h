@@ -14,6 +14,9 @@
 //                                  # floor_floor, floor_wall or floor_ceiling
 //     trials: 1                    # seeded batch: trial t uses seed scenario.seed + t
 //     coupled_motion: true         # run the coupled-motion check (default true)
+//     calibrated_operator_error_mm: 0.1  # the dual-arm workflow's second handclasp (with the
+//                                  # calibrated kinematics, bench/workflow_run.h): operator
+//                                  # alignment error sigma per axis [mm] (default 0.1)
 //
 // Taught points are the operator's choice: the planner uses the scenario's layout of the bases
 // (where the operator sees the robots stand) only to pick reachable points; the estimator gets
@@ -22,6 +25,7 @@
 
 #include <array>
 #include <iosfwd>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,6 +46,7 @@ struct HandclaspConfig {
   BaseConstraint constraint = BaseConstraint::kGeneral;  ///< resolved (never "auto")
   int trials = 1;                      ///< seeded batch size (>= 1)
   bool coupled_motion = true;          ///< run the coupled-motion check
+  double calibrated_operator_error_m = 1e-4;  ///< workflow stage (c) alignment error [m]
 };
 
 /// The constraint implied by the installations: robot 1 on the floor and robot 2 on the floor,
@@ -51,6 +56,27 @@ BaseConstraint ImpliedConstraint(const TwinSpec& twin);
 /// Parses scenario.handclasp (an absent section gives the defaults). Throws InputError naming
 /// "file:line scenario.handclasp.key" for unknown keys and bad values.
 HandclaspConfig ParseHandclaspConfig(const Scenario& scenario);
+
+/// The scoring frame (bench only). A robot's geometry errors in link 1's theta and d are a
+/// rotation of the whole arm about base z and a shift along it: no kinematic calibration can
+/// see them (calib/nonlinear_identification.h: they stay unidentifiable), so a controller's
+/// model expresses its tip in a frame B' of its own, not in the physical base frame B. With
+/// eq. 2's link transform RotZ(theta) TransZ(d) TransX(a) RotX(alpha) RotY(beta), and RotZ,
+/// TransZ commuting,
+///   FK_true(q) = X_BL0 RotZ(dtheta1) TransZ(dd1) X_BL0^-1 * FK_model(q),
+/// where FK_model carries the pendant model's link-1 theta and d and the true rest, and
+/// dtheta1 = theta1_true - theta1_pendant, dd1 = d1_true - d1_pendant. That is X_BB'; it is
+/// exact for the link-1 part and gauge only (the other parameters' errors are what the
+/// handclasp is expected to suffer from).
+Transform KinematicBaseOffset(const KinematicModel& true_model,
+                              const KinematicModel& pendant_model);
+
+/// X_B1'B2' = X_B1B1'^-1 X_B1B2 X_B2B2': the transform between the frames the robots'
+/// kinematic models (the pendant models) use; what a handclasp can determine at best and what
+/// base_frame.{general,constrained} are scored against. The physical X_B1B2 is scored too
+/// (base_frame.physical_truth).
+Transform KinematicFrameTruth(const TwinTruth& truth,
+                              const std::array<KinematicModel, 2>& pendant_models);
 
 /// Estimates of one handclasp stage and its report (bench scoring included).
 struct HandclaspStageResult {
@@ -66,9 +92,11 @@ struct HandclaspStageResult {
 /// flange models `pendant_models_flange` (nominal or calibrated; the scenario's tips are added
 /// as tools), then scores it against cell.Truth(). Progress lines go to `progress`. Throws
 /// InputError for a bad section; procedure failures are reported (ok = false, report.status).
+/// `operator_error_m` (>= 0) replaces the section's operator_error_mm when given.
 HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
                                        const std::array<KinematicModel, 2>& pendant_models_flange,
-                                       std::ostream& progress);
+                                       std::ostream& progress,
+                                       std::optional<double> operator_error_m = std::nullopt);
 
 /// Loads the scenario, runs its handclasp section with the nominal models for each trial of
 /// the batch and writes out_dir/report.json atomically (temporary file, then rename). Returns

@@ -1,6 +1,7 @@
 #include "bench/model_loader.h"
 
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 
 #include "bench/model_yaml.h"
@@ -20,6 +21,16 @@ KinematicModel LoadRobotModel(const std::string& path) {
   if (EndsWith(path, ".yaml") || EndsWith(path, ".yml")) return LoadModelYaml(path);
   if (EndsWith(path, ".urdf")) return LoadUrdf(path);
   throw InputError(path, "unknown model format; expected a .yaml, .yml or .urdf file");
+}
+
+void PublishDirectory(const std::string& staging, const std::string& out) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path old = out + ".old";
+  fs::remove_all(old, ec);
+  if (fs::exists(out)) fs::rename(out, old);
+  fs::rename(staging, out);
+  fs::remove_all(old, ec);
 }
 
 void WriteFileAtomically(const std::string& path, const std::string& text) {

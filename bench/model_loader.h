@@ -14,4 +14,8 @@ KinematicModel LoadRobotModel(const std::string& path);
 /// never leaves a half-written file. Throws InputError naming the path on failure.
 void WriteFileAtomically(const std::string& path, const std::string& text);
 
+/// Replaces the folder `out` by the completed folder `staging` (renamed into place; an old
+/// `out` is kept aside until then), so readers never see a half-written output folder.
+void PublishDirectory(const std::string& staging, const std::string& out);
+
 }  // namespace twin

@@ -172,6 +172,8 @@ std::optional<YamlField> YamlMap::Find(const std::string& key, bool required) co
   return std::nullopt;
 }
 
+bool IsPresent(const YamlField& f) { return f.node.IsDefined() && !f.node.IsNull(); }
+
 Transform ReadPose(const YamlReader& r, const YamlMap& m) {
   const std::optional<YamlField> rpy = m.Find("rpy_deg", false);
   const std::optional<YamlField> zyz = m.Find("zyz_deg", false);

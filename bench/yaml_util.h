@@ -76,6 +76,9 @@ class YamlReader {
   std::string source_;
 };
 
+/// True when a field was written and is not null (an optional section that is present).
+bool IsPresent(const YamlField& f);
+
 /// The entries of a YAML map, checked against the allowed keys (unknown keys fail unless
 /// accepted as extra; repeated keys always fail).
 class YamlMap {

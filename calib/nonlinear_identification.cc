@@ -47,6 +47,15 @@ Vec3<T> EndPositionT(const KinematicModel& m, const T* phi, const JointVector& q
   return p + R * m.X_L7E.translation().cast<T>();
 }
 
+// phi = phi0 + SV z: the 35 parameters from the identifiable coordinates z.
+template <typename T>
+void ExpandParameters(const ParameterVector& phi0, const Eigen::MatrixXd& SV, const T* z, T* phi) {
+  for (int i = 0; i < kNumParams; ++i) {
+    phi[i] = T(phi0(i));
+    for (int j = 0; j < SV.cols(); ++j) phi[i] += SV(i, j) * z[j];
+  }
+}
+
 // (I - mu mu^T / |mu|^2)(p - c): the part of p - c perpendicular to the line (eq. 14-15).
 template <typename T>
 Vec3<T> PerpendicularPart(const Vec3<T>& p, const Vec3<T>& c, const Vec3<T>& mu) {
@@ -73,10 +82,7 @@ struct AxisResidualFunctor {
     const T* s = blocks[1];
     const T* mu = blocks[2];
     T phi[kNumParams];
-    for (int i = 0; i < kNumParams; ++i) {
-      phi[i] = T(phi0(i));
-      for (int j = 0; j < SV.cols(); ++j) phi[i] += SV(i, j) * z[j];
-    }
+    ExpandParameters(phi0, SV, z, phi);
     const Vec3<T> p = EndPositionT(model, phi, q) - offset.cast<T>();
     const Vec3<T> c = c0.cast<T>() + N.col(0).cast<T>() * s[0] + N.col(1).cast<T>() * s[1];
     const Vec3<T> r = PerpendicularPart(p, c, Vec3<T>(mu[0], mu[1], mu[2]));
@@ -105,10 +111,7 @@ struct DepthResidualFunctor {
     const T* mu = blocks[2];
     const T* t = blocks[3];
     T phi[kNumParams];
-    for (int i = 0; i < kNumParams; ++i) {
-      phi[i] = T(phi0(i));
-      for (int j = 0; j < SV.cols(); ++j) phi[i] += SV(i, j) * z[j];
-    }
+    ExpandParameters(phi0, SV, z, phi);
     const Vec3<T> p = EndPositionT(model, phi, q) - offset.cast<T>();
     const Vec3<T> c = c0.cast<T>() + N.col(0).cast<T>() * s[0] + N.col(1).cast<T>() * s[1];
     const Vec3<T> m(mu[0], mu[1], mu[2]);

@@ -1,5 +1,6 @@
 // `twinbench run` input errors and `twinbench identify` on recorded measurements: exit 2 with
 // the bad input named and nothing written; a synthetic recording identifies exactly.
+#include "tests/bench/cli_run.h"
 #include <sys/wait.h>
 
 #include <array>
@@ -21,22 +22,8 @@ namespace twin {
 namespace {
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int code;
-  std::string output;
-};
-
-CliRun Twinbench(const std::string& args) {
-  const std::string cmd = std::string(TWINBENCH_BIN) + " " + args + " 2>&1";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-  CliRun r{-1, ""};
-  if (!pipe) return r;
-  std::array<char, 512> buf;
-  while (fgets(buf.data(), buf.size(), pipe.get())) r.output += buf.data();
-  const int status = pclose(pipe.release());
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using twin::testing::CliRun;
+using twin::testing::Twinbench;
 
 fs::path TempDir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("twinbench_calib_cli_" + name);

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "calib/errors.h"
+#include "calib/forward_kinematics.h"
 #include "sim/mujoco_handles.h"
 
 namespace twin {
@@ -80,9 +81,63 @@ TEST_F(HandclaspRunTest, RecoversTheBaseFrameExactlyWithTrueKinematicsInClosedLo
   }
 }
 
+TEST_F(HandclaspRunTest, ScoresAgainstTheFramesTheKinematicModelsUse) {
+  // Explicit link-1 errors on both robots (no other geometry error): robot 1 theta +0.5 deg,
+  // d +3 mm; robot 2 theta -0.3 deg, d -2 mm. The pendant models are the TRUE models with link
+  // 1's theta and d put back to nominal (what any kinematic calibration ends with: those two
+  // are unidentifiable), the operator exact. The handclasp then recovers X_B1'B2' exactly
+  // (bounds of the closed-loop exact test above), while the physical X_B1B2 differs by the
+  // link-1 offsets: 0.5 + 0.3 deg about z, so the physical e_rot must be near 0.8 deg and the
+  // physical e_tran several mm (3 + 2 mm along z, plus the rotation's lever).
+  Scenario sc = IdealSetup("floor_floor");
+  sc.twin.effects.clear();
+  const std::pair<double, double> link1[2] = {{0.5, 3.0}, {-0.3, -2.0}};
+  for (int k = 0; k < 2; ++k) {
+    EffectSpec e;
+    e.type = "geometry_errors";
+    e.robot = k;
+    e.params = {{"link1.theta_deg", link1[k].first}, {"link1.d_mm", link1[k].second}};
+    e.where = "test";
+    sc.twin.effects.push_back(e);
+  }
+  TwinCell cell(sc.twin, sc.path);
+  std::array<KinematicModel, 2> pendant = cell.Truth().models;
+  for (int k = 0; k < 2; ++k) pendant[k].links[0].dh = [&] {
+    DhParameters dh = pendant[k].links[0].dh;
+    dh.theta_offset = sc.twin.robots[k].model.links[0].dh.theta_offset;
+    dh.d = sc.twin.robots[k].model.links[0].dh.d;
+    return dh;
+  }();
+  // The offset of eq. 2's link-1 part alone: FK_true = X_BB' * FK_pendant for any q.
+  const JointVector q = (JointVector() << 0.3, -0.4, 0.5, 0.2, -0.6, 0.7).finished();
+  for (int k = 0; k < 2; ++k) {
+    const Transform lhs = EndPose(cell.Truth().models[k], q);
+    const Transform rhs = KinematicBaseOffset(cell.Truth().models[k], pendant[k]) *
+                          EndPose(pendant[k], q);
+    EXPECT_LT((lhs.matrix() - rhs.matrix()).norm(), 1e-12) << "robot " << k;
+  }
+  std::ostringstream progress;
+  const HandclaspStageResult r = RunHandclaspStage(cell, sc, pendant, progress);
+  ASSERT_TRUE(r.ok) << r.report.dump(1) << progress.str();
+  const nlohmann::json& rep = r.report;
+  for (const char* which : {"general", "constrained"}) {
+    const double e_tran = rep[which]["e_tran_mm"], e_rot = rep[which]["e_rot_deg"];
+    const double p_tran = rep["physical_truth"][which]["e_tran_mm"];
+    const double p_rot = rep["physical_truth"][which]["e_rot_deg"];
+    std::printf("[ measured ] %s: kinematic frame e_tran %.3g mm, e_rot %.3g deg; physical "
+                "e_tran %.3g mm, e_rot %.3g deg\n", which, e_tran, e_rot, p_tran, p_rot);
+    EXPECT_LT(e_tran, 1e-5) << which;
+    EXPECT_LT(e_rot, 1e-6) << which;
+    EXPECT_NEAR(p_rot, 0.8, 0.01) << which;  // 0.5 + 0.3 deg about z; 0.01: ZYZ split slack
+    EXPECT_GT(p_tran, 2.0) << which;
+  }
+  EXPECT_NEAR(rep["scoring_frame"]["link1_offsets"][0]["dd1_mm"].get<double>(), 3.0, 1e-9);
+  EXPECT_NEAR(rep["scoring_frame"]["link1_offsets"][1]["dtheta1_deg"].get<double>(), -0.3, 1e-9);
+}
+
 TEST_F(HandclaspRunTest, ConstrainedIsNotWorseThanGeneralOverASeededBatch) {
-  // The paper's set-ups with nominal pendant models (geometry errors of Zhu 2019 Table 3
-  // magnitude) and 0.5 mm operator error; 3 trials each (seeds 11..13). The claim of the paper
+  // The paper's set-ups with nominal pendant models (geometry errors of a well-kept factory
+  // arm, sigma 0.5 mm / 0.05 deg) and 0.5 mm operator error; 3 trials each (seeds 11..13). The claim of the paper
   // (Table 1, section 4) is checked on the batch means.
   for (const char* name : kSetups) {
     const std::string out = ::testing::TempDir() + "/hc_batch_" + name;
@@ -92,7 +147,7 @@ TEST_F(HandclaspRunTest, ConstrainedIsNotWorseThanGeneralOverASeededBatch) {
       std::stringstream text;
       text << in.rdbuf();
       std::string s = text.str();
-      const std::string from = "trials: 1", to = "trials: 3";
+      const std::string from = "trials: 10", to = "trials: 3";
       ASSERT_NE(s.find(from), std::string::npos);
       s.replace(s.find(from), from.size(), to);
       // Model paths are relative to the scenario's folder: make them absolute.
@@ -116,7 +171,12 @@ TEST_F(HandclaspRunTest, ConstrainedIsNotWorseThanGeneralOverASeededBatch) {
     // beyond 1% (the free angle stays the general one's, up to re-fitting). e_tran is re-fitted
     // by eq. 12 with the new rotation and can move either way: the paper's own Table 1 row 1
     // has the constrained e_tran 3.5% worse (5.9 vs 5.7 mm), hence a 5% allowance.
-    EXPECT_LE(c_r, 1.01 * g_r) << name;
+    // Floor-wall: the paper's H_tru stands 0.126 deg off a perfect wall (middle ZYZ angle
+    // 89.874), and the refinement forces 90 deg (eq. 17-21), so the constrained middle angle is
+    // off by exactly 0.126 deg whatever the data; where the general error is smaller, e_rot
+    // grows up to that (the paper's own row 12: 0.126 vs 0.121 deg). Allowed on top.
+    const double wall_tilt_deg = std::string(name) == "floor_wall" ? 90.0 - 89.874 : 0.0;
+    EXPECT_LE(c_r, 1.01 * g_r + wall_tilt_deg) << name;
     EXPECT_LE(c_t, 1.05 * g_t) << name;
     EXPECT_EQ(rep["base_frame"]["installation"], std::string(name) == "floor_floor" ? "floor-floor"
                                                  : std::string(name) == "floor_wall" ? "floor-wall"

@@ -1,5 +1,6 @@
 // Runs the built twinbench binary: user errors must exit with code 2 and a message naming the
 // bad input; good input exits 0.
+#include "tests/bench/cli_run.h"
 #include <sys/wait.h>
 
 #include <array>
@@ -13,22 +14,8 @@
 
 namespace {
 
-struct CliRun {
-  int code;
-  std::string output;  // stdout and stderr
-};
-
-CliRun Twinbench(const std::string& args) {
-  const std::string cmd = std::string(TWINBENCH_BIN) + " " + args + " 2>&1";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-  CliRun r{-1, ""};
-  if (!pipe) return r;
-  std::array<char, 512> buf;
-  while (fgets(buf.data(), buf.size(), pipe.get())) r.output += buf.data();
-  const int status = pclose(pipe.release());
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using twin::testing::CliRun;
+using twin::testing::Twinbench;
 
 const std::string kModel = std::string(TWIN_SOURCE_DIR) + "/models/reinovo_r1.yaml";
 
