@@ -50,8 +50,19 @@ FeatureDetection DetectFeaturePoint(const cv::Mat& bgr, const BoardGeometry& boa
   FeatureDetection result;
   const cv::Size pattern(board.squares_x - 1, board.squares_y - 1);
   std::vector<cv::Point2f> corners;
-  const bool found = cv::findChessboardCorners(
-      grey, pattern, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+  // Global threshold first: the rendered board is evenly lit and this is fast. Adaptive
+  // thresholding only as the fallback, on a blurred copy: on a noisy image with a partly hidden
+  // board, OpenCV 4.6's adaptive search turns the pixel noise of the flat background into
+  // thousands of quad candidates and took 50 s for one frame here (opencv issue #23558). The
+  // corners are refined on the unblurred image below either way.
+  const int flags = cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_FAST_CHECK;
+  bool found = cv::findChessboardCorners(grey, pattern, corners, flags);
+  if (!found) {
+    cv::Mat smooth;
+    cv::GaussianBlur(grey, smooth, cv::Size(5, 5), 1.0);
+    found = cv::findChessboardCorners(smooth, pattern, corners,
+                                      flags | cv::CALIB_CB_ADAPTIVE_THRESH);
+  }
   if (!found || corners.size() != static_cast<size_t>(pattern.area())) {
     result.reason = "no complete " + std::to_string(pattern.width) + "x" +
                     std::to_string(pattern.height) + " inner-corner grid in the " +
