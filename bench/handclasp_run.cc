@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <random>
 #include <sstream>
 
 #include "calib/errors.h"
@@ -16,7 +17,8 @@ namespace twin {
 namespace {
 
 const YamlKeys kHandclaspKeys = {"points", "operator_error_mm", "constraint", "trials",
-                                 "coupled_motion", "calibrated_operator_error_mm"};
+                                 "coupled_motion", "calibrated_operator_error_mm",
+                                 "calibrated_tip_identification"};
 
 // Coupled-motion path of robot 1's tip: offsets from the first contact point in B1 [m], a
 // 50 mm square and a rise, so that the deviation is sampled along all three axes.
@@ -118,6 +120,49 @@ nlohmann::json CoupledMotion(TwinCell& cell, const std::array<KinematicModel, 2>
   return out;
 }
 
+// Seeded random joint configurations inside the limits (10 deg margin).
+std::vector<JointVector> RandomConfigurations(const KinematicModel& model, int n,
+                                              std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  const double margin = DegToRad(10.0);
+  std::vector<JointVector> qs;
+  for (int c = 0; c < n; ++c) {
+    JointVector q;
+    for (int i = 0; i < kNumJoints; ++i) {
+      const JointLimits& l = model.links[i].limits;
+      const double lo = l.lower + margin, hi = std::max(lo, l.upper - margin);
+      q(i) = std::uniform_real_distribution<double>(lo, hi)(rng);
+    }
+    qs.push_back(q);
+  }
+  return qs;
+}
+
+// A tip model with its tip moved by dt_F in the flange frame.
+KinematicModel WithTipCorrection(KinematicModel tip_model, const Vector3& dt_F) {
+  tip_model.X_L7E.translation() += dt_F;
+  return tip_model;
+}
+
+// Truth-only diagnostic: how far a controller's pendant tip model is from the true tip, in
+// the scoring frame B' (X_BBp), over 200 seeded random joint configurations. The handclasp
+// can be no better than these errors.
+nlohmann::json PendantTipError(const KinematicModel& true_tip, const KinematicModel& tip_model,
+                               const Transform& X_BBp) {
+  constexpr int kConfigurations = 200;
+  double sum2 = 0.0, worst = 0.0;
+  for (const JointVector& q : RandomConfigurations(tip_model, kConfigurations, 1)) {
+    const double e = 1e3 * (X_BBp * EndPose(tip_model, q).translation() -
+                            EndPose(true_tip, q).translation())
+                               .norm();
+    sum2 += e * e;
+    worst = std::max(worst, e);
+  }
+  return {{"rms_mm", std::sqrt(sum2 / kConfigurations)},
+          {"max_mm", worst},
+          {"configurations", kConfigurations}};
+}
+
 void WriteAtomically(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".tmp";
   {
@@ -143,6 +188,21 @@ Transform KinematicBaseOffset(const KinematicModel& true_model,
   delta.theta_offset = true_model.links[0].dh.theta_offset - pendant_model.links[0].dh.theta_offset;
   delta.d = true_model.links[0].dh.d - pendant_model.links[0].dh.d;
   return true_model.X_BL0 * LinkTransform(delta, 0.0) * true_model.X_BL0.inverse();
+}
+
+Transform BestFitBaseOffset(const KinematicModel& true_tip_model,
+                            const KinematicModel& pendant_tip_model, const Vector3& dt_F,
+                            int configurations) {
+  const KinematicModel model = WithTipCorrection(pendant_tip_model, dt_F);
+  const std::vector<JointVector> qs = RandomConfigurations(model, configurations, 1);
+  Eigen::Matrix3Xd a(3, qs.size()), b(3, qs.size());
+  for (size_t c = 0; c < qs.size(); ++c) {
+    a.col(c) = EndPose(model, qs[c]).translation();
+    b.col(c) = EndPose(true_tip_model, qs[c]).translation();
+  }
+  Transform X = Transform::Identity();
+  X.matrix() = Eigen::umeyama(a, b, false);  // b = X a: model frame B' to base B
+  return X;
 }
 
 Transform KinematicFrameTruth(const TwinTruth& truth,
@@ -208,6 +268,9 @@ HandclaspConfig ParseHandclaspConfig(const Scenario& scenario) {
     if (c.trials < 1 || c.trials > 1000) r.Fail(*f, "must be in 1..1000");
   }
   if (const auto f = m.Find("coupled_motion", false)) c.coupled_motion = r.Bool(*f);
+  if (const auto f = m.Find("calibrated_tip_identification", false)) {
+    c.calibrated_tip_identification = r.Bool(*f);
+  }
   if (const auto f = m.Find("calibrated_operator_error_mm", false)) {
     const double v = r.Number(*f);
     if (v < 0) r.Fail(*f, "must be >= 0 mm");
@@ -219,9 +282,9 @@ HandclaspConfig ParseHandclaspConfig(const Scenario& scenario) {
 HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
                                        const std::array<KinematicModel, 2>& pendant_models_flange,
                                        std::ostream& progress,
-                                       std::optional<double> operator_error_m) {
+                                       const HandclaspStageOptions& stage_options) {
   HandclaspConfig config = ParseHandclaspConfig(scenario);
-  if (operator_error_m) config.operator_error_m = *operator_error_m;
+  if (stage_options.operator_error_m) config.operator_error_m = *stage_options.operator_error_m;
   cell.SetOperatorAlignmentError(config.operator_error_m);
   std::array<KinematicModel, 2> tip_models;
   for (int k = 0; k < 2; ++k) {
@@ -233,6 +296,7 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
   const std::array<JointVector, 2> seeds = {cell.ReadEncoders(0), cell.ReadEncoders(1)};
   TeachOptions teach;
   teach.seed = scenario.twin.seed;
+  if (stage_options.identify_tips) teach.orientations_per_point = 4;
   const TaughtPoints taught =
       config.auto_points ? PlanTaughtPoints(tip_models, X_B1B2_layout, seeds, teach)
                          : TeachPoints(tip_models, X_B1B2_layout, config.points_B1, seeds, teach);
@@ -242,7 +306,9 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
   rep["operator_error_mm"] = 1e3 * config.operator_error_m;
   rep["taught_points"] = {{"planned", config.auto_points},
                           {"cube_side_mm", 1e3 * taught.cube_side_m},
-                          {"count", taught.q1.size()},
+                          {"count", taught.points},
+                          {"orientations_per_point", teach.orientations_per_point},
+                          {"poses", taught.q1.size()},
                           {"rejected", taught.rejected}};
   if (!taught.ok) {
     rep["status"] = "failed";
@@ -252,22 +318,48 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
   }
   HandclaspOptions options;
   options.constraint = config.constraint;
+  options.identify_tips = stage_options.identify_tips;
   const HandclaspResult result =
       RunHandclaspProcedure(cell, tip_models, taught.q1, options, &progress);
   // --- the procedure has ended: scoring against the truth from here on ---
   // Scored against the frames the pendant models use (KinematicFrameTruth: link 1's theta and
-  // d errors are invisible to any kinematic calibration); the physical transform is scored
-  // too, under physical_truth, so that nothing is hidden.
+  // d errors are invisible to any kinematic calibration; BestFitBaseOffset for calibrated
+  // models); the physical transform is scored too, under physical_truth, so that nothing is
+  // hidden.
   const TwinTruth twin_truth = cell.Truth();
-  const Transform truth = KinematicFrameTruth(twin_truth, pendant_models_flange);
+  const bool tips_ok = result.ok() && result.tips.ok;
+  const std::array<Vector3, 2> dt = {tips_ok ? result.tips.dt1_F1 : Vector3::Zero(),
+                                     tips_ok ? result.tips.dt2_F2 : Vector3::Zero()};
+  std::array<KinematicModel, 2> true_tips;
+  std::array<Transform, 2> X_BBp;
+  for (int k = 0; k < 2; ++k) {
+    true_tips[k] = WithTipTool(twin_truth.models[k], scenario.twin.tips[k].X_FTip);
+    X_BBp[k] = stage_options.best_fit_frames
+                   ? BestFitBaseOffset(true_tips[k], tip_models[k], dt[k])
+                   : KinematicBaseOffset(twin_truth.models[k], pendant_models_flange[k]);
+  }
   const Transform physical = TrueX_B1B2(twin_truth);
+  const Transform truth = X_BBp[0].inverse() * physical * X_BBp[1];
   rep["truth"] = PoseJson(truth);
-  rep["scoring_frame"] = {
-      {"frames", "kinematic: X_B1'B2' = X_B1B1'^-1 X_B1B2 X_B2B2', B' = B X_BL0 RotZ(dtheta1) "
-                 "TransZ(dd1) X_BL0^-1 with dtheta1, dd1 = true minus pendant link-1 theta, d "
-                 "(unidentifiable by any kinematic calibration)"},
-      {"link1_offsets", Link1Offsets(twin_truth, pendant_models_flange)}};
+  if (stage_options.best_fit_frames) {
+    rep["scoring_frame"] = {
+        {"frames", "best fit: X_B1'B2' = X_B1B1'^-1 X_B1B2 X_B2B2', X_BB' the rigid transform "
+                   "taking the pendant model's tip positions (identified tip corrections "
+                   "applied) onto the true ones over 200 random joint configurations"},
+        {"offsets", {PoseJson(X_BBp[0]), PoseJson(X_BBp[1])}}};
+  } else {
+    rep["scoring_frame"] = {
+        {"frames", "kinematic: X_B1'B2' = X_B1B1'^-1 X_B1B2 X_B2B2', B' = B X_BL0 RotZ(dtheta1) "
+                   "TransZ(dd1) X_BL0^-1 with dtheta1, dd1 = true minus pendant link-1 theta, d "
+                   "(unidentifiable by any kinematic calibration)"},
+        {"link1_offsets", Link1Offsets(twin_truth, pendant_models_flange)}};
+  }
   rep["physical_truth"] = PoseJson(physical);
+  rep["pendant_tip_error"] = nlohmann::json::array();
+  for (int k = 0; k < 2; ++k) {
+    rep["pendant_tip_error"].push_back(
+        PendantTipError(true_tips[k], WithTipCorrection(tip_models[k], dt[k]), X_BBp[k]));
+  }
   rep["skipped"] = result.skipped;
   rep["warnings"] = result.calibration.warnings;
   nlohmann::json contacts = nlohmann::json::array();
@@ -299,9 +391,31 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
     const BaseFrameError e = CompareBaseFrames(X, physical);  // eq. 33-34
     rep["physical_truth"][which] = {{"e_tran_mm", e.e_tran_mm}, {"e_rot_deg", e.e_rot_deg}};
   }
+  if (stage_options.identify_tips) {
+    nlohmann::json& t = rep["tips_identified"];
+    t["status"] = result.tips.ok ? "ok" : "failed";
+    t["relative_singular_value"] = result.tips.relative_singular_value;
+    if (result.tips.ok) {
+      t.update(Scored(result.tips.X_B1B2, truth, result.tips.rms_residual_m));
+      t["rms_residual_before_mm"] = 1e3 * result.tips.rms_residual_before_m;
+      t["dt_flange_mm"] = {Xyz(result.tips.dt1_F1), Xyz(result.tips.dt2_F2)};
+      t["sigma_dt_flange_mm"] = {Xyz(result.tips.sigma_dt1_F1), Xyz(result.tips.sigma_dt2_F2)};
+      const BaseFrameError e = CompareBaseFrames(result.tips.X_B1B2, physical);
+      rep["physical_truth"]["tips_identified"] = {{"e_tran_mm", e.e_tran_mm},
+                                                  {"e_rot_deg", e.e_rot_deg}};
+      out.X_B1B2_tips = result.tips.X_B1B2;
+    } else {
+      t["reason"] = result.tips.reason;
+    }
+  }
   if (config.coupled_motion) {
+    // With identified tips the controllers use them (the TCP a pendant would store).
+    std::array<KinematicModel, 2> used = tip_models;
+    for (int k = 0; k < 2; ++k) used[k] = WithTipCorrection(tip_models[k], dt[k]);
     rep["coupled_motion"] =
-        CoupledMotion(cell, tip_models, result.contacts.front(), cal.X_B1B2_constrained);
+        CoupledMotion(cell, used, result.contacts.front(),
+                      tips_ok ? result.tips.X_B1B2 : cal.X_B1B2_constrained);
+    rep["coupled_motion"]["estimate"] = tips_ok ? "tips_identified" : "constrained";
   }
   progress << "handclasp: " << ToString(config.constraint) << " general e_tran "
            << rep["general"]["e_tran_mm"].get<double>() << " mm, e_rot "

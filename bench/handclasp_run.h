@@ -17,6 +17,9 @@
 //     calibrated_operator_error_mm: 0.1  # the dual-arm workflow's second handclasp (with the
 //                                  # calibrated kinematics, bench/workflow_run.h): operator
 //                                  # alignment error sigma per axis [mm] (default 0.1)
+//     calibrated_tip_identification: true  # that handclasp teaches 4 tip orientations per
+//                                  # point and identifies both tips on their flanges jointly
+//                                  # with X_B1B2 (calib/tip_refinement.h; default true)
 //
 // Taught points are the operator's choice: the planner uses the scenario's layout of the bases
 // (where the operator sees the robots stand) only to pick reachable points; the estimator gets
@@ -47,6 +50,19 @@ struct HandclaspConfig {
   int trials = 1;                      ///< seeded batch size (>= 1)
   bool coupled_motion = true;          ///< run the coupled-motion check
   double calibrated_operator_error_m = 1e-4;  ///< workflow stage (c) alignment error [m]
+  bool calibrated_tip_identification = true;  ///< workflow stage (c) identifies the tips
+};
+
+/// How one handclasp stage runs and is scored.
+struct HandclaspStageOptions {
+  /// Replaces the section's operator_error_mm when set [m].
+  std::optional<double> operator_error_m;
+  /// Teach 4 orientations per point and identify the tips (HandclaspOptions::identify_tips).
+  bool identify_tips = false;
+  /// Score in the best-fit frames of the pendant models (BestFitBaseOffset) instead of the
+  /// link-1 frames (KinematicBaseOffset): for calibrated models, whose base gauge is not the
+  /// link-1 one.
+  bool best_fit_frames = false;
 };
 
 /// The constraint implied by the installations: robot 1 on the floor and robot 2 on the floor,
@@ -71,6 +87,18 @@ HandclaspConfig ParseHandclaspConfig(const Scenario& scenario);
 Transform KinematicBaseOffset(const KinematicModel& true_model,
                               const KinematicModel& pendant_model);
 
+/// The frame B' a pendant model works in, for models whose base gauge is not link 1's theta
+/// and d alone (after an optical-axis calibration the unidentifiable combinations also hold
+/// link 1's beta, a rotation about a second vertical axis): the rigid X_BB' that best maps the
+/// model's tip positions onto the true ones (least squares, Umeyama) over `configurations`
+/// seeded random joint configurations inside the limits, with the tip corrections dt_F (in
+/// the flange frame, e.g. identified by the handclasp) applied to the model's tip. With a
+/// calibration exact in its identifiable combinations this is the exact gauge; otherwise the
+/// remaining model error is what the handclasp suffers from.
+Transform BestFitBaseOffset(const KinematicModel& true_tip_model,
+                            const KinematicModel& pendant_tip_model, const Vector3& dt_F,
+                            int configurations = 200);
+
 /// X_B1'B2' = X_B1B1'^-1 X_B1B2 X_B2B2': the transform between the frames the robots'
 /// kinematic models (the pendant models) use; what a handclasp can determine at best and what
 /// base_frame.{general,constrained} are scored against. The physical X_B1B2 is scored too
@@ -83,6 +111,9 @@ struct HandclaspStageResult {
   bool ok = false;                                       ///< the procedure calibrated
   Transform X_B1B2_general = Transform::Identity();      ///< general estimate (eq. 3, 12)
   Transform X_B1B2_constrained = Transform::Identity();  ///< installation-refined estimate
+  /// With HandclaspStageOptions::identify_tips and report.tips_identified.status "ok": the
+  /// estimate refined jointly with the tips.
+  Transform X_B1B2_tips = Transform::Identity();
   /// base_frame-style object: installation, truth, general, constrained (e_tran_mm, e_rot_deg,
   /// xyz_mm, zyz_deg, rms_residual_mm), contacts, skipped, warnings, coupled_motion, ...
   nlohmann::json report;
@@ -92,11 +123,10 @@ struct HandclaspStageResult {
 /// flange models `pendant_models_flange` (nominal or calibrated; the scenario's tips are added
 /// as tools), then scores it against cell.Truth(). Progress lines go to `progress`. Throws
 /// InputError for a bad section; procedure failures are reported (ok = false, report.status).
-/// `operator_error_m` (>= 0) replaces the section's operator_error_mm when given.
 HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
                                        const std::array<KinematicModel, 2>& pendant_models_flange,
                                        std::ostream& progress,
-                                       std::optional<double> operator_error_m = std::nullopt);
+                                       const HandclaspStageOptions& stage_options = {});
 
 /// Loads the scenario, runs its handclasp section with the nominal models for each trial of
 /// the batch and writes out_dir/report.json atomically (temporary file, then rename). Returns

@@ -50,7 +50,14 @@ nlohmann::json StageSummary(const HandclaspStageResult& r, const std::string& ki
   nlohmann::json j;
   j["kinematics"] = kinematics;
   j["status"] = r.ok ? "ok" : "failed";
-  if (r.ok) {
+  const nlohmann::json& tips = r.report.contains("tips_identified") ? r.report["tips_identified"]
+                                                                     : nlohmann::json();
+  if (r.ok && tips.is_object() && tips.value("status", "") == "ok") {
+    j["estimate"] = "tips_identified";
+    j["e_tran_mm"] = tips["e_tran_mm"];
+    j["e_rot_deg"] = tips["e_rot_deg"];
+    j["physical_truth"] = r.report["physical_truth"]["tips_identified"];
+  } else if (r.ok) {
     j["estimate"] = "constrained";
     j["e_tran_mm"] = r.report["constrained"]["e_tran_mm"];
     j["e_rot_deg"] = r.report["constrained"]["e_rot_deg"];
@@ -144,8 +151,11 @@ int RunWorkflowScenario(const RunOptions& o) {
     if (failure.empty()) {
       progress << "[" << Seconds(t_start) << " s] (c) handclasp with calibrated kinematics, "
                << 1e3 * handclasp.calibrated_operator_error_m << " mm operator error\n";
-      const HandclaspStageResult c = RunHandclaspStage(
-          cell, sc, calibrated, progress, handclasp.calibrated_operator_error_m);
+      HandclaspStageOptions stage;
+      stage.operator_error_m = handclasp.calibrated_operator_error_m;
+      stage.identify_tips = handclasp.calibrated_tip_identification;
+      stage.best_fit_frames = true;
+      const HandclaspStageResult c = RunHandclaspStage(cell, sc, calibrated, progress, stage);
       workflow["calibrated_kinematics"] = StageSummary(c, "calibrated (optical-axis)");
       if (!c.ok) failure = "handclasp with calibrated kinematics failed";
       if (c.report.contains("coupled_motion")) {

@@ -73,16 +73,26 @@ Matrix3 FrameWithZ(const Vector3& u) {
   return R;
 }
 
+// Robot 1's tip direction for orientation `k` of a point: towards robot 2's shoulder (k = 0),
+// else tilted by o.tilt_deg about an axis perpendicular to it, the axes spread evenly.
+Vector3 TipDirection(const std::array<KinematicModel, 2>& m, const Transform& X_B1B2,
+                     const Vector3& p_B1, int k, const TeachOptions& o) {
+  const Vector3 u = (X_B1B2 * Shoulder(m[1]) - p_B1).normalized();
+  if (k == 0) return u;
+  const Vector3 a = Perpendicular(u);
+  const double spin = 2.0 * kPi * (k - 1) / std::max(1, o.orientations_per_point - 1);
+  const Vector3 axis = Eigen::AngleAxisd(spin, u) * a;
+  return Eigen::AngleAxisd(DegToRad(o.tilt_deg), axis) * u;
+}
+
 Teach TeachOne(const std::array<KinematicModel, 2>& m, const Transform& X_B1B2,
-               const Vector3& p_B1, const std::array<JointVector, 2>& seed,
+               const Vector3& p_B1, const Vector3& u, const std::array<JointVector, 2>& seed,
                const TeachOptions& o) {
   Teach t;
   if (p_B1.z() < o.min_height_m) {
     t.reason = "lower than min_height_m";
     return t;
   }
-  const Vector3 shoulder2_B1 = X_B1B2 * Shoulder(m[1]);
-  const Vector3 u = (shoulder2_B1 - p_B1).normalized();  // robot 1's tip points at robot 2
   const IkResult r1 = TipIk(m[0], p_B1, FrameWithZ(u), seed[0], o);
   if (r1.status != IkStatus::kSuccess) {
     t.reason = std::string("robot 1 cannot reach it (IK ") + ToString(r1.status) + ")";
@@ -135,6 +145,12 @@ void TeachOptions::Validate() const {
   }
   if (rolls < 1) fail("rolls", "must be >= 1, got " + std::to_string(rolls));
   if (ik_restarts < 0) fail("ik_restarts", "must be >= 0, got " + std::to_string(ik_restarts));
+  if (orientations_per_point < 1 || orientations_per_point > 8) {
+    fail("orientations_per_point", "must be in 1..8, got " + std::to_string(orientations_per_point));
+  }
+  if (!(tilt_deg > 0 && tilt_deg < 90)) {
+    fail("tilt_deg", "must be in (0, 90), got " + std::to_string(tilt_deg));
+  }
 }
 
 TaughtPoints TeachPoints(const std::array<KinematicModel, 2>& tip_models,
@@ -146,18 +162,33 @@ TaughtPoints TeachPoints(const std::array<KinematicModel, 2>& tip_models,
     if (!p_B1[i].allFinite()) {
       throw InputError("TeachPoints p_B1[" + std::to_string(i) + "]", "must be finite");
     }
-    const Teach t = TeachOne(tip_models, X_B1B2_rough, p_B1[i], q_seed, options);
-    if (t.ok) {
-      out.p_B1.push_back(p_B1[i]);
-      out.q1.push_back(t.q1);
-    } else {
+    const Teach t = TeachOne(tip_models, X_B1B2_rough, p_B1[i],
+                             TipDirection(tip_models, X_B1B2_rough, p_B1[i], 0, options), q_seed,
+                             options);
+    if (!t.ok) {
       out.rejected.push_back("point " + std::to_string(i) + " " + Mm(p_B1[i]) + ": " + t.reason);
+      continue;
+    }
+    out.p_B1.push_back(p_B1[i]);
+    out.q1.push_back(t.q1);
+    ++out.points;
+    for (int k = 1; k < options.orientations_per_point; ++k) {
+      const Teach tk = TeachOne(tip_models, X_B1B2_rough, p_B1[i],
+                                TipDirection(tip_models, X_B1B2_rough, p_B1[i], k, options),
+                                {t.q1, q_seed[1]}, options);
+      if (tk.ok) {
+        out.p_B1.push_back(p_B1[i]);
+        out.q1.push_back(tk.q1);
+      } else {
+        out.rejected.push_back("point " + std::to_string(i) + " orientation " +
+                               std::to_string(k) + ": " + tk.reason);
+      }
     }
   }
   const size_t needed = std::min<size_t>(options.min_points, std::max<size_t>(p_B1.size(), kMinContacts));
-  out.ok = out.q1.size() >= needed;
+  out.ok = static_cast<size_t>(out.points) >= needed;
   if (!out.ok) {
-    out.reason = "only " + std::to_string(out.q1.size()) + " of " + std::to_string(p_B1.size()) +
+    out.reason = "only " + std::to_string(out.points) + " of " + std::to_string(p_B1.size()) +
                  " handclasp points are reachable by both robots, need " + std::to_string(needed);
   }
   return out;
@@ -302,6 +333,30 @@ HandclaspResult RunHandclaspProcedure(Cell& cell,
     result.reason = std::string("base calibration ") + ToString(result.calibration.status) +
                     ": " + result.calibration.reason;
     return result;
+  }
+  if (options.identify_tips) {
+    // Flange poses from the pendant models (tip tool removed) and the tips on the flanges.
+    std::vector<Transform> X_B1F1, X_B2F2;
+    std::array<KinematicModel, 2> flange = pendant_tip_models;
+    for (KinematicModel& f : flange) f.X_L7E = Transform::Identity();
+    for (const HandclaspContact& c : result.contacts) {
+      X_B1F1.push_back(EndPose(flange[0], c.q1));
+      X_B2F2.push_back(EndPose(flange[1], c.q2));
+    }
+    const Transform& X_FTip1 = pendant_tip_models[0].X_L7E;
+    result.tips = RefineBaseAndTips(X_B1F1, X_B2F2, X_FTip1.translation(),
+                                    pendant_tip_models[1].X_L7E.translation(),
+                                    X_FTip1.linear().col(2), result.calibration.X_B1B2_general,
+                                    options.tips);
+    if (result.tips.ok) {
+      note("tips identified: robot 1 " + Mm(result.tips.dt1_F1) + ", robot 2 " +
+           Mm(result.tips.dt2_F2) + " on the flanges; RMS contact mismatch " +
+           std::to_string(1e3 * result.tips.rms_residual_before_m) + " -> " +
+           std::to_string(1e3 * result.tips.rms_residual_m) + " mm");
+    } else {
+      result.calibration.warnings.push_back("tip identification: " + result.tips.reason);
+      note("warning: tip identification: " + result.tips.reason);
+    }
   }
   result.status = S::kSuccess;
   return result;

@@ -20,6 +20,7 @@
 #include "calib/cell.h"
 #include "calib/inverse_kinematics.h"
 #include "calib/kinematic_model.h"
+#include "calib/tip_refinement.h"
 
 namespace twin {
 
@@ -49,6 +50,12 @@ struct TeachOptions {
   int ik_restarts = 2;
   /// Seed of the IK restarts.
   std::uint64_t seed = 1;
+  /// Robot 1 tip orientations taught per point (1..8): the first points at robot 2's shoulder,
+  /// the others are that direction tilted by tilt_deg about axes spread evenly around it. More
+  /// than one gives the orientation variety the tip identification needs (tip_refinement.h).
+  int orientations_per_point = 1;
+  /// Tilt of the extra orientations [deg] (0 < tilt < 90).
+  double tilt_deg = 30.0;
 
   /// Throws InputError naming the bad field and its value.
   void Validate() const;
@@ -59,8 +66,9 @@ struct TaughtPoints {
   bool ok = false;                       ///< enough teachable points
   std::string reason;                    ///< why not, when !ok
   double cube_side_m = 0.0;              ///< planner: side of the accepted cube [m]
-  std::vector<Vector3> p_B1;             ///< nominal contact points in B1 [m]
+  std::vector<Vector3> p_B1;             ///< nominal contact points in B1 [m], one per pose
   std::vector<JointVector> q1;           ///< robot 1 joint angles (motor side) [rad]
+  int points = 0;                        ///< distinct points taught (p_B1 repeats per orientation)
   std::vector<std::string> rejected;     ///< "point i: reason" for points left out
 };
 
@@ -92,6 +100,12 @@ struct HandclaspOptions {
   double retract_m = 0.05;
   /// IK options of the retract move (pendant model of robot 2).
   IkOptions ik;
+  /// Also refine X_B1B2 jointly with both tips' positions on their flanges (tip_refinement.h;
+  /// beyond the paper): for pendant models whose flange frame is known only up to a constant
+  /// rotation, as after an optical-axis calibration. Needs contacts of varied orientation
+  /// (TeachOptions::orientations_per_point).
+  bool identify_tips = false;
+  TipRefinementOptions tips;
 
   /// Throws InputError naming the bad field and its value.
   void Validate() const;
@@ -118,6 +132,9 @@ struct HandclaspResult {
   std::vector<HandclaspContact> contacts;   ///< registered contacts, in teaching order
   std::vector<std::string> skipped;         ///< "point i: reason" for failed contacts
   BaseCalibrationResult calibration;        ///< general and constrained X_B1B2
+  /// With options.identify_tips: X_B1B2 and the tip corrections (tips.ok false, with a reason
+  /// and a warning in `calibration.warnings`, when the contacts cannot separate them).
+  TipRefinementResult tips;
 
   bool ok() const { return status == Status::kSuccess; }
 };
