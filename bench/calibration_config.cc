@@ -11,7 +11,8 @@ namespace {
 
 const YamlKeys kKeys = {"robots",           "rough_base_from_robot1", "rough_hand_eye",
                         "board_mount",      "intrinsics_views",       "planning",
-                        "servo",            "calibration_axes",       "scoring"};
+                        "servo",            "calibration_axes",       "scoring",
+                        "calibration_split", "refit_all_axes"};
 const YamlKeys kPoseKeys = {"xyz_mm", "rpy_deg", "zyz_deg"};
 const YamlKeys kPlanningKeys = {"axes",
                                 "positions_per_axis",
@@ -108,6 +109,17 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
   }
   o.calibration_axes = std::min(3, p.num_axes);
   if (const auto f = m.Find("calibration_axes", false)) o.calibration_axes = r.Integer(*f);
+  if (const auto f = m.Find("refit_all_axes", false)) o.refit_all_axes = r.Bool(*f);
+  if (const auto f = m.Find("calibration_split", false)) {
+    const std::string v = r.String(*f);
+    if (v == "best_conditioned") {
+      o.split = OpticalAxisOptions::Split::kBestConditioned;
+    } else if (v == "first") {
+      o.split = OpticalAxisOptions::Split::kFirst;
+    } else {
+      r.Fail(*f, "must be best_conditioned or first, got '" + v + "'");
+    }
+  }
   if (const auto f = m.Find("scoring", false)) {
     const YamlMap sm(r, *f, kScoringKeys);
     if (const auto g = sm.Find("configurations", false)) {

@@ -27,7 +27,11 @@
 //       camera_height_mm: 400          #   base towards the passive base and up
 //       seed: 1
 //     servo: {tolerance_px: 0.1, max_iterations: 10, gain: 1.0}
-//     calibration_axes: 3              # first axes: calibration set; the rest: validation
+//     calibration_axes: 3              # whole axes in the calibration set; the rest validate
+//     calibration_split: best_conditioned  # which axes: best_conditioned (the subset with the
+//                                      # largest smallest identifiable singular value) or first
+//     refit_all_axes: true             # deliver the model refit on all axes after validation
+//                                      # (false: the calibration-set model)
 //     scoring: {configurations: 200, seed: 1}   # truth metrics (bench only)
 //
 // Errors are InputErrors naming file:line and the key path, like the rest of the scenario.

@@ -137,6 +137,70 @@ KinematicModel BoardRobotModel(const KinematicModel& nominal, const Transform& X
   return m;
 }
 
+namespace {
+
+// The smallest identifiable singular value of the identification of `samples` from the
+// nominal model (Ceres formulation, scale measurement included when recorded); 0 when the
+// identification fails.
+double SmallestIdentifiableSingularValue(const KinematicModel& nominal,
+                                         const std::vector<AxisSample>& samples,
+                                         const NonlinearIdentificationOptions& options) {
+  const NonlinearIdentificationResult r = IdentifyNonlinear(nominal, samples, options);
+  const ObservabilityReport& o = r.observability;
+  if (r.status == NonlinearIdentificationStatus::kFailed || o.rank < 1 ||
+      static_cast<int>(o.singular_values.size()) < o.rank) {
+    return 0.0;
+  }
+  return o.singular_values[o.rank - 1];
+}
+
+}  // namespace
+
+void SplitAxes(const KinematicModel& nominal, const std::vector<AxisSample>& samples,
+               int num_axes, const OpticalAxisOptions& options, std::vector<int>* cal_axes,
+               std::vector<int>* val_axes,
+               std::vector<std::pair<std::vector<int>, double>>* candidates) {
+  cal_axes->clear();
+  val_axes->clear();
+  candidates->clear();
+  std::vector<int> usable;  // axes with 3 or more aligned poses
+  for (int k = 0; k < num_axes; ++k) {
+    std::vector<int> kept;
+    Subset(samples, {k}, &kept);
+    if (!kept.empty()) usable.push_back(k);
+  }
+  const int n = std::min<int>(options.calibration_axes, static_cast<int>(usable.size()));
+  if (options.split == OpticalAxisOptions::Split::kFirst ||
+      n >= static_cast<int>(usable.size()) || n < 1) {
+    for (int k = 0; k < num_axes; ++k) {
+      (k < options.calibration_axes ? *cal_axes : *val_axes).push_back(k);
+    }
+    return;
+  }
+  // Every n-subset of the usable axes (C(5, 3) = 10 for the paper's plan).
+  std::vector<bool> pick(usable.size(), false);
+  std::fill(pick.begin(), pick.begin() + n, true);
+  double best = -1.0;
+  do {
+    std::vector<int> subset;
+    for (size_t i = 0; i < usable.size(); ++i) {
+      if (pick[i]) subset.push_back(usable[i]);
+    }
+    const double sigma = SmallestIdentifiableSingularValue(nominal, Subset(samples, subset),
+                                                           options.nonlinear);
+    candidates->emplace_back(subset, sigma);
+    if (sigma > best) {
+      best = sigma;
+      *cal_axes = subset;
+    }
+  } while (std::prev_permutation(pick.begin(), pick.end()));
+  for (int k = 0; k < num_axes; ++k) {
+    if (std::find(cal_axes->begin(), cal_axes->end(), k) == cal_axes->end()) {
+      val_axes->push_back(k);
+    }
+  }
+}
+
 void IdentifyRobot(const std::vector<int>& calibration_axes,
                    const std::vector<int>& validation_axes, const OpticalAxisOptions& options,
                    RobotCalibration* rc) {
@@ -171,6 +235,23 @@ void IdentifyRobot(const std::vector<int>& calibration_axes,
   rc->per_axis.assign(num_axes, MisalignedSummary{});
   for (int k = 0; k < num_axes; ++k) {
     rc->per_axis[k] = Misaligned(rc->nominal, rc->identified, Subset(rc->samples, {k}));
+  }
+  rc->holdout = rc->identified;
+  rc->refit = false;
+  if (options.refit_all_axes && !val_kept.empty()) {
+    std::vector<int> all = cal_kept;
+    all.insert(all.end(), val_kept.begin(), val_kept.end());
+    std::sort(all.begin(), all.end());
+    const auto t1 = Clock::now();
+    NonlinearIdentificationResult f =
+        IdentifyNonlinear(rc->nominal, Subset(rc->samples, all), options.nonlinear);
+    rc->identification_s += Seconds(t1);
+    if (f.status != NonlinearIdentificationStatus::kFailed) {
+      rc->identified = f.model;
+      rc->method = std::string(f.depth_used ? "ceres_with_scale" : "ceres") + "_all_axes";
+      rc->refit_result = std::move(f);
+      rc->refit = true;
+    }
   }
 }
 
@@ -378,8 +459,15 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
 
     // 3-4. Split by whole axes and identify.
     std::vector<int> cal_axes, val_axes;
-    for (int k = 0; k < num_axes; ++k) {
-      (k < options.calibration_axes ? cal_axes : val_axes).push_back(k);
+    const auto t_split = Clock::now();
+    SplitAxes(rc.nominal, rc.samples, num_axes, options, &cal_axes, &val_axes,
+              &rc.split_candidates);
+    rc.identification_s += Seconds(t_split);
+    if (!rc.split_candidates.empty()) {
+      std::string axes;
+      for (int k : cal_axes) axes += (axes.empty() ? "" : ", ") + std::to_string(k + 1);
+      say(name(r) + ": calibration axes " + axes + " of " + std::to_string(num_axes) +
+          " (best conditioned of " + std::to_string(rc.split_candidates.size()) + " subsets)");
     }
     say(name(r) + ": identifying from " + std::to_string(rc.samples.size()) + " aligned poses (" +
         std::to_string(rc.failed.size()) + " skipped)");

@@ -55,8 +55,18 @@ struct OpticalAxisOptions {
   std::uint64_t seed = 1;            ///< seed of the intrinsics view poses
   PosePlannerOptions planner;        ///< PSO (q, p, swarm, iterations, runs, C1-C5)
   ServoOptions servo;                ///< alignment (tolerance 0.1 px, iteration limit)
-  int calibration_axes = 3;          ///< the first axes are the calibration set, the rest
-                                     ///< the validation set (paper: 30 / 20 of 5 x 10)
+  int calibration_axes = 3;          ///< axes in the calibration set, the rest validate
+                                     ///< (paper: 30 / 20 poses of 5 x 10, by whole axes)
+  /// Which whole axes calibrate: the first calibration_axes (kFirst), or the subset whose
+  /// identification Jacobian has the largest smallest identifiable singular value
+  /// (kBestConditioned, the minimum-singular-value observability index: the weakest
+  /// identifiable combination is determined best). Uses the recorded joint angles only.
+  enum class Split { kFirst, kBestConditioned };
+  Split split = Split::kBestConditioned;
+  /// After the hold-out validation (the paper's metric, eq. 46, on the validation axes), the
+  /// delivered model is identified again from all aligned axes (true), as one refits on all
+  /// data after cross-validation; false delivers the calibration-set model.
+  bool refit_all_axes = true;
   /// Start each position of an axis with the correction the servo found at the previous one
   /// (the kinematic error changes little over 20 mm), so the servo starts close.
   bool carry_correction = true;
@@ -124,10 +134,18 @@ struct RobotCalibration {
   std::vector<AxisSample> samples;     ///< all aligned poses, axis = plan axis index
   std::vector<int> calibration_axes;   ///< plan axis indices in the calibration set
   std::vector<int> validation_axes;    ///< ... in the validation set
+  /// kBestConditioned: each candidate calibration subset (plan axes) and its smallest
+  /// identifiable singular value (observability.h scaling); empty for kFirst.
+  std::vector<std::pair<std::vector<int>, double>> split_candidates;
   LinearizedIdentificationResult linearized;  ///< paper, eq. 45-49, on the calibration set
   NonlinearIdentificationResult nonlinear;    ///< Ceres + scale, on the calibration set
-  KinematicModel identified;           ///< the result: nonlinear unless it failed
-  std::string method;                  ///< "ceres_with_scale", "ceres", or "linearized"
+  KinematicModel identified;           ///< the delivered model (see refit_all_axes)
+  std::string method;                  ///< "ceres_with_scale", "ceres", or "linearized",
+                                       ///< with "_all_axes" appended after the refit
+  KinematicModel holdout;              ///< the calibration-set model (nonlinear unless it
+                                       ///< failed): what the misaligned errors are of
+  bool refit = false;                  ///< identified is the all-axes refit
+  NonlinearIdentificationResult refit_result;  ///< Ceres on all usable axes, when refit
   MisalignedSummary calibration_error, validation_error;  ///< eq. 46
   std::vector<MisalignedSummary> per_axis;  ///< per plan axis (samples 0 when dropped)
   std::vector<ServoImages> images;
@@ -148,9 +166,21 @@ struct OpticalAxisResult {
 OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& knowledge,
                                             const OpticalAxisOptions& options);
 
+/// Splits plan axes 0..num_axes-1 into calibration and validation sets by whole axes:
+/// options.calibration_axes of them calibrate, chosen by options.split among the axes with 3
+/// or more samples (kBestConditioned: every subset is identified from `nominal` and the one
+/// with the largest smallest identifiable singular value wins; `candidates` lists each subset
+/// and that value, empty for kFirst or when there is no choice).
+void SplitAxes(const KinematicModel& nominal, const std::vector<AxisSample>& samples,
+               int num_axes, const OpticalAxisOptions& options,
+               std::vector<int>* calibration_axes, std::vector<int>* validation_axes,
+               std::vector<std::pair<std::vector<int>, double>>* candidates);
+
 /// Identification of one robot from recorded samples (the part that runs on recorded data):
 /// `samples` axis indices are plan axes; `calibration_axes` / `validation_axes` split them.
-/// Fills linearized, nonlinear, identified, method, the misaligned summaries and per_axis.
+/// Fills linearized, nonlinear, holdout, the misaligned summaries and per_axis (all of the
+/// calibration-set model), then identified and method (the refit on all axes when
+/// options.refit_all_axes and there are validation axes, else the calibration-set model).
 void IdentifyRobot(const std::vector<int>& calibration_axes,
                    const std::vector<int>& validation_axes, const OpticalAxisOptions& options,
                    RobotCalibration* robot);
