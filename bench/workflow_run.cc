@@ -188,13 +188,19 @@ int RunWorkflowScenario(const RunOptions& o) {
         std::printf("%-34s failed\n", label);
         return;
       }
-      std::printf("%-34s e_tran %8.3f mm  e_rot %7.4f deg  (physical %.3f mm, %.4f deg)\n",
+      std::printf("%-34s e_tran %8.3f mm  e_rot %7.4f deg  (%s; physical %.3f mm, %.4f deg)\n",
                   label, s["e_tran_mm"].get<double>(), s["e_rot_deg"].get<double>(),
+                  s["estimate"].get<std::string>().c_str(),
                   s["physical_truth"]["e_tran_mm"].get<double>(),
                   s["physical_truth"]["e_rot_deg"].get<double>());
+      const nlohmann::json& cm = s["stage"]["coupled_motion"];
+      if (cm.is_object() && cm.value("status", "") == "ok") {
+        std::printf("%-34s coupled motion: largest tip-to-tip deviation %.3f mm\n", "",
+                    cm["max_deviation_mm"].get<double>());
+      }
     };
     if (!o.quiet) {
-      std::printf("\nbase frame (%s, constrained estimate):\n", ToString(handclasp.constraint));
+      std::printf("\nbase frame (%s installation):\n", ToString(handclasp.constraint));
       line("nominal_kinematics", "  handclasp, nominal kinematics");
       if (workflow.contains("calibrated_kinematics")) {
         line("calibrated_kinematics", "  handclasp, calibrated kinematics");

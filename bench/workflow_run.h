@@ -7,17 +7,24 @@
 //       the camera sees the board (bench/calibration_run.h, RunCalibrationStage);
 //   (c) the handclasp again, with the identified kinematics as the pendant models (links 1-6
 //       and X_BL0 of the identified model, the scenario's tip as tool) and the section's
-//       calibrated_operator_error_mm.
-// Both handclasp stages are scored against the frames the kinematic models use (handclasp_run.h,
-// KinematicFrameTruth), the physical transform reported beside. One report.json (and
-// report.html, measurements.csv, servo_*.png, identified_<robot>.yaml) is written to a staging
-// folder out_dir + ".partial" and renamed onto out_dir at the end.
+//       calibrated_operator_error_mm; with calibrated_tip_identification (default) robot 1's
+//       tip is taught at 4 orientations per point and both tips are identified on their
+//       flanges jointly with X_B1B2 (calib/tip_refinement.h): a single feature point leaves
+//       the flange frame's rotation about it unidentified, a constant tip error of about a
+//       millimetre for a tip 150 mm off the axis.
+// Stage (a) is scored against the link-1 frames of the nominal models (KinematicFrameTruth),
+// stage (c) against the best-fit frames of the calibrated models (BestFitBaseOffset: their
+// base gauge also holds link 1's beta); the physical transform is reported beside. One
+// report.json (and report.html, measurements.csv, servo_*.png, identified_<robot>.yaml) is
+// written to a staging folder out_dir + ".partial" and renamed onto out_dir at the end.
 //
 // report.json: the calibration keys (scenario, intrinsics, robots, timing_s) plus
 //   base_frame.installation
-//   base_frame.workflow.{nominal_kinematics,calibrated_kinematics}.{e_tran_mm,e_rot_deg}
-//       (the constrained estimate, eq. 33-34), each with .stage (the whole handclasp report:
-//       general, constrained, physical_truth, contacts, coupled_motion, ...)
+//   base_frame.workflow.{nominal_kinematics,calibrated_kinematics}.{e_tran_mm,e_rot_deg,
+//       estimate} (eq. 33-34 of the stage's headline estimate: "tips_identified" when the tip
+//       identification succeeded, else "constrained"), .physical_truth, and .stage (the whole
+//       handclasp report: general, constrained, tips_identified, scoring_frame, physical_truth,
+//       pendant_tip_error, contacts, coupled_motion, ...)
 //   base_frame.coupled_motion (stage (c)'s coupled-motion check, issue item 6)
 #pragma once
 
