@@ -9,6 +9,7 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include "calib/cell_moves.h"
 #include "calib/errors.h"
 #include "calib/forward_kinematics.h"
 #include "calib/inverse_kinematics.h"
@@ -131,9 +132,21 @@ void ValidateOpticalAxisOptions(const OpticalAxisOptions& o) {
 
 KinematicModel BoardRobotModel(const KinematicModel& nominal, const Transform& X_FT) {
   KinematicModel m = nominal;
-  m.links[kNumJoints].dh = DhParameters{};
+  // The mount's translation becomes link 7's eq. 2 parameters (theta = atan2(y, x), d = z,
+  // a = the distance from the flange axis) and its rotation stays in X_L7E, so that link 7's
+  // a, theta and d move the feature point radially, tangentially and along z to first order
+  // wherever it sits. With the whole mount in X_L7E (identity link 7), a point on the flange
+  // plane's y axis had no first-order parameter along y: exact synthetic data with depths
+  // stopped at 0.05 mm (tests/bench/calibration_cli_test.cc).
+  const Vector3 p = X_FT.translation();
+  DhParameters dh;
+  const double radial = std::hypot(p.x(), p.y());
+  dh.theta_offset = radial > 1e-9 ? std::atan2(p.y(), p.x()) : 0.0;
+  dh.d = p.z();
+  dh.a = radial;
+  m.links[kNumJoints].dh = dh;
   m.links[kNumJoints].inertia = LinkInertia{};
-  m.X_L7E = X_FT;
+  m.X_L7E = LinkTransform(dh, 0.0).inverse() * X_FT;  // L7 X_L7E = X_FT exactly
   return m;
 }
 
@@ -215,6 +228,14 @@ void IdentifyRobot(const std::vector<int>& calibration_axes,
     throw InputError(name + " identification",
                      "no calibration axis has 3 or more aligned poses; nothing to identify");
   }
+  if (cal_kept.size() < 2) {
+    // One line through the points of one axis fits any model that keeps them collinear: the
+    // problem is rank-deficient far beyond the named combinations.
+    throw InputError(name + " identification",
+                     "only one calibration axis (plan axis " + std::to_string(cal_kept[0] + 1) +
+                         ") has 3 or more aligned poses; the collinearity constraint needs at "
+                         "least 2 optical axes (see the skipped poses and axes above)");
+  }
   const auto t0 = Clock::now();
   // Eq. 45-49: the paper's recursive linearized LM.
   rc->linearized = IdentifyFromOpticalAxes(rc->nominal, cal, options.linearized);
@@ -271,7 +292,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
   // Where the cell starts: the camera sees the board (the scenario's set-up pose).
   const std::array<JointVector, 2> home = {cell.ReadEncoders(0), cell.ReadEncoders(1)};
   auto go_home = [&](int robot) {
-    const MoveResult m = cell.MoveTo(robot, home[robot]);
+    const MoveResult m = MoveAvoidingSweep(cell, robot, home[robot]);
     if (m.status != MoveStatus::kSettled) {
       throw InputError(name(robot), std::string("cannot return to the start pose: ") +
                                         ToString(m.status) + ": " + m.reason);
@@ -368,13 +389,13 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
       };
       // Step 1: the active robot to its pose (after the passive robot moved to its first
       // position: the planned pair is collision-free by construction of the axis geometry).
-      MoveResult m = cell.MoveTo(r, axis.q_passive[0]);
-      if (m.status == MoveStatus::kSettled) m = cell.MoveTo(a, axis.q_active);
+      MoveResult m = MoveAvoidingSweep(cell, r, axis.q_passive[0]);
+      if (m.status == MoveStatus::kSettled) m = MoveAvoidingSweep(cell, a, axis.q_active);
       if (m.status != MoveStatus::kSettled) {
         // One retry from the start poses (a path between two planned poses may sweep through
         // the other robot).
-        if (cell.MoveTo(r, home[r]).status == MoveStatus::kSettled &&
-            cell.MoveTo(a, axis.q_active).status == MoveStatus::kSettled) {
+        if (MoveAvoidingSweep(cell, r, home[r]).status == MoveStatus::kSettled &&
+            MoveAvoidingSweep(cell, a, axis.q_active).status == MoveStatus::kSettled) {
           m = MoveResult{};
         }
       }

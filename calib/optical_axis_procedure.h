@@ -81,9 +81,11 @@ struct OpticalAxisOptions {
 void ValidateOpticalAxisOptions(const OpticalAxisOptions& options);
 
 /// The passive robot's estimator model: the nominal model with link 7 the board mount (Zhu et
-/// al. 2019, VI.A: "the calibration target is considered as the link 7"): an identity tool
-/// link followed by X_L7E = X_FT, so the end frame E is the board frame, origin the feature
-/// point.
+/// al. 2019, VI.A: "the calibration target is considered as the link 7"): link 7 holds the
+/// mount's translation as eq. 2 parameters (theta = atan2(y, x), d = z, a = distance from the
+/// flange axis, alpha = beta = 0) and X_L7E its rotation, so that L7 X_L7E = X_FT: the end
+/// frame E is the board frame, origin the feature point, and link 7's parameters move that
+/// point in every direction to first order.
 KinematicModel BoardRobotModel(const KinematicModel& nominal, const Transform& X_FT);
 
 /// One aligned pose: what a hardware cell records (measurements.csv).

@@ -6,6 +6,7 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include "calib/cell_moves.h"
 #include "calib/errors.h"
 #include "calib/forward_kinematics.h"
 #include "calib/inverse_kinematics.h"
@@ -108,7 +109,7 @@ ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
     return finish(ServoStatus::kJointLimits,
                   "start pose of robot " + std::to_string(passive) + " is outside its limits");
   }
-  const MoveResult start = cell.MoveTo(passive, q_passive_start);
+  const MoveResult start = MoveAvoidingSweep(cell, passive, q_passive_start);
   if (start.status != MoveStatus::kSettled) {
     return finish(start.status == MoveStatus::kOutOfLimits ? ServoStatus::kJointLimits
                                                            : ServoStatus::kMoveFailed,

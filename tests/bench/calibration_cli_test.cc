@@ -86,9 +86,36 @@ std::string SyntheticCsv(const testing::OpticalAxisScenario& s, bool depths = tr
   return csv.str();
 }
 
+// With depths, the synthetic model's tool link (theta -90 deg, a 60 mm) given as the board
+// mount: the scale is measured and the identification is exact. (With the whole mount in X_L7E
+// and an identity link 7, this point on the flange plane's y axis had no first-order parameter
+// along y and the solve stopped at 0.05 mm; BoardRobotModel now puts the mount's translation
+// into link 7's parameters.)
+TEST(CalibrationCli, IdentifyWithDepthsAndABoardMountIsExact) {
+  const fs::path dir = TempDir("identify_depth");
+  const auto s = testing::MakeOpticalAxisScenario(42);
+  std::ofstream(dir / "nominal.yaml") << ModelToYaml(s.nominal);
+  std::ofstream(dir / "measurements.csv") << SyntheticCsv(s, true);
+  const CliRun r = Twinbench("identify --model " + (dir / "nominal.yaml").string() +
+                             " --measurements " + (dir / "measurements.csv").string() +
+                             " --board-mount 0,-60,0,0,0,-90 --out " + (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(dir / "out" / "identification.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  const auto& m = j["misaligned_error_mm"];
+  std::printf("[ measured ] identify with depths: calibration %.3g -> %.3g mm, validation %.3g "
+              "-> %.3g mm\n",
+              m["calibration"]["before"].get<double>(), m["calibration"]["after"].get<double>(),
+              m["validation"]["before"].get<double>(), m["validation"]["after"].get<double>());
+  EXPECT_EQ(j["method"], "ceres_with_scale_all_axes");
+  EXPECT_GT(m["calibration"]["before"].get<double>(), 0.1);
+  // Exact data: the synthetic servo floor (1e-7 m); 1e-3 mm leaves margin.
+  EXPECT_LT(m["calibration"]["after"].get<double>(), 1e-3);
+  EXPECT_LT(m["validation"]["after"].get<double>(), 1e-3);
+}
+
 // Without depths (a recording of the paper's method: collinearity only); the scale
-// measurement is tested in tests/calib/scale_measurement_test.cc. Open: with depths and this
-// synthetic model's tool expressed as a board mount the solve stops at 0.05 mm (session note).
+// measurement is tested in tests/calib/scale_measurement_test.cc.
 TEST(CalibrationCli, IdentifyRecoversASyntheticRecording) {
   const fs::path dir = TempDir("identify");
   const auto s = testing::MakeOpticalAxisScenario(42);

@@ -128,11 +128,15 @@ TEST(WorkflowRun, AReducedRunReportsBothStagesAndTheCalibratedOneIsBetter) {
   // even this small calibration must at least halve it.
   EXPECT_GT(nominal, 2.0);
   EXPECT_LT(calibrated, 0.5 * nominal);
-  // The physical check: robot 2 following robot 1 through the estimate with the identified
-  // tips stays within 0.5 mm (nominal kinematics: about a millimetre in the full run).
+  // The physical check, frame-free: robot 2 following robot 1 through the estimate (with the
+  // identified tips) deviates at most half as much as with the nominal kinematics.
   const nlohmann::json& cm = w["calibrated_kinematics"]["stage"]["coupled_motion"];
+  const nlohmann::json& cm0 = w["nominal_kinematics"]["stage"]["coupled_motion"];
   ASSERT_EQ(cm["status"], "ok") << cm.dump();
-  EXPECT_LT(cm["max_deviation_mm"].get<double>(), 0.5);
+  ASSERT_EQ(cm0["status"], "ok") << cm0.dump();
+  std::printf("[ measured ] coupled motion: nominal %.3f mm, calibrated %.3f mm\n",
+              cm0["max_deviation_mm"].get<double>(), cm["max_deviation_mm"].get<double>());
+  EXPECT_LT(cm["max_deviation_mm"].get<double>(), 0.5 * cm0["max_deviation_mm"].get<double>());
   for (const char* key : {"report.json", "report.html", "measurements.csv"}) {
     EXPECT_TRUE(std::filesystem::exists(out + "/" + key)) << key;
   }

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "calib/errors.h"
 #include "optical_axis_synthetic.h"
 
 namespace twin {
@@ -71,6 +72,26 @@ TEST(AxisSplit, FirstKeepsThePlanOrderAndSkipsNothing) {
   EXPECT_EQ(cal, (std::vector<int>{0, 1, 2}));
   EXPECT_EQ(val, (std::vector<int>{3, 4}));
   EXPECT_TRUE(candidates.empty());
+}
+
+TEST(AxisSplit, IdentificationFromASingleUsableAxisIsRefused) {
+  // Every axis but axis 0 lost all but two poses (as when the servo failed there): one line
+  // fits any model that keeps its points collinear, so nothing is identified.
+  const auto sc = MakeOpticalAxisScenario(31);
+  RobotCalibration rc;
+  rc.nominal = sc.nominal;
+  std::vector<int> count(5, 0);
+  for (const AxisSample& s : sc.samples) {
+    if (s.axis == 0 || count[s.axis]++ < 2) rc.samples.push_back(s);
+  }
+  OpticalAxisOptions o;
+  try {
+    IdentifyRobot({0, 1, 2}, {3, 4}, o, &rc);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(e.message().find("at least 2 optical axes"), std::string::npos) << e.what();
+    EXPECT_NE(e.message().find("plan axis 1"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
