@@ -43,9 +43,11 @@ TEST(CellMoves, ASweptPathIsSplitIntoWristAndArmMoves) {
   const MoveResult m = MoveAvoidingSweep(cell, 1, target);
   EXPECT_EQ(m.status, MoveStatus::kSettled) << m.reason;
   EXPECT_EQ(cell.ReadEncoders(1), target);
-  ASSERT_EQ(cell.calls.size(), 3u);  // direct (collides), wrist only, then the arm
-  EXPECT_EQ(cell.calls[1].head<3>(), JointVector::Zero().head<3>());
-  EXPECT_EQ(cell.calls[1].tail<3>(), target.tail<3>());
+  // direct (collides), back to the start, wrist only, then the arm
+  ASSERT_EQ(cell.calls.size(), 4u);
+  EXPECT_EQ(cell.calls[1], JointVector::Zero());
+  EXPECT_EQ(cell.calls[2].head<3>(), JointVector::Zero().head<3>());
+  EXPECT_EQ(cell.calls[2].tail<3>(), target.tail<3>());
 }
 
 TEST(CellMoves, AFreeMoveIsOneMoveAndABlockedTargetStaysAFailure) {
