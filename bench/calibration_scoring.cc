@@ -46,21 +46,30 @@ GaugeErrors CompareInGauges(const std::vector<Vector3>& model, const std::vector
   return g;
 }
 
+std::vector<JointVector> RandomJointConfigurations(const KinematicModel& model, int n,
+                                                   std::uint64_t seed, double margin) {
+  std::mt19937_64 rng(seed);
+  std::vector<JointVector> qs;
+  for (int c = 0; c < n; ++c) {
+    JointVector q;
+    for (int i = 0; i < kNumJoints; ++i) {
+      const JointLimits& l = model.links[i].limits;
+      const double lo = l.lower + margin, hi = std::max(lo, l.upper - margin);
+      q(i) = std::uniform_real_distribution<double>(lo, hi)(rng);
+    }
+    qs.push_back(q);
+  }
+  return qs;
+}
+
 RobotScore ScoreRobot(const KinematicModel& nominal, const KinematicModel& identified,
                       const KinematicModel& truth, const ObservabilityReport& observability,
                       int configurations, std::uint64_t seed) {
   RobotScore s;
   s.configurations = configurations;
-  std::mt19937_64 rng(seed);
   std::vector<Vector3> p_nom, p_id, p_true;
-  const double margin = DegToRad(10.0);
-  for (int n = 0; n < configurations; ++n) {
-    JointVector q;
-    for (int i = 0; i < kNumJoints; ++i) {
-      const JointLimits& l = nominal.links[i].limits;
-      const double lo = l.lower + margin, hi = std::max(lo, l.upper - margin);
-      q(i) = std::uniform_real_distribution<double>(lo, hi)(rng);
-    }
+  for (const JointVector& q :
+       RandomJointConfigurations(nominal, configurations, seed, DegToRad(10.0))) {
     p_nom.push_back(EndPose(nominal, q).translation());
     p_id.push_back(EndPose(identified, q).translation());
     p_true.push_back(EndPose(truth, q).translation());

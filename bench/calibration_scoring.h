@@ -49,6 +49,12 @@ struct RobotScore {
 /// Scores `identified` and `nominal` (passive-robot models with the board as link 7) against
 /// `truth` over `configurations` joint vectors drawn uniformly inside the joint limits less
 /// 10 deg (seeded). `observability` is the identification's (for the combinations).
+/// `n` joint vectors drawn uniformly inside `model`'s limits less `margin` [rad] per side,
+/// from a std::mt19937_64 seeded with `seed` (joint by joint, configuration by
+/// configuration): the configurations of the truth metrics.
+std::vector<JointVector> RandomJointConfigurations(const KinematicModel& model, int n,
+                                                   std::uint64_t seed, double margin);
+
 RobotScore ScoreRobot(const KinematicModel& nominal, const KinematicModel& identified,
                       const KinematicModel& truth, const ObservabilityReport& observability,
                       int configurations, std::uint64_t seed);

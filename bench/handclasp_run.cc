@@ -5,9 +5,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <random>
 #include <sstream>
 
+#include "bench/calibration_scoring.h"
 #include "calib/errors.h"
 #include "calib/forward_kinematics.h"
 #include "calib/handclasp_procedure.h"
@@ -120,24 +120,6 @@ nlohmann::json CoupledMotion(TwinCell& cell, const std::array<KinematicModel, 2>
   return out;
 }
 
-// Seeded random joint configurations inside the limits (10 deg margin).
-std::vector<JointVector> RandomConfigurations(const KinematicModel& model, int n,
-                                              std::uint64_t seed) {
-  std::mt19937_64 rng(seed);
-  const double margin = DegToRad(10.0);
-  std::vector<JointVector> qs;
-  for (int c = 0; c < n; ++c) {
-    JointVector q;
-    for (int i = 0; i < kNumJoints; ++i) {
-      const JointLimits& l = model.links[i].limits;
-      const double lo = l.lower + margin, hi = std::max(lo, l.upper - margin);
-      q(i) = std::uniform_real_distribution<double>(lo, hi)(rng);
-    }
-    qs.push_back(q);
-  }
-  return qs;
-}
-
 // A tip model with its tip moved by dt_F in the flange frame.
 KinematicModel WithTipCorrection(KinematicModel tip_model, const Vector3& dt_F) {
   tip_model.X_L7E.translation() += dt_F;
@@ -151,7 +133,8 @@ nlohmann::json PendantTipError(const KinematicModel& true_tip, const KinematicMo
                                const Transform& X_BBp) {
   constexpr int kConfigurations = 200;
   double sum2 = 0.0, worst = 0.0;
-  for (const JointVector& q : RandomConfigurations(tip_model, kConfigurations, 1)) {
+  for (const JointVector& q :
+       RandomJointConfigurations(tip_model, kConfigurations, 1, DegToRad(10.0))) {
     const double e = 1e3 * (X_BBp * EndPose(tip_model, q).translation() -
                             EndPose(true_tip, q).translation())
                                .norm();
@@ -194,7 +177,8 @@ Transform BestFitBaseOffset(const KinematicModel& true_tip_model,
                             const KinematicModel& pendant_tip_model, const Vector3& dt_F,
                             int configurations) {
   const KinematicModel model = WithTipCorrection(pendant_tip_model, dt_F);
-  const std::vector<JointVector> qs = RandomConfigurations(model, configurations, 1);
+  const std::vector<JointVector> qs =
+      RandomJointConfigurations(model, configurations, 1, DegToRad(10.0));
   Eigen::Matrix3Xd a(3, qs.size()), b(3, qs.size());
   for (size_t c = 0; c < qs.size(); ++c) {
     a.col(c) = EndPose(model, qs[c]).translation();

@@ -139,14 +139,16 @@ int RunWorkflowScenario(const RunOptions& o) {
     }
 
     // (c) Handclasp again with the calibrated kinematics and the small contact error; the
-    // tools go back to where they started (the calibration exchanged camera and board).
-    if (failure.empty() && cell.CameraRobot() != initial_camera_robot) {
-      const MoveResult m = cell.ExchangeTools();
-      if (m.status != MoveStatus::kSettled) failure = "exchanging the tools back: " + m.reason;
-    }
+    // tools go back to where they started (the calibration exchanged camera and board), at
+    // the start pose, where the calibration exchanged them (wherever the calibration left the
+    // robots, the exchanged tools may touch something).
     if (failure.empty()) {
       const std::string back = ReturnToStart(cell, sc);
       if (!back.empty()) failure = "before the second handclasp: " + back;
+    }
+    if (failure.empty() && cell.CameraRobot() != initial_camera_robot) {
+      const MoveResult m = cell.ExchangeTools();
+      if (m.status != MoveStatus::kSettled) failure = "exchanging the tools back: " + m.reason;
     }
     if (failure.empty()) {
       progress << "[" << Seconds(t_start) << " s] (c) handclasp with calibrated kinematics, "

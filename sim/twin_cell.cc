@@ -393,6 +393,8 @@ MoveResult TwinCell::ExchangeTools() {
   mj_forward(s.m.get(), s.d.get());
   MoveResult result;
   if (const mjContact* c = s.Collision({})) {
+    // The contact lives in the data the rebuild below replaces: its text first.
+    const std::string contact = s.ContactText(*c);
     // Put the tools back: a cell never stays in an inconsistent state.
     std::swap(s.spec.camera.robot, s.spec.board.robot);
     s.Build();
@@ -402,7 +404,7 @@ MoveResult TwinCell::ExchangeTools() {
     }
     mj_forward(s.m.get(), s.d.get());
     result.status = MoveStatus::kCollision;
-    result.reason = "after exchanging the tools " + s.ContactText(*c) +
+    result.reason = "after exchanging the tools " + contact +
                     "; tools left where they were (move the robots apart first)";
     return result;
   }

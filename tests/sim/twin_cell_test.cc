@@ -337,3 +337,30 @@ TEST_F(TwinCellTest, UnstableServoIsAnInputError) {
 
 }  // namespace
 }  // namespace twin
+
+namespace twin {
+namespace {
+
+TEST(TwinCellTools, ExchangeSwapsTheToolsAndBackAndARefusalNamesTheRealContact) {
+  TwinCell cell(testing::DemoTwinSpec());
+  const int camera = cell.CameraRobot();
+  ASSERT_EQ(cell.ExchangeTools().status, MoveStatus::kSettled);
+  EXPECT_EQ(cell.CameraRobot(), 1 - camera);
+  ASSERT_EQ(cell.ExchangeTools().status, MoveStatus::kSettled);
+  EXPECT_EQ(cell.CameraRobot(), camera);
+  // Camera against the board (as in CollisionStopsTheMoveAndNamesTheBodies): exchanged there,
+  // the tools overlap, the exchange is refused and the reason names the bodies that touch.
+  JointVector into = testing::DemoPose();
+  into(1) = -1.1;
+  into(2) = 1.1;
+  ASSERT_EQ(cell.MoveTo(0, into).status, MoveStatus::kCollision);
+  const MoveResult r = cell.ExchangeTools();
+  ASSERT_EQ(r.status, MoveStatus::kCollision) << r.reason;
+  EXPECT_EQ(cell.CameraRobot(), camera);  // nothing changed
+  EXPECT_NE(r.reason.find("robot"), std::string::npos) << r.reason;
+  EXPECT_EQ(r.reason.find("world touches world"), std::string::npos) << r.reason;
+  std::printf("[ measured ] refused exchange: %s\n", r.reason.c_str());
+}
+
+}  // namespace
+}  // namespace twin
