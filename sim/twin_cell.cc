@@ -384,18 +384,8 @@ MoveResult TwinCell::ExchangeTools() {
     for (int i = 0; i < kNumJoints; ++i) link[k](i) = s.d->qpos[s.qadr[k][i]];
   }
   const double time = s.d->time;
-  std::swap(s.spec.camera.robot, s.spec.board.robot);
-  s.Build();
-  s.d->time = time;
-  for (int k = 0; k < kNumRobots; ++k) {
-    for (int i = 0; i < kNumJoints; ++i) s.d->qpos[s.qadr[k][i]] = link[k](i);
-  }
-  mj_forward(s.m.get(), s.d.get());
-  MoveResult result;
-  if (const mjContact* c = s.Collision({})) {
-    // The contact lives in the data the rebuild below replaces: its text first.
-    const std::string contact = s.ContactText(*c);
-    // Put the tools back: a cell never stays in an inconsistent state.
+  // Swap the tools and rebuild the world with the robots where they stand.
+  const auto swap_tools = [&]() {
     std::swap(s.spec.camera.robot, s.spec.board.robot);
     s.Build();
     s.d->time = time;
@@ -403,6 +393,13 @@ MoveResult TwinCell::ExchangeTools() {
       for (int i = 0; i < kNumJoints; ++i) s.d->qpos[s.qadr[k][i]] = link[k](i);
     }
     mj_forward(s.m.get(), s.d.get());
+  };
+  swap_tools();
+  MoveResult result;
+  if (const mjContact* c = s.Collision({})) {
+    // The contact lives in the data the rebuild below replaces: its text first.
+    const std::string contact = s.ContactText(*c);
+    swap_tools();  // the tools back: a cell never stays in an inconsistent state
     result.status = MoveStatus::kCollision;
     result.reason = "after exchanging the tools " + contact +
                     "; tools left where they were (move the robots apart first)";
