@@ -376,12 +376,8 @@ int RunCalibrationScenario(const RunOptions& o) {
   if (IsPresent(sc.handclasp) && IsPresent(sc.calibration)) return RunWorkflowScenario(o);
   CalibrationConfig config = ParseCalibrationConfig(sc);
   const fs::path out(o.out_dir);
-  const fs::path staging = out.string() + ".partial";
+  const fs::path staging = CreateStagingDirectory(o.out_dir);
   std::error_code ec;
-  fs::remove_all(staging, ec);
-  if (!fs::create_directories(staging, ec) && ec) {
-    throw InputError(o.out_dir, "cannot create the output folder: " + ec.message());
-  }
   try {
     InstallMujocoErrorHandlers();
     std::printf("twinbench run: scenario %s (%s)\n", sc.name.c_str(), sc.path.c_str());

@@ -33,6 +33,16 @@ void PublishDirectory(const std::string& staging, const std::string& out) {
   fs::remove_all(old, ec);
 }
 
+std::string CreateStagingDirectory(const std::string& out) {
+  const std::string staging = out + ".partial";
+  std::error_code ec;
+  std::filesystem::remove_all(staging, ec);
+  if (!std::filesystem::create_directories(staging, ec) && ec) {
+    throw InputError(out, "cannot create the output folder: " + ec.message());
+  }
+  return staging;
+}
+
 void WriteFileAtomically(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".partial";
   {

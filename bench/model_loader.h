@@ -14,6 +14,11 @@ KinematicModel LoadRobotModel(const std::string& path);
 /// never leaves a half-written file. Throws InputError naming the path on failure.
 void WriteFileAtomically(const std::string& path, const std::string& text);
 
+/// Creates the empty staging folder `out` + ".partial" (a left-over one is removed first) and
+/// returns its path; PublishDirectory moves it onto `out` when the output is complete. Throws
+/// InputError naming `out` when it cannot be created.
+std::string CreateStagingDirectory(const std::string& out);
+
 /// Replaces the folder `out` by the completed folder `staging` (renamed into place; an old
 /// `out` is kept aside until then), so readers never see a half-written output folder.
 void PublishDirectory(const std::string& staging, const std::string& out);

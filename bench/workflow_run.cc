@@ -88,12 +88,8 @@ int RunWorkflowScenario(const RunOptions& o) {
   CalibrationConfig config = ParseCalibrationConfig(sc);
 
   const fs::path out(o.out_dir);
-  const fs::path staging = out.string() + ".partial";
+  const fs::path staging = CreateStagingDirectory(o.out_dir);
   std::error_code ec;
-  fs::remove_all(staging, ec);
-  if (!fs::create_directories(staging, ec) && ec) {
-    throw InputError(o.out_dir, "cannot create the output folder: " + ec.message());
-  }
   std::ostringstream discard;
   std::ostream& progress = o.quiet ? static_cast<std::ostream&>(discard) : std::cout;
   int rc = 0;
