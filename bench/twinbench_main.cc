@@ -8,15 +8,15 @@
 
 #include <CLI/CLI.hpp>
 
-#include "bench/calibration_run.h"
-#include "bench/model_loader.h"
-#include "bench/twin_commands.h"
-#include "bench/urdf_model.h"
-#include "bench/yaml_util.h"
-#include "calib/errors.h"
-#include "calib/forward_kinematics.h"
-#include "calib/inverse_kinematics.h"
-#include "calib/parameters.h"
+#include "bench/runs/calibration_run.h"
+#include "bench/io/model_loader.h"
+#include "bench/runs/twin_commands.h"
+#include "bench/io/urdf_model.h"
+#include "bench/io/yaml_util.h"
+#include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
+#include "calib/kinematics/inverse_kinematics.h"
+#include "calib/model/parameters.h"
 
 namespace twin {
 namespace {

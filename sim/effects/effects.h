@@ -7,7 +7,7 @@
 
 #include <memory>
 
-#include "sim/effect.h"
+#include "sim/effects/effect.h"
 
 namespace twin::effects {
 

@@ -1,7 +1,7 @@
 #include <random>
 
-#include "calib/errors.h"
-#include "calib/parameters.h"
+#include "calib/common/errors.h"
+#include "calib/model/parameters.h"
 #include "sim/effects/effects.h"
 #include "sim/effects/params.h"
 
@@ -9,7 +9,7 @@ namespace twin::effects {
 namespace {
 
 // Key of the explicit delta of flat parameter `index`: its name without the robot prefix plus
-// the unit, e.g. "link3.alpha_deg", "link2.d_mm" (names come from calib/parameters.h).
+// the unit, e.g. "link3.alpha_deg", "link2.d_mm" (names come from calib/model/parameters.h).
 std::string DeltaKey(int index) {
   const std::string name = ParameterName("r", index);  // "r.link3.alpha"
   return name.substr(2) + (IsLengthParameter(index) ? "_mm" : "_deg");

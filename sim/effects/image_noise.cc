@@ -1,4 +1,4 @@
-#include "sim/camera_image.h"
+#include "sim/render/camera_image.h"
 #include "sim/effects/effects.h"
 #include "sim/effects/params.h"
 

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <utility>
 
-#include "calib/errors.h"
+#include "calib/common/errors.h"
 
 namespace twin::effects {
 

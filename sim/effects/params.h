@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "calib/frames.h"
-#include "sim/twin_spec.h"
+#include "calib/common/frames.h"
+#include "sim/world/twin_spec.h"
 
 namespace twin::effects {
 

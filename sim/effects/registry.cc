@@ -2,8 +2,8 @@
 // dispatch chains). Adding an effect adds one line here.
 #include <string>
 
-#include "calib/errors.h"
-#include "sim/effect.h"
+#include "calib/common/errors.h"
+#include "sim/effects/effect.h"
 #include "sim/effects/effects.h"
 #include "sim/effects/params.h"
 

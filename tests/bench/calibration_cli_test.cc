@@ -15,7 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../calib/optical_axis_synthetic.h"
-#include "bench/model_yaml.h"
+#include "bench/io/model_yaml.h"
 #include "tests/bench/text_edit.h"
 
 namespace twin {
@@ -115,7 +115,7 @@ TEST(CalibrationCli, IdentifyWithDepthsAndABoardMountIsExact) {
 }
 
 // Without depths (a recording of the paper's method: collinearity only); the scale
-// measurement is tested in tests/calib/scale_measurement_test.cc.
+// measurement is tested in tests/calib/identification/scale_measurement_test.cc.
 TEST(CalibrationCli, IdentifyRecoversASyntheticRecording) {
   const fs::path dir = TempDir("identify");
   const auto s = testing::MakeOpticalAxisScenario(42);

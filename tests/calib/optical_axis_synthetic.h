@@ -9,8 +9,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "calib/inverse_kinematics.h"
-#include "calib/optical_axis_model.h"
+#include "calib/kinematics/inverse_kinematics.h"
+#include "calib/measurements/optical_axis_model.h"
 #include "test_models.h"
 
 namespace twin::testing {

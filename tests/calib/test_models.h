@@ -4,7 +4,7 @@
 
 #include <random>
 
-#include "calib/kinematic_model.h"
+#include "calib/kinematics/kinematic_model.h"
 
 namespace twin::testing {
 

@@ -4,8 +4,8 @@
 
 #include <string>
 
-#include "calib/kinematic_model.h"
-#include "sim/twin_spec.h"
+#include "calib/kinematics/kinematic_model.h"
+#include "sim/world/twin_spec.h"
 #include "tests/calib/test_models.h"
 
 namespace twin::testing {

@@ -1,0 +1,59 @@
+// The `calibration:` section of a scenario: what the estimator is told (rough base-to-base and
+// hand-eye transforms, the board mount by drawing) and the options of the optical-axis
+// procedure. Example (scenarios/paper_reinovo.yaml); every key is optional unless marked:
+//
+//   calibration:
+//     robots: [r2, r1]                 # passive robots, in calibration order (default: the
+//                                      # board robot, then the camera robot)
+//     rough_base_from_robot1: {xyz_mm: [1200, 0, 0], zyz_deg: [180, 0, 0]}  # required
+//     rough_hand_eye: {xyz_mm: [60, -60, -26], rpy_deg: [0, 0, 0]}       # required, X_FC
+//     board_mount: {xyz_mm: [0, 0, 40], rpy_deg: [0, 0, 0]}  # X_FT by drawing (default: the
+//                                      # scenario's board.mount)
+//     intrinsics_views: 25             # board views for Zhang's method
+//     planning:                        # section IV and eq. 50 (defaults: the paper's)
+//       axes: 5                        # q
+//       positions_per_axis: 10         # p
+//       swarm_size: 10
+//       iterations: 100
+//       runs: 5
+//       distance_step_mm: 20           # D_step
+//       planning_max_distance_mm: 500  # largest planned camera-board distance
+//       min_distance_mm: 300           # C4
+//       max_distance_mm: 600           # C5
+//       min_joint_limit_distance_deg: 10   # C1
+//       min_singular_value: 0.1        # C2
+//       max_visibility_angle_deg: 30   # C3
+//       camera_reach_mm: 400           # centre of the camera search box, from the active
+//       camera_height_mm: 400          #   base towards the passive base and up
+//       seed: 1
+//     servo: {tolerance_px: 0.1, max_iterations: 10, gain: 1.0}
+//     calibration_axes: 3              # whole axes in the calibration set; the rest validate
+//     calibration_split: best_conditioned  # which axes: best_conditioned (the subset with the
+//                                      # largest smallest identifiable singular value) or first
+//     refit_all_axes: true             # deliver the model refit on all axes after validation
+//                                      # (false: the calibration-set model)
+//     scoring: {configurations: 200, seed: 1}   # truth metrics (bench only)
+//
+// Errors are InputErrors naming file:line and the key path, like the rest of the scenario.
+#pragma once
+
+#include <cstdint>
+
+#include "bench/io/scenario.h"
+#include "calib/procedures/optical_axis_procedure.h"
+
+namespace twin {
+
+/// The parsed `calibration:` section.
+struct CalibrationConfig {
+  CellKnowledge knowledge;       ///< what the estimator is told
+  OpticalAxisOptions options;    ///< procedure options (progress left empty)
+  int scoring_configurations = 200;   ///< random joint configurations for truth metrics
+  std::uint64_t scoring_seed = 1;     ///< their seed
+};
+
+/// Parses scenario.calibration (an InputError when the section is absent or wrong). The
+/// nominal models are the scenario's robot models (what the twin then perturbs).
+CalibrationConfig ParseCalibrationConfig(const Scenario& scenario);
+
+}  // namespace twin

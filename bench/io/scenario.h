@@ -1,0 +1,107 @@
+// Scenario files (scenarios/*.yaml): the edge where a YAML description of a twin cell becomes a
+// TwinSpec. Units are in the key names (mm, deg, s, kg) and converted to SI on reading; paths
+// are relative to the folder of the scenario file. Example (scenarios/twin_demo.yaml):
+//
+//   scenario:
+//     name: twin_demo                      # required
+//     seed: 7                              # optional (default 1): seed of every random effect
+//     robots:                              # required, exactly two
+//       - name: r1                         # unique identifier ([A-Za-z_][A-Za-z0-9_]*), used by
+//                                          # camera.robot, board.robot, tips and effects; it also
+//                                          # renames the loaded model (parameter-name prefix)
+//         model: ../models/reinovo_r1.yaml # required; LoadRobotModel (.yaml, .yml or .urdf)
+//         installation: floor              # required: floor | wall | ceiling
+//         base: {xyz_mm: [0, 0, 0], rpy_deg: [0, 0, 0]}   # optional X_WB1 (default identity)
+//         initial_joints_deg: [0, 34, -34, 0, 90, 90]    # required, 6 motor-side angles
+//       - name: r2
+//         model: ../models/reinovo_r2.yaml
+//         installation: floor
+//         base_from_robot1: {xyz_mm: [1200, 0, 0], zyz_deg: [180, 0, 0]}  # required X_B1B2;
+//                                          # X_WB2 = X_WB1 X_B1B2 (robot 2 takes no 'base')
+//         initial_joints_deg: [0, 39, -36, 0, 87, 90]
+//     camera:                              # required
+//       robot: r1                          # required: the robot whose flange carries it
+//       hand_eye: {xyz_mm: [0, 0, 50], rpy_deg: [0, 0, 0]}  # required X_FC (OpenCV optical C)
+//       resolution: [1024, 768]            # required [width, height] px
+//       fx: 834.31                         # required fx, fy, cx, cy [px]
+//       fy: 833.38
+//       cx: 513.56
+//       cy: 403.95
+//       distortion: [0, 0, 0, 0, 0]        # optional [k1, k2, p1, p2, k3] (default none)
+//       msaa: 4                            # optional samples 0, 1, 2, 4, 8 (default 4)
+//       near_mm: 20                        # optional clipping planes (defaults 20, 5000)
+//       far_mm: 5000
+//     board:                               # required
+//       robot: r2                          # required
+//       squares: [4, 4]                    # required [x, y] squares
+//       square_mm: 20                      # required
+//       margin_mm: 10                      # optional (default 10)
+//       thickness_mm: 4                    # optional (default 4)
+//       mass_kg: 0.2                       # optional (default 0.2)
+//       mount: {xyz_mm: [0, 0, 40], rpy_deg: [0, 0, 0]}      # required X_FT
+//     tips:                                # optional, keyed by robot name; each entry optional
+//       r1: {xyz_mm: [0, 0, 80], rpy_deg: [0, 0, 0], length_mm: 80, radius_mm: 4}
+//                                          # pose X_FTip (if given, xyz_mm and a rotation), and
+//                                          # optional length_mm, radius_mm (defaults TipSpec)
+//     physics:                             # optional; each key optional (defaults PhysicsSpec)
+//       timestep_s: 0.002
+//       stiffness_Nm_per_rad: 1.0e5
+//       armature_kgm2: 0.1
+//       max_joint_speed_deg_s: 57.3
+//       settle_speed_deg_s: 5.7e-5
+//       settle_steps: 20
+//       max_steps: 20000
+//       gravity: true
+//     calibration: {...}                   # optional: the optical-axis procedure (see
+//                                          # bench/io/calibration_config.h)
+//     handclasp: {...}                     # optional: the handclasp base-frame procedure
+//     effects:                             # optional list, applied on the truth side
+//       - type: transmission_error         # required; one of EffectTypes()
+//         declared: false                  # optional (default true): told to the estimator?
+//         robot: r2                        # optional robot name (absent: both robots)
+//         joint: 3                         # optional joint 1..6 (absent: every joint)
+//         amplitude_deg: 0.02              # every other key is a number, into EffectSpec::params
+//         harmonic: 2                      #   under its own name (the effect checks its keys)
+//
+// A pose map takes xyz_mm and exactly one of rpy_deg (fixed axes, R = Rz(y) Ry(p) Rx(r), as
+// URDF) or zyz_deg (R = Rz(a) Ry(b) Rz(c), the Euler angles of Gan et al. 2014, eq. 31).
+// Everything is checked before anything runs: malformed YAML, unknown or missing keys, wrong
+// list lengths, non-numeric values, unknown robot names, then ValidateTwinSpec and MakeEffect
+// for each effect. Every error is an InputError whose where() is "file:line key.path" (e.g.
+// "scenarios/twin_demo.yaml:31 scenario.board.square_mm") and whose message says what was
+// expected.
+#pragma once
+
+#include <array>
+#include <string>
+
+#include "bench/io/yaml_util.h"
+#include "sim/world/twin_spec.h"
+
+namespace twin {
+
+/// A loaded scenario: the twin cell it describes plus where it came from.
+struct Scenario {
+  std::string name;                                  ///< scenario.name
+  std::string path;                                  ///< the file it was read from (source)
+  TwinSpec twin;                                     ///< the cell, in SI units, validated
+  std::array<std::string, kNumRobots> robot_names;   ///< robot names, in file order
+  std::array<std::string, kNumRobots> model_paths;   ///< model files as resolved and loaded
+  /// The optional procedure sections, as written (node empty when absent); each procedure
+  /// parses its own with YamlReader(path), so messages name file, line and key path:
+  /// `calibration:` (optical-axis calibration, bench/io/calibration_config.h) and `handclasp:`
+  /// (base-frame calibration by handclasp).
+  YamlField calibration;
+  YamlField handclasp;
+};
+
+/// Parses scenario text. `source` names it in messages; relative model paths are resolved
+/// against `base_dir` (empty: the current directory). Throws InputError (see above).
+Scenario ParseScenario(const std::string& text, const std::string& source,
+                       const std::string& base_dir);
+
+/// Reads and parses a scenario file; model paths are relative to the file's folder. A missing
+/// or unreadable file is an InputError naming it.
+Scenario LoadScenario(const std::string& path);
+
+}  // namespace twin

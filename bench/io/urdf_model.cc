@@ -1,0 +1,471 @@
+#include "bench/io/urdf_model.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <sstream>
+#include <vector>
+
+#include <urdf_parser/urdf_parser.h>
+
+#include "calib/common/text_format.h"
+#include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
+
+namespace twin {
+namespace {
+
+// Below this sine of the angle between consecutive joint axes the link uses the Hayati form
+// (d = 0 plus beta): classic DH would put the common normal up to offset / sine metres away.
+constexpr double kNearParallelSine = 1e-2;
+// Parallel axes closer than this turn about one line: the link is undefined [m].
+constexpr double kCoincidentDistance = 1e-9;
+// A base axis whose part perpendicular to z0 is shorter than this is not used as x0.
+constexpr double kMinProjection = 0.1;
+// Travel given to continuous joints [rad].
+constexpr double kContinuousTravel = 2.0 * kPi;
+
+using JointPtr = urdf::JointConstSharedPtr;
+
+// A joint axis line at q = 0: a point on it and its unit direction.
+struct AxisLine {
+  Vector3 point;
+  Vector3 dir;
+};
+
+Transform ToTransform(const urdf::Pose& pose) {
+  const urdf::Rotation& r = pose.rotation;
+  Transform X = Transform::Identity();
+  X.linear() = Eigen::Quaterniond(r.w, r.x, r.y, r.z).normalized().toRotationMatrix();
+  X.translation() << pose.position.x, pose.position.y, pose.position.z;
+  return X;
+}
+
+Matrix3 RotZ(double angle) { return Eigen::AngleAxisd(angle, Vector3::UnitZ()).matrix(); }
+
+std::string TypeName(int type) {
+  switch (type) {
+    case urdf::Joint::REVOLUTE: return "revolute";
+    case urdf::Joint::CONTINUOUS: return "continuous";
+    case urdf::Joint::PRISMATIC: return "prismatic";
+    case urdf::Joint::FLOATING: return "floating";
+    case urdf::Joint::PLANAR: return "planar";
+    case urdf::Joint::FIXED: return "fixed";
+    default: return "unknown";
+  }
+}
+
+bool IsRevolute(const urdf::Joint& j) {
+  return j.type == urdf::Joint::REVOLUTE || j.type == urdf::Joint::CONTINUOUS;
+}
+
+std::string ListNames(const std::vector<std::string>& names) {
+  std::string s = "[";
+  for (size_t i = 0; i < names.size(); ++i) s += (i ? ", " : "") + names[i];
+  return s + "]";
+}
+
+// ---- Parsing and the chain ------------------------------------------------------------------
+
+urdf::ModelInterfaceSharedPtr ParseText(const std::string& text, const std::string& source) {
+  urdf::ModelInterfaceSharedPtr urdf;
+  try {
+    urdf = urdf::parseURDF(text);
+  } catch (const std::exception& e) {
+    throw InputError(source, std::string("not a valid URDF: ") + e.what());
+  }
+  if (!urdf) {
+    throw InputError(source, "not a valid URDF: urdfdom rejected it (malformed XML, no <robot "
+                             "name=...>, a revolute joint without <limit>, or links that do not "
+                             "form one tree; urdfdom's messages on stderr say which)");
+  }
+  return urdf;
+}
+
+urdf::LinkConstSharedPtr RequireLink(const urdf::ModelInterface& urdf, const std::string& name,
+                                     const std::string& role, const std::string& source) {
+  urdf::LinkConstSharedPtr link = urdf.getLink(name);
+  if (!link) throw InputError(source, role + " '" + name + "' is not a link of the URDF");
+  return link;
+}
+
+void CollectLeaves(const urdf::Link& link, std::vector<std::string>* leaves) {
+  if (link.child_links.empty()) leaves->push_back(link.name);
+  for (const auto& child : link.child_links) CollectLeaves(*child, leaves);
+}
+
+std::string DefaultTip(const urdf::Link& base, const std::string& source) {
+  std::vector<std::string> leaves;
+  CollectLeaves(base, &leaves);
+  if (leaves.size() == 1 && leaves[0] != base.name) return leaves[0];
+  if (leaves.size() == 1) throw InputError(source, "base_link '" + base.name + "' has no children");
+  throw InputError(source, "the URDF has several leaf links " + ListNames(leaves) +
+                               "; pass tip_link to choose the end of the arm");
+}
+
+// All joints from base to tip (fixed ones included), base first.
+std::vector<JointPtr> JointsBetween(const urdf::ModelInterface& urdf, const std::string& base,
+                                    const std::string& tip, const std::string& source) {
+  std::vector<JointPtr> joints;
+  for (urdf::LinkConstSharedPtr link = urdf.getLink(tip); link->name != base;
+       link = urdf.getLink(joints.back()->parent_link_name)) {
+    if (!link->parent_joint) {
+      throw InputError(source, "tip_link '" + tip + "' is not below base_link '" + base + "'");
+    }
+    joints.push_back(link->parent_joint);
+  }
+  std::reverse(joints.begin(), joints.end());
+  return joints;
+}
+
+// The six moving joints of the chain, base first; anything but revolute, continuous and
+// fixed joints, or another count, is an error.
+std::vector<JointPtr> MovingJoints(const std::vector<JointPtr>& chain, const std::string& base,
+                                   const std::string& tip, const std::string& source) {
+  std::vector<JointPtr> moving;
+  std::vector<std::string> names;
+  for (const JointPtr& j : chain) {
+    if (j->type == urdf::Joint::FIXED) continue;
+    if (!IsRevolute(*j)) {
+      throw InputError(source, "joint '" + j->name + "' is " + TypeName(j->type) +
+                                   "; only revolute, continuous and fixed joints are supported");
+    }
+    moving.push_back(j);
+    names.push_back(j->name);
+  }
+  if (moving.size() != kNumJoints) {
+    throw InputError(source, "expected 6 revolute joints between '" + base + "' and '" + tip +
+                                 "', found " + std::to_string(moving.size()) + ": " +
+                                 ListNames(names));
+  }
+  return moving;
+}
+
+JointLimits LimitsOf(const urdf::Joint& j, const std::string& source) {
+  if (j.type == urdf::Joint::CONTINUOUS) return {-kContinuousTravel, kContinuousTravel};
+  if (!j.limits) throw InputError(source, "revolute joint '" + j.name + "' has no <limit>");
+  if (!(j.limits->lower < j.limits->upper)) {
+    std::ostringstream os;
+    os << "joint '" << j.name << "': lower limit " << j.limits->lower
+       << " rad must be below upper limit " << j.limits->upper << " rad";
+    throw InputError(source, os.str());
+  }
+  return {j.limits->lower, j.limits->upper};
+}
+
+// Walks the chain at q = 0: axis lines of the moving joints in B; returns the tip pose X_BT.
+Transform ChainAtZero(const std::vector<JointPtr>& chain, const std::string& source,
+                      std::vector<AxisLine>* axes) {
+  Transform X_BC = Transform::Identity();
+  for (const JointPtr& j : chain) {
+    X_BC = X_BC * ToTransform(j->parent_to_joint_origin_transform);
+    if (!IsRevolute(*j)) continue;
+    const Vector3 axis(j->axis.x, j->axis.y, j->axis.z);
+    if (!(axis.norm() > 1e-12) || !axis.allFinite()) {
+      throw InputError(source, "joint '" + j->name + "' has a zero axis vector");
+    }
+    axes->push_back({X_BC.translation(), X_BC.linear() * axis.normalized()});
+  }
+  return X_BC;
+}
+
+// ---- DH frames from axis lines --------------------------------------------------------------
+
+// L0: z along axis 1, origin at the point of axis 1 nearest B's origin, x0 along B's x axis
+// (B's y axis if x is nearly along z0) made perpendicular to z0.
+Transform BaseToL0(const AxisLine& axis1) {
+  const Vector3 z = axis1.dir;
+  Vector3 x = Vector3::UnitX() - z.x() * z;
+  if (x.norm() < kMinProjection) x = Vector3::UnitY() - z.y() * z;
+  x.normalize();
+  const Vector3 y = z.cross(x);
+  Transform X = Transform::Identity();
+  X.linear() << y.cross(z), y, z;
+  X.translation() = axis1.point - axis1.point.dot(z) * z;
+  return X;
+}
+
+// Classic DH to the skew or intersecting axis (p, u) given in L(i-1): x_i along z x u.
+DhParameters ClassicDh(const Vector3& p, const Vector3& u) {
+  const double sine = std::hypot(u.x(), u.y());
+  const Vector3 n(-u.y() / sine, u.x() / sine, 0.0);
+  // Foot of the common normal on z_(i-1): s with (0,0,s) + a n = p + t u.
+  const double b = u.z(), e = -u.dot(p), d0 = -p.z();
+  const double s = (b * e - d0) / (sine * sine);
+  DhParameters dh;
+  dh.theta_offset = std::atan2(n.y(), n.x());
+  dh.d = s;
+  dh.a = p.dot(n);
+  dh.alpha = std::atan2(sine, u.z());
+  return dh;
+}
+
+// Hayati form (d = 0) to the nearly parallel axis (p, u) given in L(i-1): the common normal
+// lies in the plane z = 0 of L(i-1). Returns false if the axes are coincident.
+bool HayatiDh(const Vector3& p, const Vector3& u, DhParameters* dh) {
+  const Vector3 c = p - (p.z() / u.z()) * u;  // axis i+1 meets the plane z = 0
+  const double a = std::hypot(c.x(), c.y());
+  if (a < kCoincidentDistance) return false;
+  dh->theta_offset = std::atan2(c.y(), c.x());
+  dh->d = 0.0;
+  dh->a = a;
+  const Vector3 v = RotZ(-dh->theta_offset) * u;  // = RotX(alpha) RotY(beta) e_z
+  dh->alpha = std::atan2(-v.y(), v.z());
+  dh->beta = std::atan2(v.x(), std::hypot(v.y(), v.z()));
+  return true;
+}
+
+// Link 6: a pure RotZ TransZ along axis 6 placing L6 at the foot of the tip on axis 6, x6 along
+// the tip's x axis (or its y axis turned back by 90 deg) projected onto the xy plane of L5.
+DhParameters FlangeDh(const Transform& X_L5T) {
+  const Matrix3& R = X_L5T.linear();
+  DhParameters dh;
+  dh.d = X_L5T.translation().z();
+  if (std::hypot(R(0, 0), R(1, 0)) >= kMinProjection) {
+    dh.theta_offset = std::atan2(R(1, 0), R(0, 0));
+  } else {
+    dh.theta_offset = std::remainder(std::atan2(R(1, 1), R(0, 1)) - kPi / 2, 2 * kPi);
+  }
+  return dh;
+}
+
+void BuildGeometry(const std::vector<AxisLine>& axes, const Transform& X_BT,
+                   const std::vector<JointPtr>& moving, const std::string& source,
+                   KinematicModel* model) {
+  model->X_BL0 = BaseToL0(axes[0]);
+  Transform X_BL = model->X_BL0;
+  for (int i = 0; i + 1 < kNumJoints; ++i) {
+    const Vector3 p = X_BL.inverse() * axes[i + 1].point;
+    const Vector3 u = X_BL.linear().transpose() * axes[i + 1].dir;
+    DhParameters& dh = model->links[i].dh;
+    if (std::hypot(u.x(), u.y()) >= kNearParallelSine) {
+      dh = ClassicDh(p, u);
+    } else if (!HayatiDh(p, u, &dh)) {
+      throw InputError(source, "joints '" + moving[i]->name + "' and '" + moving[i + 1]->name +
+                                   "' turn about the same line (coincident axes)");
+    }
+    X_BL = X_BL * LinkTransform(dh, 0.0);
+  }
+  model->links[kNumJoints - 1].dh = FlangeDh(X_BL.inverse() * X_BT);
+  X_BL = X_BL * LinkTransform(model->links[kNumJoints - 1].dh, 0.0);  // L6 = L7
+  model->X_L7E = X_BL.inverse() * X_BT;
+}
+
+// ---- Mass properties ------------------------------------------------------------------------
+
+// Mass, first and second moments about the origin of a body's DH frame, in that frame.
+struct MassSums {
+  double mass = 0.0;
+  Vector3 first = Vector3::Zero();
+  Matrix3 second = Matrix3::Zero();
+
+  void Add(const urdf::Inertial& in, const Transform& X_LI) {
+    Matrix3 I;
+    I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+    const Matrix3& R = X_LI.linear();
+    const Vector3 c = X_LI.translation();
+    mass += in.mass;
+    first += in.mass * c;
+    second += R * I * R.transpose() +
+              in.mass * (c.squaredNorm() * Matrix3::Identity() - c * c.transpose());
+  }
+
+  LinkInertia ToInertia() const {
+    LinkInertia out;
+    if (!(mass > 0.0)) return out;
+    out.mass = mass;
+    out.p_LiCom = first / mass;
+    const Vector3& c = out.p_LiCom;
+    const Matrix3 I = second - mass * (c.squaredNorm() * Matrix3::Identity() - c * c.transpose());
+    out.I_Com = 0.5 * (I + I.transpose());
+    return out;
+  }
+};
+
+// Assigns every link below the base to the body it rides on at q = 0: a chain joint starts
+// body k (DH frame L(k+1)); any other joint, fixed or off-chain, keeps its parent's body.
+class MassCollector {
+ public:
+  MassCollector(const urdf::ModelInterface& urdf, const std::vector<JointPtr>& moving,
+                const FrameSet& frames)
+      : urdf_(urdf), frames_(frames) {
+    for (size_t k = 0; k < moving.size(); ++k) body_of_joint_[moving[k]->name] = int(k);
+  }
+
+  void Visit(const urdf::Link& link, const Transform& X_B_link, int body) {
+    if (body >= 0 && link.inertial) {
+      const Transform& X_BL = frames_.X_BL[body + 1];
+      const Transform X_B_inertial = X_B_link * ToTransform(link.inertial->origin);
+      sums_[body].Add(*link.inertial, X_BL.inverse() * X_B_inertial);
+    }
+    for (const auto& joint : link.child_joints) {
+      const auto it = body_of_joint_.find(joint->name);
+      const int child_body = it == body_of_joint_.end() ? body : it->second;
+      const Transform X_B_child = X_B_link * ToTransform(joint->parent_to_joint_origin_transform);
+      Visit(*urdf_.getLink(joint->child_link_name), X_B_child, child_body);
+    }
+  }
+
+  LinkInertia Inertia(int body) const { return sums_[body].ToInertia(); }
+
+ private:
+  const urdf::ModelInterface& urdf_;
+  const FrameSet& frames_;
+  std::map<std::string, int> body_of_joint_;
+  std::array<MassSums, kNumJoints> sums_;
+};
+
+void AssignInertias(const urdf::ModelInterface& urdf, const urdf::Link& base,
+                    const std::vector<JointPtr>& moving, KinematicModel* model) {
+  const FrameSet frames = ForwardKinematics(*model, JointVector::Zero());
+  MassCollector collector(urdf, moving, frames);
+  collector.Visit(base, Transform::Identity(), -1);
+  for (int k = 0; k < kNumJoints; ++k) model->links[k].inertia = collector.Inertia(k);
+  model->links[kNumJoints].inertia = LinkInertia{};
+}
+
+// ---- URDF writing ---------------------------------------------------------------------------
+
+// URDF rpy of R = Rz(yaw) Ry(pitch) Rx(roll); roll comes from the residual rotation so the
+// result stays exact near pitch = +-90 deg.
+Vector3 RollPitchYaw(const Matrix3& R) {
+  const double yaw = std::atan2(R(1, 0), R(0, 0));
+  const double pitch = std::atan2(-R(2, 0), std::hypot(R(0, 0), R(1, 0)));
+  const Matrix3 R_yp = RotZ(yaw) * Eigen::AngleAxisd(pitch, Vector3::UnitY()).matrix();
+  const Matrix3 M = R_yp.transpose() * R;  // RotX(roll)
+  return Vector3(std::atan2(M(2, 1), M(1, 1)), pitch, yaw);
+}
+
+std::string XmlEscape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+void WriteOrigin(std::ostream& os, const Transform& X) {
+  // Adding 0.0 turns -0 into 0 in the text.
+  const Vector3 p = X.translation() + Vector3::Zero();
+  const Vector3 rpy = RollPitchYaw(X.linear()) + Vector3::Zero();
+  const auto N = ShortestNumber;
+  os << "<origin xyz=\"" << N(p.x()) << ' ' << N(p.y()) << ' ' << N(p.z()) << "\" rpy=\""
+     << N(rpy.x()) << ' ' << N(rpy.y()) << ' ' << N(rpy.z()) << "\"/>";
+}
+
+// A link whose inertia is given in frame L, posed X_UL in the URDF link frame U.
+void WriteLink(std::ostream& os, const std::string& name, const LinkInertia& in,
+               const Transform& X_UL) {
+  if (!(in.mass > 0.0)) {
+    os << "  <link name=\"" << name << "\"/>\n";
+    return;
+  }
+  Transform X_UI = X_UL;
+  X_UI.translation() = X_UL * in.p_LiCom;
+  const Matrix3& I = in.I_Com;
+  os << "  <link name=\"" << name << "\">\n    <inertial>\n      ";
+  WriteOrigin(os, X_UI);
+  const auto N = ShortestNumber;
+  os << "\n      <mass value=\"" << N(in.mass) << "\"/>\n      <inertia ixx=\"" << N(I(0, 0))
+     << "\" ixy=\"" << N(I(0, 1)) << "\" ixz=\"" << N(I(0, 2)) << "\" iyy=\"" << N(I(1, 1))
+     << "\" iyz=\"" << N(I(1, 2)) << "\" izz=\"" << N(I(2, 2)) << "\"/>\n    </inertial>\n  </link>\n";
+}
+
+void WriteJoint(std::ostream& os, const std::string& name, const std::string& parent,
+                const std::string& child, const Transform& X, const JointLimits* limits) {
+  os << "  <joint name=\"" << name << "\" type=\"" << (limits ? "revolute" : "fixed") << "\">\n"
+     << "    <parent link=\"" << parent << "\"/>\n    <child link=\"" << child << "\"/>\n    ";
+  WriteOrigin(os, X);
+  os << "\n";
+  if (limits) {
+    os << "    <axis xyz=\"0 0 1\"/>\n    <limit lower=\"" << ShortestNumber(limits->lower)
+       << "\" upper=\"" << ShortestNumber(limits->upper) << "\" effort=\"100\" velocity=\"3\"/>\n";
+  }
+  os << "  </joint>\n";
+}
+
+// M_i = TransZ(d) TransX(a) RotX(alpha) RotY(beta): link i's transform after its RotZ.
+Transform AfterRotZ(const DhParameters& dh) {
+  DhParameters m = dh;
+  m.theta_offset = 0.0;
+  return LinkTransform(m, 0.0);
+}
+
+Transform RotZTransform(double angle) {
+  Transform X = Transform::Identity();
+  X.linear() = RotZ(angle);
+  return X;
+}
+
+}  // namespace
+
+KinematicModel ParseUrdf(const std::string& text, const std::string& source,
+                         const UrdfImportOptions& options) {
+  const urdf::ModelInterfaceSharedPtr urdf = ParseText(text, source);
+  const std::string base_name =
+      options.base_link.empty() ? urdf->getRoot()->name : options.base_link;
+  const urdf::LinkConstSharedPtr base = RequireLink(*urdf, base_name, "base_link", source);
+  const std::string tip =
+      options.tip_link.empty() ? DefaultTip(*base, source) : options.tip_link;
+  RequireLink(*urdf, tip, "tip_link", source);
+
+  const std::vector<JointPtr> chain = JointsBetween(*urdf, base_name, tip, source);
+  const std::vector<JointPtr> moving = MovingJoints(chain, base_name, tip, source);
+  std::vector<AxisLine> axes;
+  const Transform X_BT = ChainAtZero(chain, source, &axes);
+
+  KinematicModel model;
+  model.name = options.robot_name.empty() ? urdf->getName() : options.robot_name;
+  BuildGeometry(axes, X_BT, moving, source, &model);
+  for (int i = 0; i < kNumLinks; ++i) {
+    model.links[i].name = i < kNumJoints ? "link" + std::to_string(i + 1) : "tool";
+    if (i < kNumJoints) model.links[i].limits = LimitsOf(*moving[i], source);
+  }
+  AssignInertias(*urdf, *base, moving, &model);
+  ValidateModel(model, source);
+  return model;
+}
+
+KinematicModel LoadUrdf(const std::string& path, const UrdfImportOptions& options) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "cannot open URDF file (missing or unreadable)");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return ParseUrdf(text.str(), path, options);
+}
+
+std::string ModelToUrdf(const KinematicModel& model) {
+  std::ostringstream os;
+  os << "<?xml version=\"1.0\"?>\n<robot name=\"" << XmlEscape(model.name) << "\">\n";
+  os << "  <link name=\"base_link\"/>\n";
+  // URDF link i is U_i = L(i-1) RotZ(theta_i + q_i); L_i = U_i M_i.
+  std::string parent = "base_link";
+  Transform X_parent_joint = model.X_BL0;
+  for (int i = 0; i < kNumJoints; ++i) {
+    const Link& l = model.links[i];
+    const std::string child = "link" + std::to_string(i + 1);
+    WriteLink(os, child, l.inertia, AfterRotZ(l.dh));
+    WriteJoint(os, "joint" + std::to_string(i + 1), parent, child,
+               X_parent_joint * RotZTransform(l.dh.theta_offset), &l.limits);
+    parent = child;
+    X_parent_joint = AfterRotZ(l.dh);
+  }
+  WriteLink(os, "tool", model.tool().inertia, Transform::Identity());
+  WriteJoint(os, "tool_joint", parent, "tool",
+             X_parent_joint * LinkTransform(model.tool().dh, 0.0), nullptr);
+  os << "  <link name=\"end\"/>\n";
+  WriteJoint(os, "end_joint", "tool", "end", model.X_L7E, nullptr);
+  os << "</robot>\n";
+  return os.str();
+}
+
+}  // namespace twin

@@ -1,0 +1,601 @@
+#include "bench/runs/calibration_run.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "bench/io/calibration_config.h"
+#include "bench/scoring/calibration_scoring.h"
+#include "bench/runs/handclasp_run.h"
+#include "bench/runs/workflow_run.h"
+#include "bench/io/model_loader.h"
+#include "bench/io/model_yaml.h"
+#include "bench/report/report_html.h"
+#include "bench/io/scenario.h"
+#include "bench/io/yaml_util.h"
+#include "calib/common/errors.h"
+#include "calib/model/parameters.h"
+#include "sim/world/mujoco_handles.h"
+#include "sim/cell/twin_cell.h"
+
+namespace twin {
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+// JSON number, or null for NaN / infinity (JSON has neither).
+json Num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+json Mm(double m) { return Num(1000.0 * m); }
+
+double DecreasePercent(double before, double after) {
+  return before > 0.0 ? 100.0 * (before - after) / before
+                      : std::numeric_limits<double>::quiet_NaN();
+}
+
+json Misaligned(const MisalignedSummary& m) {
+  if (m.samples == 0) return json{{"before", nullptr}, {"after", nullptr}, {"samples", 0}};
+  return json{{"before", Mm(m.before)},
+              {"after", Mm(m.after)},
+              {"decrease_percent", Num(DecreasePercent(m.before, m.after))},
+              {"samples", m.samples}};
+}
+
+json Stats(const PositionErrorStats& s) { return json{{"rms", Mm(s.rms)}, {"max", Mm(s.max)}}; }
+
+json Gauges(const RobotScore& s) {
+  json j;
+  j["configurations"] = s.configurations;
+  j["raw"] = {{"before", Stats(s.before.raw)}, {"after", Stats(s.after.raw)}};
+  j["rigid"] = {{"before", Stats(s.before.rigid)}, {"after", Stats(s.after.rigid)}};
+  j["similarity"] = {{"before", Stats(s.before.similarity)}, {"after", Stats(s.after.similarity)}};
+  return j;
+}
+
+json IntrinsicsJson(const PinholeIntrinsics& k, const DistortionCoefficients& d) {
+  return json{{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}, {"k1", d.k1},
+              {"k2", d.k2}, {"p1", d.p1}, {"p2", d.p2}, {"k3", d.k3}};
+}
+
+std::string Deg(double rad) {
+  std::ostringstream os;
+  os.precision(10);
+  os << RadToDeg(rad);
+  return os.str();
+}
+
+std::string Csv(double v, int precision = 10) {
+  std::ostringstream os;
+  os.precision(precision);
+  os << v;
+  return os.str();
+}
+
+const char* kCsvHeader =
+    "robot,camera_robot,axis,index,set,q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,du_px,dv_px,"
+    "depth_mm,offset_x_mm,offset_y_mm,offset_z_mm,frames,moves";
+
+// One CSV row per aligned pose (what a hardware cell records).
+void AppendRows(const RobotCalibration& rc, const std::string& robot, const std::string& camera,
+                std::ostringstream* csv) {
+  for (const AlignedPose& p : rc.aligned) {
+    const bool cal = std::find(rc.calibration_axes.begin(), rc.calibration_axes.end(), p.axis) !=
+                     rc.calibration_axes.end();
+    const bool val = std::find(rc.validation_axes.begin(), rc.validation_axes.end(), p.axis) !=
+                     rc.validation_axes.end();
+    *csv << robot << ',' << camera << ',' << p.axis << ',' << p.index << ','
+         << (cal ? "calibration" : val ? "validation" : "unused");
+    for (int i = 0; i < kNumJoints; ++i) *csv << ',' << Deg(p.q_passive(i));
+    *csv << ',' << Csv(p.pixel_error.x, 6) << ',' << Csv(p.pixel_error.y, 6) << ','
+         << Csv(1000 * p.p_C.z()) << ',' << Csv(1000 * p.offset.x()) << ','
+         << Csv(1000 * p.offset.y()) << ',' << Csv(1000 * p.offset.z()) << ',' << p.frames << ','
+         << p.moves << '\n';
+  }
+}
+
+void WritePng(const fs::path& path, const cv::Mat& image) {
+  if (!cv::imwrite(path.string(), image)) {
+    throw std::runtime_error("cannot write " + path.string());
+  }
+}
+
+// The servo image with the principal point (red circle) and the detected feature point (green
+// circle), as the paper's Fig. 12 shows them.
+cv::Mat Annotated(const cv::Mat& image, const PinholeIntrinsics& k, const cv::Point2d& error) {
+  cv::Mat out = image.clone();
+  const cv::Point2d pp(k.cx, k.cy);
+  const int shift = 4;  // sub-pixel drawing
+  auto fixed = [&](const cv::Point2d& p) {
+    return cv::Point(static_cast<int>(std::lround(p.x * (1 << shift))),
+                     static_cast<int>(std::lround(p.y * (1 << shift))));
+  };
+  cv::circle(out, fixed(pp), 12 << shift, cv::Scalar(0, 0, 255), 2, cv::LINE_AA, shift);
+  cv::circle(out, fixed(pp + error), 6 << shift, cv::Scalar(0, 200, 0), 2, cv::LINE_AA, shift);
+  return out;
+}
+
+// A Cell that forwards to another and adds up where the time goes (the benchmark's split of
+// servoing into rendering and motion).
+class TimedCell : public Cell {
+ public:
+  explicit TimedCell(Cell& cell) : cell_(cell) {}
+  MoveResult MoveTo(int robot, const JointVector& q) override {
+    const auto t0 = Clock::now();
+    MoveResult r = cell_.MoveTo(robot, q);
+    move_s += Seconds(t0);
+    ++moves;
+    return r;
+  }
+  JointVector ReadEncoders(int robot) override { return cell_.ReadEncoders(robot); }
+  cv::Mat GrabImage() override {
+    const auto t0 = Clock::now();
+    cv::Mat image = cell_.GrabImage();
+    grab_s += Seconds(t0);
+    ++frames;
+    return image;
+  }
+  MoveResult ExchangeTools() override { return cell_.ExchangeTools(); }
+  int CameraRobot() override { return cell_.CameraRobot(); }
+
+  double move_s = 0, grab_s = 0;
+  int moves = 0, frames = 0;
+
+ private:
+  Cell& cell_;
+};
+
+}  // namespace
+
+OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, CalibrationConfig config,
+                                    const fs::path& staging, bool quiet,
+                                    std::chrono::steady_clock::time_point t_start, json* report) {
+  config.options.progress = [&](const std::string& line) {
+    if (quiet) return;
+    std::printf("[%7.1f s] %s\n", Seconds(t_start), line.c_str());
+    std::fflush(stdout);
+  };
+  TimedCell timed(cell);
+  const OpticalAxisResult result = RunOpticalAxisCalibration(timed, config.knowledge,
+                                                             config.options);
+
+  // Scoring: estimates meet truth only here, after the procedure ended.
+  const auto t_score = Clock::now();
+  const TwinTruth truth = cell.Truth();
+  (*report)["scenario"] = {{"name", sc.name}, {"file", sc.path}, {"seed", sc.twin.seed}};
+  const Intrinsics& ti = truth.camera.intrinsics;
+  const Distortion& td = truth.camera.distortion;
+  const PinholeIntrinsics& ei = result.intrinsics.intrinsics;
+  (*report)["intrinsics"] = {
+      {"estimated", IntrinsicsJson(ei, result.intrinsics.distortion)},
+      {"true", IntrinsicsJson(PinholeIntrinsics{ti.fx, ti.fy, ti.cx, ti.cy},
+                          DistortionCoefficients{td.k1, td.k2, td.p1, td.p2, td.k3})},
+      {"error_px",
+       {{"fx", ei.fx - ti.fx}, {"fy", ei.fy - ti.fy}, {"cx", ei.cx - ti.cx}, {"cy", ei.cy - ti.cy}}},
+      {"rms_reprojection_px", result.intrinsics.rms_px},
+      {"views_used", result.intrinsics.views_used}};
+  std::ostringstream csv;
+  csv << kCsvHeader << '\n';
+  double planning = 0, servoing = 0, identification = 0;
+  json robots = json::object();
+  for (const RobotCalibration& rc : result.robots) {
+    const std::string name = sc.robot_names[rc.robot];
+    const std::string camera = sc.robot_names[rc.camera_robot];
+    planning += rc.planning_s;
+    servoing += rc.servoing_s;
+    identification += rc.identification_s;
+    const KinematicModel true_model = BoardRobotModel(truth.models[rc.robot], truth.board.X_FT);
+    const ObservabilityReport& obs = rc.refit                    ? rc.refit_result.observability
+                                     : rc.method == "linearized" ? rc.linearized.observability
+                                                                 : rc.nonlinear.observability;
+    const RobotScore score = ScoreRobot(rc.nominal, rc.identified, true_model, obs,
+                                        config.scoring_configurations, config.scoring_seed);
+    json r;
+    r["camera_robot"] = camera;
+    json history = json::array();
+    for (const auto& run : rc.plan.fitness_history) history.push_back(run);
+    const RejectionCounts& rej = rc.plan.rejections;
+    r["planning"] = {{"axes", rc.plan.axes.size()},
+                     {"positions_per_axis", config.options.planner.positions_per_axis},
+                     {"best_fitness", Num(rc.plan.best_fitness)},
+                     {"best_run", rc.plan.best_run},
+                     {"evaluations", rc.plan.evaluations},
+                     {"fitness_history", history},
+                     {"rejections",
+                      {{"active_ik", rej.active_ik}, {"passive_ik", rej.passive_ik},
+                       {"c1_joint_limits", rej.c1_joint_limits},
+                       {"c2_singularity", rej.c2_singularity},
+                       {"c3_visibility", rej.c3_visibility},
+                       {"c4_min_distance", rej.c4_min_distance},
+                       {"c5_max_distance", rej.c5_max_distance}}},
+                     {"time_s", rc.planning_s}};
+    int frames = 0;
+    double max_px = 0.0;
+    for (const AlignedPose& p : rc.aligned) {
+      frames += p.frames;
+      max_px = std::max({max_px, std::abs(p.pixel_error.x), std::abs(p.pixel_error.y)});
+    }
+    json failures = json::array();
+    for (const FailedPose& f : rc.failed) {
+      failures.push_back({{"axis", f.axis}, {"index", f.index}, {"status", f.status},
+                          {"reason", f.reason}, {"frames", f.frames}});
+    }
+    json images = json::array();
+    for (const ServoImages& im : rc.images) {
+      for (const bool after : {false, true}) {
+        const std::string file = "servo_" + name + "_axis" + std::to_string(im.axis) + "_" +
+                                 (after ? "after" : "before") + ".png";
+        const cv::Point2d e = after ? im.error_after : im.error_before;
+        WritePng(staging / file, Annotated(after ? im.after : im.before, ei, e));
+        std::ostringstream caption;
+        caption.precision(3);
+        caption << name << ", axis " << im.axis << ", position " << im.index << ", "
+                << (after ? "after" : "before") << " the visual servo: (du, dv) = (" << e.x
+                << ", " << e.y << ") px";
+        images.push_back({{"file", file}, {"caption", caption.str()}});
+      }
+    }
+    const int aligned = static_cast<int>(rc.aligned.size());
+    r["servo"] = {{"aligned_poses", aligned},
+                  {"failed_poses", rc.failed.size()},
+                  {"mean_frames_per_pose", aligned > 0 ? json(double(frames) / aligned) : json()},
+                  {"max_final_pixel_error_px", max_px},
+                  {"tolerance_px", config.options.servo.tolerance_px},
+                  {"failures", failures},
+                  {"images", images},
+                  {"time_s", rc.servoing_s}};
+    r["split"] = {{"calibration_axes", rc.calibration_axes},
+                  {"validation_axes", rc.validation_axes},
+                  {"rule", rc.split_candidates.empty() ? "first" : "best_conditioned"}};
+    for (const auto& [axes, sigma] : rc.split_candidates) {
+      r["split"]["candidates"].push_back({{"calibration_axes", axes},
+                                          {"smallest_singular_value", sigma}});
+    }
+    json per_axis = json::array();
+    for (size_t k = 0; k < rc.per_axis.size(); ++k) {
+      const int axis = static_cast<int>(k);
+      const bool cal = std::find(rc.calibration_axes.begin(), rc.calibration_axes.end(),
+                                 axis) != rc.calibration_axes.end();
+      if (rc.per_axis[k].samples == 0) continue;
+      per_axis.push_back({{"axis", axis}, {"set", cal ? "calibration" : "validation"},
+                          {"before", Mm(rc.per_axis[k].before)},
+                          {"after", Mm(rc.per_axis[k].after)}});
+    }
+    r["misaligned_error_mm"] = {{"calibration", Misaligned(rc.calibration_error)},
+                                {"validation", Misaligned(rc.validation_error)},
+                                {"per_axis", per_axis}};
+    r["truth_position_error_mm"] = Gauges(score);
+    if (rc.refit) {
+      // The calibration-set model too, so that the refit's gain is visible.
+      const RobotScore held = ScoreRobot(rc.nominal, rc.holdout, true_model, obs,
+                                         config.scoring_configurations, config.scoring_seed);
+      r["truth_position_error_mm_calibration_set_model"] = Gauges(held);
+    }
+    r["scale"] = {{"estimated", score.scale_estimated}, {"true", score.scale_true},
+                  {"identified_length_ratio",
+                   rc.refit ? rc.refit_result.scale : rc.nonlinear.scale}};
+    r["unidentifiable"] = obs.unidentifiable;
+    json combos = json::array();
+    for (size_t i = 0; i < score.combination_estimated.size(); ++i) {
+      combos.push_back({{"index", i}, {"estimated", 1000 * score.combination_estimated[i]},
+                        {"true", 1000 * score.combination_true[i]}});
+    }
+    r["identifiable_combinations"] = {{"count", obs.rank},
+                                      {"unit", "mm or mrad (scaled coordinates, 1 m)"},
+                                      {"rms_error", 1000 * score.combination_rms_error},
+                                      {"max_error", 1000 * score.combination_max_error},
+                                      {"items", combos}};
+    json params = json::array();
+    for (const ParameterComparison& p : score.parameters) {
+      const double f = p.length ? 1000.0 : RadToDeg(1.0);
+      params.push_back({{"name", p.name}, {"unit", p.length ? "mm" : "deg"},
+                        {"estimated", f * p.estimated}, {"true", f * p.truth}});
+    }
+    r["parameters"] = params;
+    const LinearizedIdentificationResult& lin = rc.linearized;
+    const NonlinearIdentificationResult& nl = rc.nonlinear;
+    json eps = json::array();
+    for (double e : lin.eps_history) eps.push_back(1000 * e);
+    r["identification"] = {
+        {"method", rc.method},
+        {"time_s", rc.identification_s},
+        {"linearized",
+         {{"status", ToString(lin.status)}, {"iterations", lin.iterations},
+          {"rank", lin.observability.rank}, {"eps_history_mm", eps},
+          {"calibration_after_mm", Mm(lin.mean_misaligned_error_after)}}},
+        {"nonlinear",
+         {{"status", ToString(nl.status)}, {"iterations", nl.iterations},
+          {"rank", nl.observability.rank}, {"depth_used", nl.depth_used},
+          {"singular_values", nl.observability.singular_values},
+          {"depth_weight", nl.depth_weight},
+          {"rms_distance_before_mm", Mm(nl.rms_distance_before)},
+          {"rms_distance_after_mm", Mm(nl.rms_distance_after)},
+          {"rms_depth_residual_mm", Mm(nl.rms_depth_residual)}}},
+        {"delivered_model", rc.refit ? "all axes (refit after validation)" : "calibration axes"},
+        {"refit_all_axes",
+         rc.refit ? json{{"status", ToString(rc.refit_result.status)},
+                         {"axes", rc.calibration_axes.size() + rc.validation_axes.size()},
+                         {"rank", rc.refit_result.observability.rank},
+                         {"rms_distance_after_mm", Mm(rc.refit_result.rms_distance_after)},
+                         {"rms_depth_residual_mm", Mm(rc.refit_result.rms_depth_residual)}}
+                  : json(nullptr)},
+        {"linearized_vs_ceres_max_parameter_difference",
+         {{"mm", 1000 * [&] {
+             double m = 0;
+             for (int i = 0; i < kNumParams; ++i)
+               if (IsLengthParameter(i))
+                 m = std::max(m, std::abs(lin.correction(i) - nl.correction(i)));
+             return m;
+           }()},
+          {"deg", RadToDeg([&] {
+             double m = 0;
+             for (int i = 0; i < kNumParams; ++i)
+               if (!IsLengthParameter(i))
+                 m = std::max(m, std::abs(lin.correction(i) - nl.correction(i)));
+             return m;
+           }())}}}};
+    robots[name] = r;
+    AppendRows(rc, name, camera, &csv);
+    // The identified model, ready to load (tool link = board mount, as identified).
+    std::ofstream(staging / ("identified_" + name + ".yaml")) << ModelToYaml(rc.identified);
+  }
+  (*report)["robots"] = robots;
+  std::ofstream(staging / "measurements.csv") << csv.str();
+  const double scoring = Seconds(t_score);
+  (*report)["timing_s"] = {{"total", Seconds(t_start)}, {"intrinsics", result.intrinsics_s},
+                        {"planning", planning},      {"servoing", servoing},
+                        {"identification", identification}, {"scoring", scoring},
+                        {"cell",
+                         {{"frames", timed.frames},
+                          {"grab_image", timed.grab_s},
+                          {"moves", timed.moves},
+                          {"move_to", timed.move_s}}}};
+  return result;
+}
+
+int RunCalibrationScenario(const RunOptions& o) {
+  const auto t_start = Clock::now();
+  const Scenario sc = LoadScenario(o.scenario);
+  if (IsPresent(sc.handclasp) && !IsPresent(sc.calibration)) {
+    return RunHandclaspScenario(o.scenario, o.out_dir);  // base-frame calibration alone
+  }
+  if (IsPresent(sc.handclasp) && IsPresent(sc.calibration)) return RunWorkflowScenario(o);
+  CalibrationConfig config = ParseCalibrationConfig(sc);
+  const fs::path out(o.out_dir);
+  const fs::path staging = CreateStagingDirectory(o.out_dir);
+  std::error_code ec;
+  try {
+    InstallMujocoErrorHandlers();
+    std::printf("twinbench run: scenario %s (%s)\n", sc.name.c_str(), sc.path.c_str());
+    TwinCell cell(sc.twin, sc.path);
+    json report;
+    RunCalibrationStage(cell, sc, config, staging, o.quiet, t_start, &report);
+    std::ofstream(staging / "report.json") << report.dump(2) << '\n';
+    std::ofstream(staging / "report.html") << RenderReportHtml(report);
+    PublishDirectory(staging.string(), out.string());
+
+    // Summary.
+    std::printf("\n%-6s %-22s %10s %10s %9s\n", "robot", "metric [mm]", "before", "after",
+                "decrease");
+    for (const auto& [name, r] : report["robots"].items()) {
+      for (const char* set : {"calibration", "validation"}) {
+        const json& m = r["misaligned_error_mm"][set];
+        if (m["before"].is_null()) continue;
+        std::printf("%-6s %-22s %10.4f %10.4f %8.1f%%\n", name.c_str(),
+                    (std::string("misaligned ") + set).c_str(), m["before"].get<double>(),
+                    m["after"].get<double>(), m["decrease_percent"].get<double>());
+      }
+      for (const char* gauge : {"raw", "rigid", "similarity"}) {
+        const json& g = r["truth_position_error_mm"][gauge];
+        std::printf("%-6s %-22s %10.4f %10.4f   (max %.4f -> %.4f)\n", name.c_str(),
+                    (std::string("truth RMS ") + gauge).c_str(), g["before"]["rms"].get<double>(),
+                    g["after"]["rms"].get<double>(), g["before"]["max"].get<double>(),
+                    g["after"]["max"].get<double>());
+      }
+      if (r.contains("truth_position_error_mm_calibration_set_model")) {
+        const json& h = r["truth_position_error_mm_calibration_set_model"];
+        std::printf("%-6s delivered model refit on all axes; the calibration-set model alone: "
+                    "truth RMS rigid %.4f, similarity %.4f\n",
+                    name.c_str(), h["rigid"]["after"]["rms"].get<double>(),
+                    h["similarity"]["after"]["rms"].get<double>());
+      }
+      std::printf("%-6s scale estimated %.6f, true %.6f; servo %d aligned, %d failed, %.2f "
+                  "frames/pose\n",
+                  name.c_str(), r["scale"]["estimated"].get<double>(),
+                  r["scale"]["true"].get<double>(), r["servo"]["aligned_poses"].get<int>(),
+                  r["servo"]["failed_poses"].get<int>(),
+                  r["servo"]["mean_frames_per_pose"].is_null()
+                      ? 0.0
+                      : r["servo"]["mean_frames_per_pose"].get<double>());
+    }
+    const json& t = report["timing_s"];
+    std::printf("timing [s]: total %.1f = intrinsics %.1f + planning %.1f + servoing %.1f + "
+                "identification %.1f + scoring %.1f\n",
+                t["total"].get<double>(), t["intrinsics"].get<double>(),
+                t["planning"].get<double>(), t["servoing"].get<double>(),
+                t["identification"].get<double>(), t["scoring"].get<double>());
+    const json& cell_t = report["timing_s"]["cell"];
+    std::printf("cell: %d frames in %.1f s (GrabImage), %d moves in %.1f s (MoveTo)\n",
+                cell_t["frames"].get<int>(), cell_t["grab_image"].get<double>(),
+                cell_t["moves"].get<int>(), cell_t["move_to"].get<double>());
+    std::printf("wrote %s/{report.json, report.html, measurements.csv, servo_*.png}\n",
+                out.string().c_str());
+  } catch (...) {
+    fs::remove_all(staging, ec);
+    throw;
+  }
+  return 0;
+}
+
+namespace {
+
+// Splits one CSV line at commas (the file has no quoted fields).
+std::vector<std::string> SplitCsv(const std::string& line) {
+  std::vector<std::string> out;
+  std::stringstream ss(line);
+  std::string item;
+  while (std::getline(ss, item, ',')) out.push_back(item);
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+double CsvNumber(const std::string& text, const std::string& where) {
+  try {
+    size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument("");
+    return v;
+  } catch (const std::exception&) {
+    throw InputError(where, "expected a finite number, got '" + text + "'");
+  }
+}
+
+int CsvInteger(const std::string& text, const std::string& where) {
+  const double v = CsvNumber(text, where);
+  if (v != std::floor(v) || v < 0 || v > 1e6) {
+    throw InputError(where, "expected a whole number >= 0, got '" + text + "'");
+  }
+  return static_cast<int>(v);
+}
+
+}  // namespace
+
+int RunIdentify(const IdentifyOptions& o) {
+  KinematicModel model = LoadRobotModel(o.model);
+  Transform X_FT = Transform::Identity();
+  if (!o.board_mount.empty()) {
+    std::vector<double> v;
+    for (const std::string& item : SplitCsv(o.board_mount)) {
+      v.push_back(CsvNumber(item, "--board-mount"));
+    }
+    if (v.size() != 6) {
+      throw InputError("--board-mount", "expected x,y,z,roll,pitch,yaw (mm, deg), got '" +
+                                            o.board_mount + "'");
+    }
+    X_FT.translation() = Vector3(v[0], v[1], v[2]) / 1000.0;
+    X_FT.linear() = RpyToRotation(Vector3(DegToRad(v[3]), DegToRad(v[4]), DegToRad(v[5])));
+  }
+  std::ifstream in(o.measurements);
+  if (!in) throw InputError(o.measurements, "cannot read the measurements file");
+  std::string line;
+  if (!std::getline(in, line)) throw InputError(o.measurements, "empty file");
+  const std::vector<std::string> header = SplitCsv(line);
+  std::map<std::string, size_t> col;
+  for (size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
+  for (const char* need : {"robot", "axis", "index", "set", "q1_deg", "q2_deg", "q3_deg",
+                                  "q4_deg", "q5_deg", "q6_deg"}) {
+    if (!col.count(need)) {
+      throw InputError(o.measurements + ":1", "missing column '" + std::string(need) + "' (expected the "
+                                              "header of `twinbench run`'s measurements.csv)");
+    }
+  }
+  const bool has_depth = col.count("depth_mm") != 0;
+  const bool has_offset =
+      col.count("offset_x_mm") && col.count("offset_y_mm") && col.count("offset_z_mm");
+  RobotCalibration rc;
+  rc.nominal = BoardRobotModel(model, X_FT);
+  std::string robot = o.robot;
+  std::set<int> cal_axes, val_axes;
+  int line_number = 1;
+  while (std::getline(in, line)) {
+    ++line_number;
+    if (line.empty()) continue;
+    const std::string where = o.measurements + ":" + std::to_string(line_number);
+    const std::vector<std::string> f = SplitCsv(line);
+    if (f.size() != header.size()) {
+      throw InputError(where, "expected " + std::to_string(header.size()) + " fields, got " +
+                                  std::to_string(f.size()));
+    }
+    if (robot.empty()) robot = f[col["robot"]];
+    if (f[col["robot"]] != robot) continue;
+    AxisSample s;
+    s.axis = CsvInteger(f[col["axis"]], where + " axis");
+    for (int i = 0; i < kNumJoints; ++i) {
+      const std::string key = "q" + std::to_string(i + 1) + "_deg";
+      s.q(i) = DegToRad(CsvNumber(f[col[key]], where + " " + key));
+    }
+    if (has_depth && !f[col["depth_mm"]].empty()) {
+      s.depth = CsvNumber(f[col["depth_mm"]], where + " depth_mm") / 1000.0;  // empty: none
+    }
+    if (has_offset) {
+      s.offset = Vector3(CsvNumber(f[col["offset_x_mm"]], where + " offset_x_mm"),
+                         CsvNumber(f[col["offset_y_mm"]], where + " offset_y_mm"),
+                         CsvNumber(f[col["offset_z_mm"]], where + " offset_z_mm")) /
+                 1000.0;
+    }
+    const std::string set = f[col["set"]];
+    if (set == "calibration") {
+      cal_axes.insert(s.axis);
+    } else if (set == "validation") {
+      val_axes.insert(s.axis);
+    } else if (set != "unused") {
+      throw InputError(where + " set", "expected calibration, validation or unused, got '" +
+                                           set + "'");
+    }
+    rc.samples.push_back(s);
+  }
+  if (rc.samples.empty()) {
+    throw InputError(o.measurements, "no rows for robot '" + robot + "'");
+  }
+  for (int k : cal_axes) {
+    if (val_axes.count(k)) {
+      throw InputError(o.measurements, "axis " + std::to_string(k) +
+                                           " has rows in both the calibration and the "
+                                           "validation set; split by whole axes");
+    }
+  }
+  rc.nominal.name = robot;
+  model.name = robot;
+  OpticalAxisOptions options;
+  IdentifyRobot({cal_axes.begin(), cal_axes.end()}, {val_axes.begin(), val_axes.end()}, options,
+                &rc);
+  json j;
+  j["robot"] = robot;
+  j["method"] = rc.method;
+  j["samples"] = rc.samples.size();
+  j["misaligned_error_mm"] = {{"calibration", Misaligned(rc.calibration_error)},
+                              {"validation", Misaligned(rc.validation_error)}};
+  const NonlinearIdentificationResult& nl = rc.nonlinear;
+  j["unidentifiable"] = (rc.method == "linearized" ? rc.linearized : rc.linearized).observability
+                            .unidentifiable;
+  if (rc.method != "linearized") j["unidentifiable"] = nl.observability.unidentifiable;
+  j["scale"] = {{"identified_length_ratio", nl.scale}, {"depth_used", nl.depth_used}};
+  json corr = json::object();
+  const ParameterVector d = GetParameters(rc.identified) - GetParameters(rc.nominal);
+  for (int i = 0; i < kNumParams; ++i) {
+    corr[ParameterName(robot, i)] = IsLengthParameter(i) ? 1000 * d(i) : RadToDeg(d(i));
+  }
+  j["correction_mm_or_deg"] = corr;
+  const fs::path out(o.out_dir);
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) throw InputError(o.out_dir, "cannot create the output folder: " + ec.message());
+  WriteFileAtomically((out / "identification.json").string(), j.dump(2) + "\n");
+  WriteFileAtomically((out / ("identified_" + robot + ".yaml")).string(), ModelToYaml(rc.identified));
+  std::printf("%s: %zu samples, method %s\n", robot.c_str(), rc.samples.size(), rc.method.c_str());
+  std::printf("misaligned error (eq. 46): calibration %.4f -> %.4f mm", 1000 * rc.calibration_error.before,
+              1000 * rc.calibration_error.after);
+  if (rc.validation_error.samples > 0) {
+    std::printf(", validation %.4f -> %.4f mm", 1000 * rc.validation_error.before,
+                1000 * rc.validation_error.after);
+  }
+  std::printf("\nwrote %s/identification.json and identified_%s.yaml\n", out.string().c_str(),
+              robot.c_str());
+  return 0;
+}
+
+}  // namespace twin

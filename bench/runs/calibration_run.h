@@ -1,0 +1,55 @@
+// `twinbench run` (the main job: a scenario's whole optical-axis calibration on the twin,
+// scored against truth, written as a report) and `twinbench identify` (identification alone on
+// recorded measurements, no twin: the path real data takes).
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/io/calibration_config.h"
+#include "bench/io/scenario.h"
+#include "calib/procedures/optical_axis_procedure.h"
+#include "sim/cell/twin_cell.h"
+
+namespace twin {
+
+/// Options of RunCalibrationScenario.
+struct RunOptions {
+  std::string scenario;  ///< scenario file with a calibration: section
+  std::string out_dir;   ///< output folder; replaced only once everything is written
+  bool quiet = false;    ///< no progress lines
+};
+
+/// Runs the scenario and writes out_dir/report.json, measurements.csv, servo_*.png and
+/// report.html; prints progress and a summary. Returns the exit code. Throws InputError for bad
+/// input (nothing is written then).
+int RunCalibrationScenario(const RunOptions& options);
+
+/// One optical-axis stage on an existing cell (also a step of the dual-arm workflow): runs the
+/// procedure with `config`, scores it against the cell's truth, writes servo_*.png,
+/// measurements.csv and identified_<robot>.yaml into `staging` and sets the report keys
+/// scenario, intrinsics, robots and timing_s. Progress lines carry the time since t_start.
+OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& scenario,
+                                      CalibrationConfig config,
+                                      const std::filesystem::path& staging, bool quiet,
+                                      std::chrono::steady_clock::time_point t_start,
+                                      nlohmann::json* report);
+
+/// Options of RunIdentify.
+struct IdentifyOptions {
+  std::string model;          ///< nominal model file (.yaml/.urdf) of the calibrated robot
+  std::string measurements;   ///< measurements.csv as `twinbench run` writes it
+  std::string robot;          ///< rows of this robot (default: the model's... the only one)
+  std::string board_mount;    ///< "x,y,z,roll,pitch,yaw" in mm and deg (X_FT); default 0s
+  std::string out_dir;        ///< output folder (identification.json, identified model)
+};
+
+/// Identifies the robot from recorded rows (calibration / validation sets from the CSV's set
+/// column) with both methods; writes the identified model and a JSON summary. Returns the exit
+/// code; throws InputError for bad input.
+int RunIdentify(const IdentifyOptions& options);
+
+}  // namespace twin

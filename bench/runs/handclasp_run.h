@@ -1,0 +1,140 @@
+// The handclasp base-frame calibration of Gan, Dai, Dong 2014 run on the MuJoCo twin: parses a
+// scenario's `handclasp:` section, runs calib's procedure (calib/procedures/handclasp_procedure.h) on a
+// TwinCell, and scores the estimates against the twin's truth after the procedure ended
+// (e_tran eq. 34, e_rot eq. 33), with a coupled-motion check (robot 2 follows robot 1 through
+// the estimated base transform). Section format (all keys optional):
+//
+//   handclasp:
+//     points: auto                 # auto (default): corners of the largest reachable cube
+//                                  # between the shoulders (calib PlanTaughtPoints); or a list
+//                                  # of [x, y, z] contact points in mm in robot 1's base frame
+//     operator_error_mm: 0.5       # operator alignment error, sigma per axis [mm] (default 0)
+//     constraint: auto             # auto (default: implied by the installations, robot 1 on
+//                                  # the floor and robot 2 on floor/wall/ceiling), general,
+//                                  # floor_floor, floor_wall or floor_ceiling
+//     trials: 1                    # seeded batch: trial t uses seed scenario.seed + t
+//     coupled_motion: true         # run the coupled-motion check (default true)
+//     calibrated_operator_error_mm: 0.1  # the dual-arm workflow's second handclasp (with the
+//                                  # calibrated kinematics, bench/runs/workflow_run.h): operator
+//                                  # alignment error sigma per axis [mm] (default 0.1)
+//     calibrated_tip_identification: true  # that handclasp teaches 4 tip orientations per
+//                                  # point and identifies both tips on their flanges jointly
+//                                  # with X_B1B2 (calib/identification/tip_refinement.h; default true)
+//
+// Taught points are the operator's choice: the planner uses the scenario's layout of the bases
+// (where the operator sees the robots stand) only to pick reachable points; the estimator gets
+// contact joint readings alone.
+#pragma once
+
+#include <array>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/io/scenario.h"
+#include "calib/identification/base_calibration.h"
+#include "calib/kinematics/kinematic_model.h"
+#include "sim/cell/twin_cell.h"
+
+namespace twin {
+
+/// The `handclasp:` section, in SI units.
+struct HandclaspConfig {
+  bool auto_points = true;             ///< plan the points (else points_B1)
+  std::vector<Vector3> points_B1;      ///< contact points in B1 [m] when !auto_points
+  double operator_error_m = 0.0;       ///< alignment error sigma per axis [m]
+  BaseConstraint constraint = BaseConstraint::kGeneral;  ///< resolved (never "auto")
+  int trials = 1;                      ///< seeded batch size (>= 1)
+  bool coupled_motion = true;          ///< run the coupled-motion check
+  double calibrated_operator_error_m = 1e-4;  ///< workflow stage (c) alignment error [m]
+  bool calibrated_tip_identification = true;  ///< workflow stage (c) identifies the tips
+};
+
+/// How one handclasp stage runs and is scored.
+struct HandclaspStageOptions {
+  /// Replaces the section's operator_error_mm when set [m].
+  std::optional<double> operator_error_m;
+  /// Teach 4 orientations per point and identify the tips (HandclaspOptions::identify_tips).
+  bool identify_tips = false;
+  /// Score in the best-fit frames of the pendant models (BestFitBaseOffset) instead of the
+  /// link-1 frames (KinematicBaseOffset): for calibrated models, whose base gauge is not the
+  /// link-1 one.
+  bool best_fit_frames = false;
+};
+
+/// The constraint implied by the installations: robot 1 on the floor and robot 2 on the floor,
+/// a wall or the ceiling give floor-floor, floor-wall, floor-ceiling; anything else general.
+BaseConstraint ImpliedConstraint(const TwinSpec& twin);
+
+/// Parses scenario.handclasp (an absent section gives the defaults). Throws InputError naming
+/// "file:line scenario.handclasp.key" for unknown keys and bad values.
+HandclaspConfig ParseHandclaspConfig(const Scenario& scenario);
+
+/// The scoring frame (bench only). A robot's geometry errors in link 1's theta and d are a
+/// rotation of the whole arm about base z and a shift along it: no kinematic calibration can
+/// see them (calib/identification/nonlinear_identification.h: they stay unidentifiable), so a controller's
+/// model expresses its tip in a frame B' of its own, not in the physical base frame B. With
+/// eq. 2's link transform RotZ(theta) TransZ(d) TransX(a) RotX(alpha) RotY(beta), and RotZ,
+/// TransZ commuting,
+///   FK_true(q) = X_BL0 RotZ(dtheta1) TransZ(dd1) X_BL0^-1 * FK_model(q),
+/// where FK_model carries the pendant model's link-1 theta and d and the true rest, and
+/// dtheta1 = theta1_true - theta1_pendant, dd1 = d1_true - d1_pendant. That is X_BB'; it is
+/// exact for the link-1 part and gauge only (the other parameters' errors are what the
+/// handclasp is expected to suffer from).
+Transform KinematicBaseOffset(const KinematicModel& true_model,
+                              const KinematicModel& pendant_model);
+
+/// The frame B' a pendant model works in, for models whose base gauge is not link 1's theta
+/// and d alone (after an optical-axis calibration the unidentifiable combinations also hold
+/// link 1's beta, a rotation about a second vertical axis): the rigid X_BB' that best maps the
+/// model's tip positions onto the true ones (least squares, Umeyama) over `configurations`
+/// seeded random joint configurations inside the limits, with the tip corrections dt_F (in
+/// the flange frame, e.g. identified by the handclasp) applied to the model's tip. With a
+/// calibration exact in its identifiable combinations this is the exact gauge; otherwise the
+/// remaining model error is what the handclasp suffers from.
+Transform BestFitBaseOffset(const KinematicModel& true_tip_model,
+                            const KinematicModel& pendant_tip_model, const Vector3& dt_F,
+                            int configurations = 200);
+
+/// X_B1'B2' = X_B1B1'^-1 X_B1B2 X_B2B2': the transform between the frames the robots'
+/// kinematic models (the pendant models) use; what a handclasp can determine at best and what
+/// base_frame.{general,constrained} are scored against. The physical X_B1B2 is scored too
+/// (base_frame.physical_truth).
+Transform KinematicFrameTruth(const TwinTruth& truth,
+                              const std::array<KinematicModel, 2>& pendant_models);
+
+/// Estimates of one handclasp stage and its report (bench scoring included).
+struct HandclaspStageResult {
+  bool ok = false;                                       ///< the procedure calibrated
+  Transform X_B1B2_general = Transform::Identity();      ///< general estimate (eq. 3, 12)
+  Transform X_B1B2_constrained = Transform::Identity();  ///< installation-refined estimate
+  /// With HandclaspStageOptions::identify_tips and report.tips_identified.status "ok": the
+  /// estimate refined jointly with the tips.
+  Transform X_B1B2_tips = Transform::Identity();
+  /// base_frame-style object: installation, truth, general, constrained (e_tran_mm, e_rot_deg,
+  /// xyz_mm, zyz_deg, rms_residual_mm), contacts, skipped, warnings, coupled_motion, ...
+  nlohmann::json report;
+};
+
+/// Runs one handclasp stage on `cell` with the section of `scenario` and the controllers'
+/// flange models `pendant_models_flange` (nominal or calibrated; the scenario's tips are added
+/// as tools), then scores it against cell.Truth(). Progress lines go to `progress`. Throws
+/// InputError for a bad section; procedure failures are reported (ok = false, report.status).
+HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
+                                       const std::array<KinematicModel, 2>& pendant_models_flange,
+                                       std::ostream& progress,
+                                       const HandclaspStageOptions& stage_options = {});
+
+/// Loads the scenario, runs its handclasp section with the nominal models for each trial of
+/// the batch and writes out_dir/report.json atomically (temporary file, then rename). Returns
+/// 0 when every trial calibrated, 1 otherwise (the report says why). Throws InputError for bad
+/// input (the CLI maps it to exit code 2).
+int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir,
+                         std::ostream& progress);
+/// As above, with progress on std::cerr.
+int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir);
+
+}  // namespace twin

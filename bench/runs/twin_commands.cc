@@ -1,0 +1,175 @@
+#include "bench/runs/twin_commands.h"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "bench/io/scenario.h"
+#include "calib/common/errors.h"
+#include "sim/cell/twin_cell.h"
+
+namespace twin {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// Small wrist moves of the board robot around its initial pose, for a few distinct views.
+JointVector ViewPose(const JointVector& q0, int k) {
+  static const double kDeltaDeg[][3] = {{0, 0, 0}, {6, -6, 0}, {-6, 5, 20}, {4, 8, -20}};
+  JointVector q = q0;
+  const auto& d = kDeltaDeg[k % 4];
+  for (int i = 0; i < 3; ++i) q(3 + i) += DegToRad(d[i]) * (1 + k / 4);
+  return q;
+}
+
+void WritePng(const fs::path& path, const cv::Mat& image) {
+  if (!cv::imwrite(path.string(), image)) throw InputError(path.string(), "cannot write PNG");
+}
+
+}  // namespace
+
+int RunRender(const RenderOptions& o) {
+  if (o.poses < 1) throw InputError("--poses", "must be >= 1, got " + std::to_string(o.poses));
+  const Scenario scenario = LoadScenario(o.scenario);
+  TwinCell cell(scenario.twin, o.scenario);
+  const int board_robot = scenario.twin.board.robot;
+  const JointVector q0 = scenario.twin.robots[board_robot].q_initial;
+
+  // Everything goes to a staging folder first, so a failure leaves no half-written output.
+  const fs::path out(o.out_dir);
+  const fs::path staging = out.string() + ".partial";
+  std::error_code ec;
+  fs::remove_all(staging, ec);
+  if (!fs::create_directories(staging, ec) && ec) {
+    throw InputError(o.out_dir, "cannot create the output folder: " + ec.message());
+  }
+  int written = 0;
+  for (int k = 0; k < o.poses; ++k) {
+    const MoveResult m = cell.MoveTo(board_robot, ViewPose(q0, k));
+    if (m.status != MoveStatus::kSettled) {
+      std::printf("pose %d skipped: %s: %s\n", k, ToString(m.status), m.reason.c_str());
+      continue;
+    }
+    char name[64];
+    std::snprintf(name, sizeof(name), "hand_camera_%02d.png", k);
+    WritePng(staging / name, cell.GrabImage());
+    std::snprintf(name, sizeof(name), "overview_%02d.png", k);
+    WritePng(staging / name, cell.RenderOverview(o.overview_width, o.overview_height, 135, -25));
+    std::printf("pose %d: wrote hand_camera_%02d.png and overview_%02d.png\n", k, k, k);
+    ++written;
+  }
+  if (written == 0) {
+    fs::remove_all(staging, ec);
+    throw InputError(o.scenario, "no pose of the board robot could be reached; nothing written");
+  }
+  fs::create_directories(out, ec);
+  for (const auto& entry : fs::directory_iterator(staging)) {
+    fs::rename(entry.path(), out / entry.path().filename());
+  }
+  fs::remove_all(staging, ec);
+  std::printf("%d pose(s) rendered into %s\n", written, o.out_dir.c_str());
+  return 0;
+}
+
+namespace {
+
+// Frames per second of `workers` processes, each with its own twin, grabbing `frames` frames
+// after a warm-up frame (shader compilation). Workers report ready on one pipe and start on a
+// go byte from the other, so the clock covers exactly the rendering of all of them.
+double WorkerFps(const TwinSpec& spec, int workers, int frames) {
+  int ready[2], go[2];
+  if (pipe(ready) != 0 || pipe(go) != 0) throw std::runtime_error("pipe failed");
+  std::vector<pid_t> children;
+  for (int w = 0; w < workers; ++w) {
+    const pid_t pid = fork();
+    if (pid < 0) throw std::runtime_error("fork failed");
+    if (pid == 0) {
+      TwinCell cell(spec);
+      cell.GrabImage();
+      char c = 1;
+      if (write(ready[1], &c, 1) != 1 || read(go[0], &c, 1) != 1) _exit(3);
+      for (int f = 0; f < frames; ++f) cell.GrabImage();
+      _exit(0);
+    }
+    children.push_back(pid);
+  }
+  char c = 1;
+  for (int w = 0; w < workers; ++w) {
+    if (read(ready[0], &c, 1) != 1) throw std::runtime_error("a worker failed to start");
+  }
+  const auto t0 = Clock::now();
+  for (int w = 0; w < workers; ++w) {
+    if (write(go[1], &c, 1) != 1) throw std::runtime_error("cannot start the workers");
+  }
+  bool ok = true;
+  for (pid_t pid : children) {
+    int status = 0;
+    waitpid(pid, &status, 0);
+    ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  }
+  const double seconds = SecondsSince(t0);
+  for (int fd : {ready[0], ready[1], go[0], go[1]}) close(fd);
+  if (!ok) throw std::runtime_error("a worker process failed");
+  return workers * frames / seconds;
+}
+
+}  // namespace
+
+int RunTwinBenchmark(const TwinBenchmarkOptions& o) {
+  if (o.frames < 1 || o.moves < 2) throw InputError("benchmark-twin", "need frames >= 1, moves >= 2");
+  const Scenario scenario = LoadScenario(o.scenario);
+  // Worker processes first: they must be forked before this process starts its own GL
+  // context (llvmpipe's threads do not survive a fork).
+  const double fps1 = WorkerFps(scenario.twin, 1, o.frames);
+  const double fps2 = WorkerFps(scenario.twin, 2, o.frames);
+
+  TwinCell cell(scenario.twin, o.scenario);
+  const cv::Mat first = cell.GrabImage();  // shader compilation: not timed
+  cell.RenderBare();
+
+  auto t0 = Clock::now();
+  for (int f = 0; f < o.frames; ++f) cell.GrabImage();
+  const double grab_ms = 1e3 * SecondsSince(t0) / o.frames;
+  t0 = Clock::now();
+  for (int f = 0; f < o.frames; ++f) cell.RenderBare();
+  const double bare_ms = 1e3 * SecondsSince(t0) / o.frames;
+
+  const int robot = scenario.twin.board.robot;
+  const JointVector q0 = scenario.twin.robots[robot].q_initial;
+  long steps = 0;
+  double sim_s = 0.0;
+  int settled = 0;
+  t0 = Clock::now();
+  for (int k = 0; k < o.moves; ++k) {
+    const MoveResult m = cell.MoveTo(robot, ViewPose(q0, k % 2 ? 1 : 0));
+    steps += cell.last_move_steps();
+    sim_s += m.duration_s;
+    settled += m.status == MoveStatus::kSettled;
+  }
+  const double move_ms = 1e3 * SecondsSince(t0) / o.moves;
+
+  std::printf("twin benchmark: %s, %dx%d image, %d frames per figure\n", o.scenario.c_str(),
+              first.cols, first.rows, o.frames);
+  std::printf("  GrabImage (render + read-back + flip + effects): %7.2f ms/frame\n", grab_ms);
+  std::printf("  bare mjr_render + mjr_readPixels:                %7.2f ms/frame\n", bare_ms);
+  std::printf("  settled move (6-deg wrist moves, %d/%d settled):  %7.2f ms/move, %.0f steps, "
+              "%.3f s simulated\n", settled, o.moves, move_ms,
+              static_cast<double>(steps) / o.moves, sim_s / o.moves);
+  std::printf("  one worker process:                              %7.1f frames/s\n", fps1);
+  std::printf("  two worker processes:                            %7.1f frames/s in total\n",
+              fps2);
+  return 0;
+}
+
+}  // namespace twin

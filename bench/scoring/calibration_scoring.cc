@@ -1,0 +1,105 @@
+#include "bench/scoring/calibration_scoring.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include <Eigen/Geometry>
+
+#include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
+#include "calib/model/parameters.h"
+
+namespace twin {
+namespace {
+
+PositionErrorStats Stats(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b) {
+  PositionErrorStats s;
+  const Eigen::VectorXd d = (a - b).colwise().norm();
+  s.rms = std::sqrt(d.squaredNorm() / static_cast<double>(d.size()));
+  s.max = d.maxCoeff();
+  return s;
+}
+
+Eigen::Matrix3Xd ToMatrix(const std::vector<Vector3>& points) {
+  Eigen::Matrix3Xd m(3, points.size());
+  for (size_t i = 0; i < points.size(); ++i) m.col(i) = points[i];
+  return m;
+}
+
+}  // namespace
+
+GaugeErrors CompareInGauges(const std::vector<Vector3>& model, const std::vector<Vector3>& truth,
+                            double* similarity_scale) {
+  if (model.size() != truth.size() || model.size() < 4) {
+    throw std::logic_error("CompareInGauges: need >= 4 matching points");
+  }
+  const Eigen::Matrix3Xd a = ToMatrix(model), b = ToMatrix(truth);
+  GaugeErrors g;
+  g.raw = Stats(a, b);
+  // Umeyama (Eigen): the least-squares rigid / similarity transform taking a onto b.
+  const Eigen::Matrix4d T_rigid = Eigen::umeyama(a, b, false);
+  const Eigen::Matrix4d T_sim = Eigen::umeyama(a, b, true);
+  g.rigid = Stats((T_rigid.topLeftCorner<3, 3>() * a).colwise() + T_rigid.topRightCorner<3, 1>(), b);
+  g.similarity = Stats((T_sim.topLeftCorner<3, 3>() * a).colwise() + T_sim.topRightCorner<3, 1>(), b);
+  if (similarity_scale) *similarity_scale = T_sim.topLeftCorner<3, 3>().col(0).norm();
+  return g;
+}
+
+std::vector<JointVector> RandomJointConfigurations(const KinematicModel& model, int n,
+                                                   std::uint64_t seed, double margin) {
+  std::mt19937_64 rng(seed);
+  std::vector<JointVector> qs;
+  for (int c = 0; c < n; ++c) {
+    JointVector q;
+    for (int i = 0; i < kNumJoints; ++i) {
+      const JointLimits& l = model.links[i].limits;
+      const double lo = l.lower + margin, hi = std::max(lo, l.upper - margin);
+      q(i) = std::uniform_real_distribution<double>(lo, hi)(rng);
+    }
+    qs.push_back(q);
+  }
+  return qs;
+}
+
+RobotScore ScoreRobot(const KinematicModel& nominal, const KinematicModel& identified,
+                      const KinematicModel& truth, const ObservabilityReport& observability,
+                      int configurations, std::uint64_t seed) {
+  RobotScore s;
+  s.configurations = configurations;
+  std::vector<Vector3> p_nom, p_id, p_true;
+  for (const JointVector& q :
+       RandomJointConfigurations(nominal, configurations, seed, DegToRad(10.0))) {
+    p_nom.push_back(EndPose(nominal, q).translation());
+    p_id.push_back(EndPose(identified, q).translation());
+    p_true.push_back(EndPose(truth, q).translation());
+  }
+  s.before = CompareInGauges(p_nom, p_true);
+  s.after = CompareInGauges(p_id, p_true);
+  // Scale of a model's point cloud relative to the nominal one: the similarity taking the
+  // nominal points onto the model's has scale |model| / |nominal|.
+  CompareInGauges(p_nom, p_id, &s.scale_estimated);
+  CompareInGauges(p_nom, p_true, &s.scale_true);
+
+  const ParameterVector phi0 = GetParameters(nominal);
+  const ParameterVector d_est = GetParameters(identified) - phi0;
+  const ParameterVector d_true = GetParameters(truth) - phi0;
+  for (int i = 0; i < kNumParams; ++i) {
+    s.parameters.push_back({ParameterName(nominal.name, i), IsLengthParameter(i), d_est(i),
+                            d_true(i)});
+  }
+  const Eigen::MatrixXd& V = observability.identifiable_basis;
+  if (V.cols() > 0) {
+    const ParameterVector inv_scale = observability.column_scale.cwiseInverse();
+    const Eigen::VectorXd ze = V.transpose() * inv_scale.cwiseProduct(d_est);
+    const Eigen::VectorXd zt = V.transpose() * inv_scale.cwiseProduct(d_true);
+    s.combination_estimated.assign(ze.data(), ze.data() + ze.size());
+    s.combination_true.assign(zt.data(), zt.data() + zt.size());
+    const Eigen::VectorXd e = ze - zt;
+    s.combination_rms_error = std::sqrt(e.squaredNorm() / static_cast<double>(e.size()));
+    s.combination_max_error = e.cwiseAbs().maxCoeff();
+  }
+  return s;
+}
+
+}  // namespace twin

@@ -1,0 +1,66 @@
+// The Cell interface: everything the calibration procedure may ask of a robot cell, exactly
+// what a hardware cell offers. sim/ implements it with the MuJoCo twin; a hardware driver
+// would implement it with the robot controllers and the camera. Nothing of the truth crosses
+// it (DESIGN.md: the estimator never sees the truth).
+#pragma once
+
+#include <string>
+
+#include <opencv2/core.hpp>
+
+#include "calib/kinematics/kinematic_model.h"
+
+namespace twin {
+
+enum class MoveStatus {
+  kSettled,       ///< reached the targets and came to rest
+  kCollision,     ///< stopped: a link, tool or the other robot was hit (reason names them)
+  kNotSettled,    ///< still moving after the step limit
+  kOutOfLimits,   ///< the targets are outside the joint limits; nothing moved
+  kInvalidInput,  ///< unknown robot index or non-finite targets; nothing moved
+};
+
+/// Name of a status for messages ("settled", "collision", ...).
+const char* ToString(MoveStatus status);
+
+/// Outcome of Cell::MoveTo.
+struct MoveResult {
+  MoveStatus status = MoveStatus::kSettled;
+  std::string reason;      ///< what went wrong, empty when settled
+  double duration_s = 0;   ///< motion time of the move (simulated time on the twin) [s]
+};
+
+/// A cell with two robots (indices 0 and 1) and one hand camera.
+class Cell {
+ public:
+  virtual ~Cell() = default;
+  /// Moves robot `robot` to motor-side joint targets [rad] and waits until it has settled.
+  virtual MoveResult MoveTo(int robot, const JointVector& q_target) = 0;
+  /// Joint encoder reading of robot `robot` (motor side, as the controller reports it) [rad].
+  virtual JointVector ReadEncoders(int robot) = 0;
+  /// One frame of the hand camera: 8-bit BGR, OpenCV row order (row 0 at the top).
+  virtual cv::Mat GrabImage() = 0;
+  /// Exchanges the hand camera and the chessboard between the two flanges, each onto the
+  /// other's bracket (Zhu et al. 2019, section II: "the roles of the passive and active robots
+  /// are exchanged"); the robots hold still. On a hardware cell the operator does it and
+  /// confirms. Fails (status and reason, nothing changed) when the tools cannot be exchanged
+  /// where the robots stand.
+  virtual MoveResult ExchangeTools() = 0;
+  /// Index of the robot that carries the hand camera now; the other carries the board.
+  virtual int CameraRobot() = 0;
+  /// Asks the operator to jog robot `jogged_robot`'s measuring tip onto the other robot's tip
+  /// and to confirm the contact (the "handclasp" of Gan et al. 2014, section 3); the other robot
+  /// holds still, and the jogged robot stays at the contact. Fails with a status and a reason
+  /// (kInvalidInput: bad index or no handclasp on this cell; kOutOfLimits: the other tip is out
+  /// of reach; kCollision; kNotSettled: the tips could not be brought together). The default
+  /// is a cell without measuring tips.
+  virtual MoveResult JogTipToContact(int jogged_robot) {
+    MoveResult result;
+    result.status = MoveStatus::kInvalidInput;
+    result.reason = "this cell has no handclasp (robot " + std::to_string(jogged_robot) +
+                    " cannot be jogged onto the other tip)";
+    return result;
+  }
+};
+
+}  // namespace twin

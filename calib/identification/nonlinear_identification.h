@@ -1,0 +1,110 @@
+// Full nonlinear least-squares identification from optical-axis samples (Zhu et al. 2019,
+// section III.B, eq. 13-15), solved with Ceres: the alternative to the paper's linearized,
+// recursive method (linearized_identification.h), against which it is tested.
+//
+// Unknowns: the kinematic correction dphi = S * V * z (S = column_scale, V =
+// identifiable_basis of AnalyseObservability with LineConstraintInvariants, z in R^rank), so the
+// unidentifiable combinations keep exactly zero correction; and one nuisance line per optical
+// axis k. Line parameterisation: direction mu_k on ceres::SphereManifold<3>; point
+// c_k = c0_k + N_k s_k with s_k in R^2 and N_k a fixed orthonormal basis of the plane through
+// the initial centroid c0_k perpendicular to the initial direction mu0_k. That plane meets the
+// line in exactly one point while mu_k stays away from perpendicular to mu0_k, so the slide of
+// the point along the line (a gauge the residual cannot see) is removed. Both are initialised
+// by FitLine on the nominal positions.
+// Residual per sample i on axis k (3 rows, metres): (I - mu_k mu_k^T)(p_BE(phi, q_i) - o_i - c_k),
+// the component of the feature point's offset from the line perpendicular to the line, with
+// o_i the offset the camera measured when the servo stopped (AxisSample::offset).
+//
+// Beyond the paper: the scale measurement. The collinearity constraint cannot see a uniform
+// scale of the arm (lines stay lines). When the samples carry depths z_i (distance of P from
+// the camera along the axis, from the board pose and the known square length), each adds one
+// residual w (mu_k . (p_i - c_k) - t_k - z_i): the position of P along the line must follow the
+// measured depth up to one unknown offset t_k per axis (where the camera centre lies on it).
+// mu_k's sign is fixed at the start so that depth grows along it. The scale of the arm then
+// enters the data, and the uniform-scale direction leaves the unidentifiable set; rotation
+// about and translation along base z (link1.theta, link1.d) stay unidentifiable.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "calib/kinematics/kinematic_model.h"
+#include "calib/identification/linearized_identification.h"
+#include "calib/identification/observability.h"
+#include "calib/measurements/optical_axis_model.h"
+#include "calib/model/parameters.h"
+
+namespace twin {
+
+/// Robust loss on each sample's residual block.
+enum class NonlinearLoss {
+  kNone,   ///< plain squared distance
+  kHuber,  ///< ceres::HuberLoss with scale huber_scale [m]
+};
+
+/// Options of IdentifyNonlinear; defaults suit the paper's 5 axes x 10 positions.
+struct NonlinearIdentificationOptions {
+  int max_iterations = 200;            ///< Ceres max_num_iterations (>= 1)
+  double function_tolerance = 1e-14;   ///< Ceres relative cost-change tolerance, in (0, 1)
+  double gradient_tolerance = 1e-16;   ///< Ceres gradient tolerance, > 0
+  double parameter_tolerance = 1e-14;  ///< Ceres relative step tolerance, > 0
+  double rank_tolerance = 1e-6;        ///< relative singular-value cut of AnalyseObservability
+  NonlinearLoss loss = NonlinearLoss::kNone;  ///< robust loss per sample
+  double huber_scale = 1e-4;           ///< Huber threshold on the distance [m] (> 0), if kHuber
+  /// Use the samples' measured depths (AxisSample::depth) when every sample has one: the
+  /// scale measurement that makes the uniform scale of the arm identifiable (see above).
+  bool use_depth = true;
+  /// Weight of a depth residual relative to a perpendicular one, sigma_perpendicular /
+  /// sigma_depth [-]; 0 estimates it from the data (variance components, two solves).
+  double depth_weight = 0.0;
+};
+
+/// Throws InputError naming the bad field and value.
+void ValidateNonlinearIdentificationOptions(const NonlinearIdentificationOptions& options);
+
+enum class NonlinearIdentificationStatus {
+  kConverged,      ///< Ceres reported CONVERGENCE
+  kMaxIterations,  ///< Ceres stopped at max_iterations (NO_CONVERGENCE); the model is usable
+  kFailed,         ///< Ceres reported FAILURE or USER_FAILURE; the model is the nominal one
+};
+
+/// Name of a status for messages ("converged", "max_iterations", "failed").
+const char* ToString(NonlinearIdentificationStatus status);
+
+/// Outcome of IdentifyNonlinear.
+struct NonlinearIdentificationResult {
+  NonlinearIdentificationStatus status = NonlinearIdentificationStatus::kFailed;
+  std::string reason;                 ///< why it stopped (Ceres' message)
+  std::string brief_report;           ///< ceres::Solver::Summary::BriefReport()
+  int iterations = 0;                 ///< Ceres iterations (successful and not)
+  KinematicModel model;               ///< nominal + correction
+  ParameterVector correction = ParameterVector::Zero();  ///< identified - nominal [m, rad]
+  Eigen::VectorXd z;                  ///< coordinates in observability.identifiable_basis
+  std::vector<Line3> axes;            ///< the fitted optical axes in B (unit directions)
+  double rms_distance_before = 0.0;   ///< RMS point-to-line distance, nominal, FitLine axes [m]
+  double rms_distance_after = 0.0;    ///< RMS point-to-line distance at the solution [m]
+  bool depth_used = false;            ///< depth residuals entered the problem
+  double depth_weight = 0.0;          ///< weight used (given or estimated) [-]
+  double rms_depth_residual = 0.0;    ///< RMS of (along-line position - t_k - z_i) [m]
+  /// Length ratio identified / nominal along the uniform-scale direction: 1 + (projection
+  /// of the correction onto the scale direction) [-]; exactly 1 without depth.
+  double scale = 1.0;
+  /// Identifiability of the nominal model (as in the linearized method); its null space gets
+  /// exactly zero correction.
+  ObservabilityReport observability;
+};
+
+/// Identifies the passive robot's 35 link parameters by minimizing the sum of squared
+/// point-to-line distances (eq. 13-15) over the correction z and the 5-DOF axis lines. Axis
+/// indices must be 0..q-1 with >= 3 samples each (throws InputError otherwise).
+NonlinearIdentificationResult IdentifyNonlinear(
+    const KinematicModel& nominal, const std::vector<AxisSample>& samples,
+    const NonlinearIdentificationOptions& options = {});
+
+/// Perpendicular residual (3 rows [m]) of one sample, evaluated in double through the same
+/// templated forward kinematics the solver differentiates; `phi` the 35 parameters, `point`
+/// and unit `direction` the line. Exposed for tests.
+Vector3 AxisResidual(const KinematicModel& model_without_params, const ParameterVector& phi,
+                     const JointVector& q, const Vector3& point, const Vector3& direction);
+
+}  // namespace twin

@@ -1,0 +1,147 @@
+#include "calib/identification/observability.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include <Eigen/SVD>
+
+#include "calib/common/errors.h"
+
+namespace twin {
+namespace {
+
+using Square = Eigen::Matrix<double, kNumParams, kNumParams>;
+
+// R factor (kNumParams x kNumParams) of a tall matrix by Givens rotations, row by row; R^T R
+// = A^T A, so R has A's singular values and right singular vectors.
+Square GivensR(const Eigen::MatrixXd& A) {
+  Square R = Square::Zero();
+  Eigen::Matrix<double, 1, kNumParams> row;
+  for (int r = 0; r < A.rows(); ++r) {
+    row = A.row(r);
+    for (int j = 0; j < kNumParams; ++j) {
+      if (row(j) == 0.0) continue;
+      const double h = std::hypot(R(j, j), row(j));
+      const double c = R(j, j) / h, s = row(j) / h;
+      for (int k = j; k < kNumParams; ++k) {
+        const double a = R(j, k), b = row(k);
+        R(j, k) = c * a + s * b;
+        row(k) = -s * a + c * b;
+      }
+    }
+  }
+  return R;
+}
+
+// Reduced row echelon form (partial pivoting on each column in order), in place.
+void ReducedRowEchelon(Eigen::MatrixXd& M, double tol) {
+  int lead = 0;
+  for (int c = 0; c < M.cols() && lead < M.rows(); ++c) {
+    Eigen::Index p;
+    const double best = M.col(c).segment(lead, M.rows() - lead).cwiseAbs().maxCoeff(&p);
+    if (best <= tol) continue;
+    if (p != 0) M.row(lead).swap(M.row(lead + p));
+    const double pivot = M(lead, c);  // copies: the row operations overwrite these entries
+    M.row(lead) /= pivot;
+    for (int r = 0; r < M.rows(); ++r) {
+      const double f = M(r, c);
+      if (r != lead) M.row(r) -= f * M.row(lead);
+    }
+    ++lead;
+  }
+}
+
+}  // namespace
+
+std::string NameCombination(const ParameterVector& direction, const std::string& robot) {
+  const double n = direction.norm();
+  if (!(n > 0.0)) return "0";
+  const ParameterVector u = direction / n;
+  int terms = 0, only = -1;
+  for (int i = 0; i < kNumParams; ++i) {
+    if (std::abs(u(i)) >= 1e-6) ++terms, only = i;
+  }
+  if (terms == 1) return ParameterName(robot, only);
+  std::string out;
+  for (int i = 0; i < kNumParams; ++i) {
+    if (std::abs(u(i)) < 1e-6) continue;
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.3g ", std::abs(u(i)));
+    if (out.empty()) {
+      out = (u(i) < 0 ? "-" : "") + std::string(buf);
+    } else {
+      out += (u(i) < 0 ? " - " : " + ") + std::string(buf);
+    }
+    out += ParameterName(robot, i);
+  }
+  return out;
+}
+
+ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi, const std::string& robot,
+                                         double relative_tolerance,
+                                         const std::vector<ParameterVector>& known_invariants) {
+  if (Phi.cols() != kNumParams) {
+    throw InputError("AnalyseObservability", "Phi has " + std::to_string(Phi.cols()) +
+                                                 " columns, expected " +
+                                                 std::to_string(kNumParams));
+  }
+  if (!(relative_tolerance > 0.0 && relative_tolerance < 1.0)) {
+    throw InputError("AnalyseObservability.relative_tolerance",
+                     "must be in (0, 1), got " + std::to_string(relative_tolerance));
+  }
+  ObservabilityReport rep;
+  for (int i = 0; i < kNumParams; ++i) {
+    if (IsLengthParameter(i)) rep.column_scale(i) = kObservabilityCharacteristicLength;
+  }
+  Eigen::MatrixXd A = Phi * rep.column_scale.asDiagonal();
+  const Square R = GivensR(A);
+  Eigen::JacobiSVD<Square, Eigen::NoQRPreconditioner> svd(R, Eigen::ComputeFullV);
+  const double cut = relative_tolerance * svd.singularValues()(0);
+  if (!known_invariants.empty()) {
+    // Null space W = span(numerical null space of A, invariants in scaled coordinates); then
+    // analyse A (I - W W^T), whose null space is exactly W. (Projecting the invariants alone
+    // would break null vectors of A that overlap them.)
+    std::vector<ParameterVector> w;
+    auto add = [&w](ParameterVector u) {
+      const double n0 = u.norm();
+      for (const auto& b : w) u -= b * b.dot(u);
+      for (const auto& b : w) u -= b * b.dot(u);  // second pass for orthogonality
+      if (u.norm() > 1e-9 * n0) w.push_back(u.normalized());
+    };
+    for (int i = 0; i < kNumParams; ++i) {
+      if (!(svd.singularValues()(i) > cut)) add(svd.matrixV().col(i));
+    }
+    for (const ParameterVector& v : known_invariants) add(v.cwiseQuotient(rep.column_scale));
+    Square Q = Square::Identity();
+    for (const auto& b : w) Q -= b * b.transpose();
+    svd.compute(R * Q, Eigen::ComputeFullV);
+  }
+  const auto& sv = svd.singularValues();
+  rep.singular_values.assign(sv.data(), sv.data() + sv.size());
+  while (rep.rank < kNumParams && sv(rep.rank) > cut) ++rep.rank;
+  rep.identifiable_basis = svd.matrixV().leftCols(rep.rank);
+  rep.null_basis = svd.matrixV().rightCols(kNumParams - rep.rank);
+
+  // Readable rotation of the null space: RREF of its basis (SI coordinates), one row each.
+  Eigen::MatrixXd M = (rep.column_scale.asDiagonal() * rep.null_basis).transpose();
+  // Pivot threshold 1e-4: the rows start orthonormal (entries O(0.1)), while data noise leaves
+  // ~1e-7 components that must not be taken as pivots (they would be amplified).
+  ReducedRowEchelon(M, 1e-4);
+  for (int r = 0; r < M.rows(); ++r) {
+    rep.unidentifiable.push_back(NameCombination(M.row(r).transpose(), robot));
+  }
+  return rep;
+}
+
+double ObservabilityIndexO1(const std::vector<double>& identifiable_singular_values) {
+  const int m = static_cast<int>(identifiable_singular_values.size());
+  if (m == 0) return 0.0;
+  double log_sum = 0.0;
+  for (double s : identifiable_singular_values) {
+    if (!(s > 0.0)) return 0.0;
+    log_sum += std::log(s);
+  }
+  return std::exp(log_sum / m) / std::sqrt(static_cast<double>(m));
+}
+
+}  // namespace twin

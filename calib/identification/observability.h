@@ -1,0 +1,57 @@
+// Identifiability of the kinematic parameters from an error model E = Phi dphi (Zhu et al. 2019,
+// eq. 21), and the observability index O1 (eq. 34). DESIGN.md convention 8: combinations of
+// parameters that the data cannot see are named and reported, not regularized away.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "calib/model/parameters.h"
+
+namespace twin {
+
+/// Characteristic length [m] dividing the length columns' units: Phi's length columns are
+/// multiplied by it so that a metre and a radian weigh about alike for a ~1 m arm (a 1 mrad
+/// error moves the tool about 1 mm). Without it the SVD would mix m and rad arbitrarily.
+constexpr double kObservabilityCharacteristicLength = 1.0;
+
+/// Result of AnalyseObservability. All bases are in scaled parameter coordinates x, where a
+/// physical correction is dphi = column_scale.asDiagonal() * x (SI units: m, rad).
+struct ObservabilityReport {
+  int rank = 0;                              ///< number of identifiable directions
+  std::vector<double> singular_values;       ///< of the column-scaled matrix, descending
+  /// One named combination per unidentifiable direction, e.g. "r2.link1.theta" or
+  /// "0.707 r2.link2.d - 0.707 r2.link3.d" (SI coefficients of a unit vector; the basis is the
+  /// reduced row echelon form of the null-space basis, coefficients below 1e-6 dropped).
+  std::vector<std::string> unidentifiable;
+  Eigen::MatrixXd identifiable_basis;        ///< kNumParams x rank, orthonormal columns
+  Eigen::MatrixXd null_basis;                ///< kNumParams x (kNumParams - rank), orthonormal
+  ParameterVector column_scale = ParameterVector::Ones();  ///< scaled -> SI factor per column
+};
+
+/// SVD of Phi (rows x kNumParams, columns in parameters.h order) after scaling its length
+/// columns by kObservabilityCharacteristicLength; rank = number of singular values above
+/// relative_tolerance * sigma_max. `known_invariants` are parameter directions (SI) known from
+/// theory to be unobservable (for example a uniform scale of all lengths for line constraints):
+/// the null space is then the span of Phi's numerical null space and these directions, so they
+/// land in it even where noisy or inconsistent data give them a small non-zero singular value;
+/// singular_values are then those of Phi restricted to the complement. `robot` prefixes the
+/// names. Throws InputError for a wrong column count or tolerance outside (0, 1).
+ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi, const std::string& robot,
+                                         double relative_tolerance,
+                                         const std::vector<ParameterVector>& known_invariants = {});
+
+/// Observability index O1 of eq. 34: (sigma_1 ... sigma_m)^(1/m) / sqrt(m), m the number of
+/// values given. Pass the identifiable singular values only (the first `rank` of a report): an
+/// unidentifiable direction has sigma = 0 and would zero the product whatever the poses, so O1
+/// could no longer rank pose sets. Computed through logarithms (no overflow). Returns 0 for an
+/// empty list or any non-positive value.
+double ObservabilityIndexO1(const std::vector<double>& identifiable_singular_values);
+
+/// Readable name of an SI parameter direction (unit-normalized, |coefficients| < 1e-6
+/// dropped), e.g. "0.707 r2.link2.d - 0.707 r2.link3.d"; a single term is just its name.
+std::string NameCombination(const ParameterVector& direction, const std::string& robot);
+
+}  // namespace twin

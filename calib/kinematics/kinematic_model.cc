@@ -1,0 +1,104 @@
+#include "calib/kinematics/kinematic_model.h"
+
+#include <cmath>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+
+#include "calib/common/errors.h"
+
+namespace twin {
+namespace {
+
+void RequireFinite(double v, const std::string& where, const std::string& field) {
+  if (!std::isfinite(v)) throw InputError(where, field + " must be a finite number, got " +
+                                                     std::to_string(v));
+}
+
+void RequireRigid(const Transform& X, const std::string& where, const std::string& field) {
+  const Matrix3 R = X.linear();
+  if (!X.matrix().allFinite() || (R.transpose() * R - Matrix3::Identity()).norm() > 1e-9 ||
+      R.determinant() < 0.0) {
+    throw InputError(where, field + " must be a rigid transform (orthonormal, right-handed)");
+  }
+}
+
+}  // namespace
+
+Transform LinkTransform(const DhParameters& dh, double q) {
+  const double th = dh.theta_offset + q;
+  const double ct = std::cos(th), st = std::sin(th);
+  const double ca = std::cos(dh.alpha), sa = std::sin(dh.alpha);
+  const double cb = std::cos(dh.beta), sb = std::sin(dh.beta);
+  // Eq. 2: RotZ(theta) TransZ(d) TransX(a) RotX(alpha) RotY(beta), written out.
+  Matrix3 R;
+  R << ct * cb - st * sa * sb, -st * ca, ct * sb + st * sa * cb,
+       st * cb + ct * sa * sb, ct * ca, st * sb - ct * sa * cb,
+       -ca * sb, sa, ca * cb;
+  Transform X = Transform::Identity();
+  X.linear() = R;
+  X.translation() << dh.a * ct, dh.a * st, dh.d;
+  return X;
+}
+
+void ValidateModel(const KinematicModel& model, const std::string& where) {
+  if (model.name.empty()) throw InputError(where, "robot name must not be empty");
+  RequireRigid(model.X_BL0, where, "base transform");
+  RequireRigid(model.X_L7E, where, "end transform");
+  for (int i = 0; i < kNumLinks; ++i) {
+    const Link& l = model.links[i];
+    const std::string f = "link " + std::to_string(i + 1) + " (" + l.name + ")";
+    if (l.name.empty()) throw InputError(where, f + ": name must not be empty");
+    RequireFinite(l.dh.theta_offset, where, f + " theta_offset");
+    RequireFinite(l.dh.d, where, f + " d");
+    RequireFinite(l.dh.a, where, f + " a");
+    RequireFinite(l.dh.alpha, where, f + " alpha");
+    RequireFinite(l.dh.beta, where, f + " beta");
+    if (i < kNumJoints) {
+      RequireFinite(l.limits.lower, where, f + " lower limit");
+      RequireFinite(l.limits.upper, where, f + " upper limit");
+      if (!(l.limits.lower < l.limits.upper)) {
+        std::ostringstream os;
+        os << f << ": joint lower limit " << l.limits.lower << " rad must be below upper limit "
+           << l.limits.upper << " rad";
+        throw InputError(where, os.str());
+      }
+    }
+    if (!std::isfinite(l.inertia.mass) || l.inertia.mass < 0.0) {
+      throw InputError(where, f + ": mass must be finite and >= 0 kg, got " +
+                                  std::to_string(l.inertia.mass));
+    }
+    if (!l.inertia.p_LiCom.allFinite() || !l.inertia.I_Com.allFinite()) {
+      throw InputError(where, f + ": centre of mass and inertia must be finite");
+    }
+    if ((l.inertia.I_Com - l.inertia.I_Com.transpose()).norm() > 1e-12) {
+      throw InputError(where, f + ": inertia tensor must be symmetric");
+    }
+    if (l.inertia.mass > 0.0) {
+      Eigen::SelfAdjointEigenSolver<Matrix3> eig(l.inertia.I_Com);
+      const Vector3 ev = eig.eigenvalues();
+      // Principal moments must be positive and satisfy the triangle inequality.
+      if (ev.minCoeff() <= 0.0 || ev(0) + ev(1) < ev(2) * (1.0 - 1e-9)) {
+        throw InputError(where, f + ": inertia tensor is not physical (principal moments must "
+                                    "be positive and satisfy the triangle inequality)");
+      }
+    }
+  }
+}
+
+bool WithinLimits(const KinematicModel& model, const JointVector& q) {
+  for (int i = 0; i < kNumJoints; ++i) {
+    if (q(i) < model.links[i].limits.lower || q(i) > model.links[i].limits.upper) return false;
+  }
+  return true;
+}
+
+JointVector MidRange(const KinematicModel& model) {
+  JointVector q;
+  for (int i = 0; i < kNumJoints; ++i) {
+    q(i) = 0.5 * (model.links[i].limits.lower + model.links[i].limits.upper);
+  }
+  return q;
+}
+
+}  // namespace twin

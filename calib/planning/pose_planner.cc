@@ -1,0 +1,471 @@
+#include "calib/planning/pose_planner.h"
+
+#include <atomic>
+#include <thread>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <sstream>
+
+#include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
+#include "calib/identification/linearized_identification.h"
+#include "calib/identification/observability.h"
+#include "calib/measurements/optical_axis_model.h"
+
+namespace twin {
+namespace {
+
+constexpr int kAxisHead = 7;     // P_c (3), yaw, pitch, camera roll, D
+constexpr int kPerPosition = 3;  // tilt a, tilt b, board roll
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+enum class Cause { kNone, kActiveIk, kPassiveIk, kC1, kC2, kC3, kC4, kC5 };
+
+void Count(Cause c, RejectionCounts* r) {
+  switch (c) {
+    case Cause::kActiveIk: ++r->active_ik; break;
+    case Cause::kPassiveIk: ++r->passive_ik; break;
+    case Cause::kC1: ++r->c1_joint_limits; break;
+    case Cause::kC2: ++r->c2_singularity; break;
+    case Cause::kC3: ++r->c3_visibility; break;
+    case Cause::kC4: ++r->c4_min_distance; break;
+    case Cause::kC5: ++r->c5_max_distance; break;
+    case Cause::kNone: break;
+  }
+}
+
+// The active model with an identity tool link, so that its end frame is the flange L6.
+KinematicModel FlangeModel(KinematicModel m) {
+  m.links[kNumJoints].dh = DhParameters{};
+  m.X_L7E = Transform::Identity();
+  return m;
+}
+
+// Rotation taking unit vector a onto unit vector b about their common normal.
+Eigen::AngleAxisd AlignRotation(const Vector3& a, const Vector3& b) {
+  const Vector3 c = a.cross(b);
+  const double sin_angle = c.norm();
+  if (sin_angle > 1e-12) return Eigen::AngleAxisd(std::atan2(sin_angle, a.dot(b)), c / sin_angle);
+  if (a.dot(b) > 0.0) return Eigen::AngleAxisd(0.0, Vector3::UnitZ());
+  const Vector3 other = std::abs(a.x()) < 0.9 ? Vector3::UnitX() : Vector3::UnitY();
+  return Eigen::AngleAxisd(kPi, a.cross(other).normalized());
+}
+
+// Eq. 24: min_i D_theta_i [rad].
+double JointLimitDistance(const KinematicModel& m, const JointVector& q) {
+  double d = kInf;
+  for (int i = 0; i < kNumJoints; ++i) {
+    d = std::min({d, q(i) - m.links[i].limits.lower, m.links[i].limits.upper - q(i)});
+  }
+  return d;
+}
+
+// C1 and C2 of one configuration.
+Cause CheckConfiguration(const KinematicModel& m, const JointVector& q,
+                         const PosePlannerOptions& o) {
+  if (JointLimitDistance(m, q) < o.min_joint_limit_distance) return Cause::kC1;
+  if (JacobianSingularValues(m, q)(kNumJoints - 1) < o.min_singular_value) return Cause::kC2;
+  return Cause::kNone;
+}
+
+struct Planner {
+  KinematicModel active;   // flange model
+  KinematicModel passive;
+  Transform X_BaBp;
+  Transform X_BpBa;
+  Transform X_CF;
+  PosePlannerOptions o;
+  Vector3 h, s, z;         // Bp: towards Bp (horizontal), z x h, up
+  Eigen::VectorXd lo, hi;  // bounds of one sub-particle
+  int dim = 0;             // of one sub-particle
+
+  // Decodes sub-particle x, solves IK for both robots and checks C1-C5 (eq. 25-33).
+  Cause Evaluate(const double* x, PlannedAxis* out) const {
+    const Vector3 p_c(x[0], x[1], x[2]);
+    const double yaw = x[3], pitch = x[4], roll = x[5], D = x[6];
+    const Vector3 mu = (std::cos(pitch) * std::cos(yaw) * h + std::cos(pitch) * std::sin(yaw) * s +
+                        std::sin(pitch) * z).normalized();
+    const Vector3 ref = std::abs(mu.dot(z)) < 0.9 ? z : h;
+    const Vector3 x0 = ref.cross(mu).normalized();
+    const Vector3 x_c = std::cos(roll) * x0 + std::sin(roll) * mu.cross(x0);
+    Transform X_BpC = Transform::Identity();
+    X_BpC.linear().col(0) = x_c;
+    X_BpC.linear().col(1) = mu.cross(x_c);
+    X_BpC.linear().col(2) = mu;
+    X_BpC.translation() = p_c;
+
+    const IkResult ik_a = SolveIk(active, X_BaBp * X_BpC * X_CF, MidRange(active), o.ik);
+    if (ik_a.status != IkStatus::kSuccess) return Cause::kActiveIk;
+    if (Cause c = CheckConfiguration(active, ik_a.q, o); c != Cause::kNone) return c;
+    // Camera as the active robot actually reaches it (within IK tolerance).
+    const Transform X_BpC_fk = X_BpBa * EndPose(active, ik_a.q) * X_CF.inverse();
+
+    out->camera_origin = X_BpC_fk.translation();
+    out->direction = X_BpC_fk.linear().col(2);
+    out->q_active = ik_a.q;
+    out->q_passive.assign(o.positions_per_axis, JointVector::Zero());
+    out->distances.assign(o.positions_per_axis, 0.0);
+    JointVector seed = MidRange(passive);
+    for (int i = 0; i < o.positions_per_axis; ++i) {
+      const double* t = x + kAxisHead + kPerPosition * i;
+      const Vector3 tilt = t[0] * x_c + t[1] * mu.cross(x_c);
+      const double tilt_angle = tilt.norm();
+      Vector3 n = -mu;
+      if (tilt_angle > 0.0) n = Eigen::AngleAxisd(tilt_angle, tilt / tilt_angle) * n;
+      Transform X_BpE = Transform::Identity();
+      X_BpE.linear() = (Eigen::AngleAxisd(t[2], n) *
+                        AlignRotation(o.board_normal_in_E, n))
+                           .toRotationMatrix();
+      const double d_i = D + i * o.distance_step;
+      X_BpE.translation() = p_c + d_i * mu;
+      const IkResult ik_p = SolveIk(passive, X_BpE, seed, o.ik);
+      if (ik_p.status != IkStatus::kSuccess) return Cause::kPassiveIk;
+      if (Cause c = CheckConfiguration(passive, ik_p.q, o); c != Cause::kNone) return c;
+      const Transform X_BpE_fk = EndPose(passive, ik_p.q);
+      const Vector3 n_fk = X_BpE_fk.linear() * o.board_normal_in_E;
+      const double visibility = std::acos(std::clamp(n_fk.dot(-out->direction), -1.0, 1.0));
+      if (visibility > o.max_visibility_angle) return Cause::kC3;
+      const double dist = (X_BpE_fk.translation() - out->camera_origin).norm();
+      if (dist < o.min_distance) return Cause::kC4;
+      if (dist > o.max_distance) return Cause::kC5;
+      out->q_passive[i] = ik_p.q;
+      out->distances[i] = d_i;
+      seed = ik_p.q;
+    }
+    return Cause::kNone;
+  }
+
+  double Fitness(const std::vector<PlannedAxis>& axes) const {
+    std::vector<std::vector<JointVector>> q;
+    std::vector<Vector3> mu;
+    for (const PlannedAxis& a : axes) {
+      q.push_back(a.q_passive);
+      mu.push_back(a.direction);
+    }
+    return PoseSetFitness(passive, q, mu, o.rank_tolerance);
+  }
+};
+
+struct Particle {
+  Eigen::VectorXd x, v, best_x;
+  std::vector<PlannedAxis> axes, best_axes;
+  double f = kInf, best_f = kInf;
+};
+
+std::string CountsText(const RejectionCounts& r) {
+  std::ostringstream s;
+  s << "rejected: active_ik " << r.active_ik << ", passive_ik " << r.passive_ik << ", C1 "
+    << r.c1_joint_limits << ", C2 " << r.c2_singularity << ", C3 " << r.c3_visibility << ", C4 "
+    << r.c4_min_distance << ", C5 " << r.c5_max_distance;
+  return s.str();
+}
+
+void Require(bool ok, const std::string& field, double value, const std::string& expected) {
+  if (!ok) {
+    std::ostringstream s;
+    s << "= " << value << ", expected " << expected;
+    throw InputError("PosePlannerOptions." + field, s.str());
+  }
+}
+
+}  // namespace
+
+int RejectionCounts::total() const {
+  return active_ik + passive_ik + c1_joint_limits + c2_singularity + c3_visibility +
+         c4_min_distance + c5_max_distance;
+}
+
+const char* ToString(PosePlannerStatus status) {
+  switch (status) {
+    case PosePlannerStatus::kSuccess: return "success";
+    case PosePlannerStatus::kNoFeasiblePoses: return "no_feasible_poses";
+  }
+  return "unknown";
+}
+
+void ValidatePosePlannerOptions(const PosePlannerOptions& o) {
+  Require(o.num_axes >= 1, "num_axes", o.num_axes, ">= 1");
+  Require(o.threads >= 0, "threads", o.threads, ">= 0 (0: one per hardware thread)");
+  Require(o.positions_per_axis >= 3, "positions_per_axis", o.positions_per_axis, ">= 3");
+  Require(o.swarm_size >= 1, "swarm_size", o.swarm_size, ">= 1");
+  Require(o.iterations >= 0, "iterations", o.iterations, ">= 0");
+  Require(o.runs >= 1, "runs", o.runs, ">= 1");
+  Require(std::isfinite(o.inertia) && o.inertia >= 0.0, "inertia", o.inertia, "finite >= 0");
+  Require(std::isfinite(o.learning_personal) && o.learning_personal >= 0.0, "learning_personal",
+          o.learning_personal, "finite >= 0");
+  Require(std::isfinite(o.learning_global) && o.learning_global >= 0.0, "learning_global",
+          o.learning_global, "finite >= 0");
+  Require(o.max_velocity_fraction > 0.0 && o.max_velocity_fraction <= 1.0,
+          "max_velocity_fraction", o.max_velocity_fraction, "in (0, 1]");
+  Require(std::isfinite(o.min_joint_limit_distance) && o.min_joint_limit_distance >= 0.0,
+          "min_joint_limit_distance", o.min_joint_limit_distance, "finite >= 0 rad");
+  Require(std::isfinite(o.min_singular_value) && o.min_singular_value >= 0.0,
+          "min_singular_value", o.min_singular_value, "finite >= 0");
+  Require(o.max_visibility_angle > 0.0 && o.max_visibility_angle < kPi / 2,
+          "max_visibility_angle", o.max_visibility_angle, "in (0, pi/2) rad");
+  Require(std::isfinite(o.min_distance) && o.min_distance > 0.0, "min_distance", o.min_distance,
+          "finite > 0 m");
+  Require(std::isfinite(o.max_distance) && o.max_distance > 0.0, "max_distance", o.max_distance,
+          "finite > 0 m");
+  Require(std::isfinite(o.planning_max_distance) && o.planning_max_distance > 0.0,
+          "planning_max_distance", o.planning_max_distance, "finite > 0 m");
+  Require(std::isfinite(o.distance_step) && o.distance_step > 0.0, "distance_step",
+          o.distance_step, "finite > 0 m");
+  Require(std::isfinite(o.camera_reach), "camera_reach", o.camera_reach, "finite");
+  Require(std::isfinite(o.camera_height), "camera_height", o.camera_height, "finite");
+  Require(std::isfinite(o.camera_region_half_extent) && o.camera_region_half_extent >= 0.0,
+          "camera_region_half_extent", o.camera_region_half_extent, "finite >= 0 m");
+  Require(o.axis_cone_half_angle >= 0.0 && o.axis_cone_half_angle < kPi / 2,
+          "axis_cone_half_angle", o.axis_cone_half_angle, "in [0, pi/2) rad");
+  Require(std::abs(o.board_normal_in_E.norm() - 1.0) < 1e-9, "board_normal_in_E",
+          o.board_normal_in_E.norm(), "a unit vector (value is its norm)");
+  Require(o.max_draws_per_axis >= 1, "max_draws_per_axis", o.max_draws_per_axis, ">= 1");
+  Require(o.redraws_after_update >= 0, "redraws_after_update", o.redraws_after_update, ">= 0");
+  Require(o.rank_tolerance > 0.0 && o.rank_tolerance < 1.0, "rank_tolerance", o.rank_tolerance,
+          "in (0, 1)");
+  ValidateIkOptions(o.ik);
+}
+
+double PoseSetFitness(const KinematicModel& passive,
+                      const std::vector<std::vector<JointVector>>& q_passive,
+                      const std::vector<Vector3>& directions, double rank_tolerance) {
+  std::vector<AxisSample> samples;
+  for (size_t k = 0; k < q_passive.size(); ++k) {
+    for (const JointVector& q : q_passive[k]) samples.push_back({static_cast<int>(k), q});
+  }
+  const MisalignedErrorStack stack = StackMisalignedErrors(passive, samples, directions);
+  const ObservabilityReport report = AnalyseObservability(
+      ProfiledPhi(stack), passive.name, rank_tolerance, LineConstraintInvariants(passive));
+  const std::vector<double> sv(report.singular_values.begin(),
+                               report.singular_values.begin() + report.rank);
+  const double o1 = ObservabilityIndexO1(sv);  // eq. 34
+  return o1 > 0.0 ? 1.0 / o1 : kInf;           // eq. 39
+}
+
+PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const KinematicModel& passive,
+                                    const Transform& X_BaBp, const Transform& X_FC,
+                                    const PosePlannerOptions& options) {
+  ValidatePosePlannerOptions(options);
+  ValidateModel(active, "active model");
+  ValidateModel(passive, "passive model");
+  PosePlanResult result;
+  const PosePlannerOptions& o = options;
+
+  // C4/C5 with eq. 38: D .. D + (p-1) D_step must lie in [D_min, min(D_max, planned max)].
+  const double d_hi = std::min(o.max_distance, o.planning_max_distance) -
+                      (o.positions_per_axis - 1) * o.distance_step;
+  if (d_hi < o.min_distance) {
+    std::ostringstream s;
+    s << "distance window empty: " << o.positions_per_axis << " positions " << o.distance_step
+      << " m apart starting at D_min = " << o.min_distance
+      << " m exceed min(max_distance, planning_max_distance) = "
+      << std::min(o.max_distance, o.planning_max_distance) << " m (C4/C5)";
+    result.reason = s.str();
+    return result;
+  }
+
+  Planner pl;
+  pl.active = FlangeModel(active);
+  pl.passive = passive;
+  pl.X_BaBp = X_BaBp;
+  pl.X_BpBa = X_BaBp.inverse();
+  pl.X_CF = X_FC.inverse();
+  pl.o = o;
+  pl.z = Vector3::UnitZ();
+  const Vector3 p_BpBa = pl.X_BpBa.translation();
+  Vector3 to_bp = -p_BpBa;
+  to_bp.z() = 0.0;
+  pl.h = to_bp.norm() > 1e-9 ? to_bp.normalized() : Vector3::UnitX();
+  pl.s = pl.z.cross(pl.h);
+  pl.dim = kAxisHead + kPerPosition * o.positions_per_axis;
+  pl.lo.resize(pl.dim);
+  pl.hi.resize(pl.dim);
+  const Vector3 centre = p_BpBa + o.camera_reach * pl.h + o.camera_height * pl.z;
+  const double e = o.camera_region_half_extent;
+  const double tilt = 0.99 * o.max_visibility_angle / std::sqrt(2.0);  // |(a, b)| < C3 limit
+  for (int i = 0; i < 3; ++i) {
+    pl.lo(i) = centre(i) - e;
+    pl.hi(i) = centre(i) + e;
+  }
+  pl.lo.segment<2>(3).setConstant(-o.axis_cone_half_angle);
+  pl.hi.segment<2>(3).setConstant(o.axis_cone_half_angle);
+  pl.lo(5) = -kPi;
+  pl.hi(5) = kPi;
+  // 1 um inside [D_min, D_max]: the IK tolerance (1e-7 m) must not push a bound pose out.
+  pl.lo(6) = o.min_distance + 1e-6;
+  pl.hi(6) = std::max(pl.lo(6), d_hi - 1e-6);
+  for (int i = 0; i < o.positions_per_axis; ++i) {
+    const int b = kAxisHead + kPerPosition * i;
+    pl.lo.segment<2>(b).setConstant(-tilt);
+    pl.hi.segment<2>(b).setConstant(tilt);
+    pl.lo(b + 2) = -kPi;
+    pl.hi(b + 2) = kPi;
+  }
+  const Eigen::VectorXd range = pl.hi - pl.lo;
+  const Eigen::VectorXd v_max = o.max_velocity_fraction * range;
+  const int q = o.num_axes;
+
+  // One PSO run (eq. 35-41); runs are independent (own seed), so they run in parallel.
+  struct RunOutput {
+    std::vector<double> history;
+    std::vector<PlannedAxis> axes;
+    double best = kInf;
+    RejectionCounts rejections;
+    int evaluations = 0;
+    std::string failure;  // non-empty: no feasible start
+  };
+  auto run_swarm = [&](int run) {
+    RunOutput out;
+    std::seed_seq seq{static_cast<std::uint32_t>(o.seed), static_cast<std::uint32_t>(o.seed >> 32),
+                      static_cast<std::uint32_t>(run)};
+    std::mt19937_64 rng(seq);
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+
+    // A random sub-particle for axis k of p, redrawn until feasible (step 1 and 3).
+    auto draw = [&](Particle* p, int k, int attempts) {
+      Eigen::VectorXd x(pl.dim);
+      for (int a = 0; a < attempts; ++a) {
+        for (int i = 0; i < pl.dim; ++i) x(i) = pl.lo(i) + u01(rng) * range(i);
+        ++out.evaluations;
+        const Cause c = pl.Evaluate(x.data(), &p->axes[k]);
+        if (c == Cause::kNone) {
+          p->x.segment(k * pl.dim, pl.dim) = x;
+          return true;
+        }
+        Count(c, &out.rejections);
+      }
+      return false;
+    };
+
+    std::vector<Particle> swarm(o.swarm_size);
+    Eigen::VectorXd g_x;
+    std::vector<PlannedAxis> g_axes;
+    double g_f = kInf;
+    for (Particle& p : swarm) {
+      p.x.setZero(q * pl.dim);
+      p.v.setZero(q * pl.dim);
+      p.axes.resize(q);
+      for (int k = 0; k < q; ++k) {
+        if (!draw(&p, k, o.max_draws_per_axis)) {
+          std::ostringstream s;
+          s << "no feasible pose for axis " << k << " of run " << run << " in "
+            << o.max_draws_per_axis << " draws";
+          out.failure = s.str();
+          return out;
+        }
+      }
+      p.f = pl.Fitness(p.axes);
+      p.best_x = p.x;
+      p.best_axes = p.axes;
+      p.best_f = p.f;
+      if (p.f < g_f) {
+        g_f = p.f;
+        g_x = p.x;
+        g_axes = p.axes;
+      }
+    }
+    if (g_x.size() == 0) {  // every fitness infinite: follow the first particle
+      g_x = swarm[0].x;
+      g_axes = swarm[0].axes;
+    }
+    out.history.push_back(g_f);
+
+    for (int it = 0; it < o.iterations; ++it) {
+      for (Particle& p : swarm) {
+        const Eigen::VectorXd x_old = p.x;
+        const std::vector<PlannedAxis> axes_old = p.axes;
+        for (int i = 0; i < p.x.size(); ++i) {  // eq. 40-41
+          const double r1 = u01(rng), r2 = u01(rng);
+          const int j = i % pl.dim;
+          double vi = o.inertia * p.v(i) + o.learning_personal * r1 * (p.best_x(i) - p.x(i)) +
+                      o.learning_global * r2 * (g_x(i) - p.x(i));
+          vi = std::clamp(vi, -v_max(j), v_max(j));
+          p.v(i) = vi;
+          p.x(i) = std::clamp(p.x(i) + vi, pl.lo(j), pl.hi(j));
+        }
+        for (int k = 0; k < q; ++k) {  // step 3: infeasible sub-particles are redrawn
+          ++out.evaluations;
+          const Cause c = pl.Evaluate(p.x.data() + k * pl.dim, &p.axes[k]);
+          if (c == Cause::kNone) continue;
+          Count(c, &out.rejections);
+          if (draw(&p, k, o.redraws_after_update)) continue;
+          p.x.segment(k * pl.dim, pl.dim) = x_old.segment(k * pl.dim, pl.dim);
+          p.v.segment(k * pl.dim, pl.dim).setZero();
+          p.axes[k] = axes_old[k];
+        }
+        p.f = pl.Fitness(p.axes);
+        if (p.f < p.best_f) {
+          p.best_f = p.f;
+          p.best_x = p.x;
+          p.best_axes = p.axes;
+        }
+        if (p.f < g_f) {
+          g_f = p.f;
+          g_x = p.x;
+          g_axes = p.axes;
+        }
+      }
+      out.history.push_back(g_f);
+    }
+    out.best = g_f;
+    out.axes = g_axes;
+    return out;
+  };
+
+  std::vector<RunOutput> runs(o.runs);
+  const int threads = std::max(1, std::min(o.threads > 0 ? o.threads
+                                                         : static_cast<int>(std::thread::hardware_concurrency()),
+                                           o.runs));
+  std::atomic<int> next{0};
+  auto worker = [&] {
+    for (int r = next++; r < o.runs; r = next++) runs[r] = run_swarm(r);
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+
+  double best_overall = kInf;
+  for (int run = 0; run < o.runs; ++run) {
+    RunOutput& r = runs[run];
+    RejectionCounts& c = result.rejections;
+    c.active_ik += r.rejections.active_ik;
+    c.passive_ik += r.rejections.passive_ik;
+    c.c1_joint_limits += r.rejections.c1_joint_limits;
+    c.c2_singularity += r.rejections.c2_singularity;
+    c.c3_visibility += r.rejections.c3_visibility;
+    c.c4_min_distance += r.rejections.c4_min_distance;
+    c.c5_max_distance += r.rejections.c5_max_distance;
+    result.evaluations += r.evaluations;
+    if (!r.failure.empty()) break;  // counts as if the runs had run one after the other
+  }
+  for (int run = 0; run < o.runs; ++run) {  // the first failing run decides, as if sequential
+    if (!runs[run].failure.empty()) {
+      result.status = PosePlannerStatus::kNoFeasiblePoses;
+      result.reason = runs[run].failure + "; " + CountsText(result.rejections);
+      result.axes.clear();
+      return result;
+    }
+  }
+  for (int run = 0; run < o.runs; ++run) {
+    result.fitness_history.push_back(runs[run].history);
+    if (runs[run].best < best_overall || result.best_run < 0) {
+      best_overall = runs[run].best;
+      result.best_run = run;
+      result.axes = runs[run].axes;
+    }
+  }
+  result.best_fitness = best_overall;
+  if (!std::isfinite(best_overall)) {
+    result.reason = "feasible poses found, but O1 = 0 for all of them (unidentifiable set)";
+    result.axes.clear();
+    return result;
+  }
+  result.status = PosePlannerStatus::kSuccess;
+  return result;
+}
+
+}  // namespace twin

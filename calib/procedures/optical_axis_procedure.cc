@@ -1,0 +1,506 @@
+#include "calib/procedures/optical_axis_procedure.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include <opencv2/calib3d.hpp>
+
+#include "calib/cell/cell_moves.h"
+#include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
+#include "calib/kinematics/inverse_kinematics.h"
+
+namespace twin {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+std::string Fixed(double v, int digits) {
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(digits);
+  os << v;
+  return os.str();
+}
+
+// The feature point P in the camera frame from the board's pose: solvePnP (IPPE, planar) on
+// all inner corners with the known square length, estimated intrinsics and distortion. The
+// centre corner is the board's centre of symmetry, so P does not depend on how OpenCV ordered
+// the corners. nullopt when the board is not found or lies behind the camera.
+std::optional<Vector3> FeaturePointInCamera(const cv::Mat& image, const BoardGeometry& board,
+                                            const IntrinsicsResult& intr) {
+  const FeatureDetection det = DetectFeaturePoint(image, board);
+  if (det.status != DetectionStatus::kFound) return std::nullopt;
+  const cv::Size n = det.pattern_size;
+  std::vector<cv::Point3d> object;
+  for (int r = 0; r < n.height; ++r) {
+    for (int c = 0; c < n.width; ++c) {
+      object.emplace_back((c - n.width / 2) * board.square_m, (r - n.height / 2) * board.square_m,
+                          0.0);
+    }
+  }
+  std::vector<cv::Point2d> pixels(det.corners.begin(), det.corners.end());
+  const PinholeIntrinsics& k = intr.intrinsics;
+  const DistortionCoefficients& d = intr.distortion;
+  const cv::Matx33d K(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
+  const cv::Vec<double, 5> dist(d.k1, d.k2, d.p1, d.p2, d.k3);
+  cv::Vec3d rvec, tvec;
+  if (!cv::solvePnP(object, pixels, K, dist, rvec, tvec, false, cv::SOLVEPNP_IPPE)) {
+    return std::nullopt;
+  }
+  // Refine by Levenberg-Marquardt on the reprojection error.
+  cv::solvePnPRefineLM(object, pixels, K, dist, rvec, tvec);
+  if (!(tvec[2] > 0)) return std::nullopt;
+  return Vector3(tvec[0], tvec[1], tvec[2]);
+}
+
+// The samples of `axes` (plan indices), renumbered 0.. in that order; axes with fewer than 3
+// samples are dropped (and left out of `kept`).
+std::vector<AxisSample> Subset(const std::vector<AxisSample>& samples, const std::vector<int>& axes,
+                               std::vector<int>* kept = nullptr) {
+  std::vector<AxisSample> out;
+  int next = 0;
+  for (int k : axes) {
+    std::vector<AxisSample> these;
+    for (const AxisSample& s : samples) {
+      if (s.axis == k) these.push_back(s);
+    }
+    if (these.size() < 3) continue;
+    for (AxisSample& s : these) {
+      s.axis = next;
+      out.push_back(s);
+    }
+    if (kept) kept->push_back(k);
+    ++next;
+  }
+  return out;
+}
+
+MisalignedSummary Misaligned(const KinematicModel& before, const KinematicModel& after,
+                             const std::vector<AxisSample>& samples) {
+  MisalignedSummary m;
+  m.samples = static_cast<int>(samples.size());
+  if (samples.empty()) return m;
+  m.before = MeanMisalignedErrorNorm(before, samples);
+  m.after = MeanMisalignedErrorNorm(after, samples);
+  return m;
+}
+
+}  // namespace
+
+void ValidateOpticalAxisOptions(const OpticalAxisOptions& o) {
+  const std::string where = "OpticalAxisOptions";
+  if (o.robots.empty() || o.robots.size() > 2) {
+    throw InputError(where + ".robots", "expected one or two robots to calibrate, got " +
+                                            std::to_string(o.robots.size()));
+  }
+  std::set<int> seen;
+  for (int r : o.robots) {
+    if (r != 0 && r != 1) {
+      throw InputError(where + ".robots", "robot index " + std::to_string(r) + " is not 0 or 1");
+    }
+    if (!seen.insert(r).second) {
+      throw InputError(where + ".robots", "robot " + std::to_string(r) + " listed twice");
+    }
+  }
+  if (o.intrinsics_views < 3) {
+    throw InputError(where + ".intrinsics_views",
+                     std::to_string(o.intrinsics_views) + ": expected >= 3 views");
+  }
+  ValidateIntrinsicsOptions(o.intrinsics);
+  ValidatePosePlannerOptions(o.planner);
+  ValidateServoOptions(o.servo);
+  ValidateLinearizedIdentificationOptions(o.linearized);
+  ValidateNonlinearIdentificationOptions(o.nonlinear);
+  if (o.calibration_axes < 1 || o.calibration_axes > o.planner.num_axes) {
+    throw InputError(where + ".calibration_axes",
+                     std::to_string(o.calibration_axes) + ": expected 1 .. num_axes (" +
+                         std::to_string(o.planner.num_axes) + ")");
+  }
+  if (o.kept_images < 0) {
+    throw InputError(where + ".kept_images", std::to_string(o.kept_images) + ": expected >= 0");
+  }
+}
+
+KinematicModel BoardRobotModel(const KinematicModel& nominal, const Transform& X_FT) {
+  KinematicModel m = nominal;
+  // The mount's translation becomes link 7's eq. 2 parameters (theta = atan2(y, x), d = z,
+  // a = the distance from the flange axis) and its rotation stays in X_L7E, so that link 7's
+  // a, theta and d move the feature point radially, tangentially and along z to first order
+  // wherever it sits. With the whole mount in X_L7E (identity link 7), a point on the flange
+  // plane's y axis had no first-order parameter along y: exact synthetic data with depths
+  // stopped at 0.05 mm (tests/bench/calibration_cli_test.cc).
+  const Vector3 p = X_FT.translation();
+  DhParameters dh;
+  const double radial = std::hypot(p.x(), p.y());
+  dh.theta_offset = radial > 1e-9 ? std::atan2(p.y(), p.x()) : 0.0;
+  dh.d = p.z();
+  dh.a = radial;
+  m.links[kNumJoints].dh = dh;
+  m.links[kNumJoints].inertia = LinkInertia{};
+  m.X_L7E = LinkTransform(dh, 0.0).inverse() * X_FT;  // L7 X_L7E = X_FT exactly
+  return m;
+}
+
+namespace {
+
+// The smallest identifiable singular value of the identification of `samples` from the
+// nominal model (Ceres formulation, scale measurement included when recorded); 0 when the
+// identification fails.
+double SmallestIdentifiableSingularValue(const KinematicModel& nominal,
+                                         const std::vector<AxisSample>& samples,
+                                         const NonlinearIdentificationOptions& options) {
+  const NonlinearIdentificationResult r = IdentifyNonlinear(nominal, samples, options);
+  const ObservabilityReport& o = r.observability;
+  if (r.status == NonlinearIdentificationStatus::kFailed || o.rank < 1 ||
+      static_cast<int>(o.singular_values.size()) < o.rank) {
+    return 0.0;
+  }
+  return o.singular_values[o.rank - 1];
+}
+
+}  // namespace
+
+void SplitAxes(const KinematicModel& nominal, const std::vector<AxisSample>& samples,
+               int num_axes, const OpticalAxisOptions& options, std::vector<int>* cal_axes,
+               std::vector<int>* val_axes,
+               std::vector<std::pair<std::vector<int>, double>>* candidates) {
+  cal_axes->clear();
+  val_axes->clear();
+  candidates->clear();
+  std::vector<int> usable;  // axes with 3 or more aligned poses
+  for (int k = 0; k < num_axes; ++k) {
+    std::vector<int> kept;
+    Subset(samples, {k}, &kept);
+    if (!kept.empty()) usable.push_back(k);
+  }
+  const int n = std::min<int>(options.calibration_axes, static_cast<int>(usable.size()));
+  if (options.split == OpticalAxisOptions::Split::kFirst ||
+      n >= static_cast<int>(usable.size()) || n < 1) {
+    for (int k = 0; k < num_axes; ++k) {
+      (k < options.calibration_axes ? *cal_axes : *val_axes).push_back(k);
+    }
+    return;
+  }
+  // Every n-subset of the usable axes (C(5, 3) = 10 for the paper's plan).
+  std::vector<bool> pick(usable.size(), false);
+  std::fill(pick.begin(), pick.begin() + n, true);
+  double best = -1.0;
+  do {
+    std::vector<int> subset;
+    for (size_t i = 0; i < usable.size(); ++i) {
+      if (pick[i]) subset.push_back(usable[i]);
+    }
+    const double sigma = SmallestIdentifiableSingularValue(nominal, Subset(samples, subset),
+                                                           options.nonlinear);
+    candidates->emplace_back(subset, sigma);
+    if (sigma > best) {
+      best = sigma;
+      *cal_axes = subset;
+    }
+  } while (std::prev_permutation(pick.begin(), pick.end()));
+  for (int k = 0; k < num_axes; ++k) {
+    if (std::find(cal_axes->begin(), cal_axes->end(), k) == cal_axes->end()) {
+      val_axes->push_back(k);
+    }
+  }
+}
+
+void IdentifyRobot(const std::vector<int>& calibration_axes,
+                   const std::vector<int>& validation_axes, const OpticalAxisOptions& options,
+                   RobotCalibration* rc) {
+  std::vector<int> cal_kept, val_kept;
+  const std::vector<AxisSample> cal = Subset(rc->samples, calibration_axes, &cal_kept);
+  const std::vector<AxisSample> val = Subset(rc->samples, validation_axes, &val_kept);
+  rc->calibration_axes = cal_kept;
+  rc->validation_axes = val_kept;
+  const std::string name = rc->nominal.name.empty() ? "robot " + std::to_string(rc->robot)
+                                                    : rc->nominal.name;
+  if (cal.empty()) {
+    throw InputError(name + " identification",
+                     "no calibration axis has 3 or more aligned poses; nothing to identify");
+  }
+  if (cal_kept.size() < 2) {
+    // One line through the points of one axis fits any model that keeps them collinear: the
+    // problem is rank-deficient far beyond the named combinations.
+    throw InputError(name + " identification",
+                     "only one calibration axis (plan axis " + std::to_string(cal_kept[0] + 1) +
+                         ") has 3 or more aligned poses; the collinearity constraint needs at "
+                         "least 2 optical axes (see the skipped poses and axes above)");
+  }
+  const auto t0 = Clock::now();
+  // Eq. 45-49: the paper's recursive linearized LM.
+  rc->linearized = IdentifyFromOpticalAxes(rc->nominal, cal, options.linearized);
+  // Ceres with nuisance lines (and the scale measurement when depths were recorded).
+  rc->nonlinear = IdentifyNonlinear(rc->nominal, cal, options.nonlinear);
+  if (rc->nonlinear.status != NonlinearIdentificationStatus::kFailed) {
+    rc->identified = rc->nonlinear.model;
+    rc->method = rc->nonlinear.depth_used ? "ceres_with_scale" : "ceres";
+  } else {
+    rc->identified = rc->linearized.model;
+    rc->method = "linearized";
+  }
+  rc->identification_s += Seconds(t0);
+  rc->calibration_error = Misaligned(rc->nominal, rc->identified, cal);
+  rc->validation_error = Misaligned(rc->nominal, rc->identified, val);
+  int num_axes = 0;
+  for (const AxisSample& s : rc->samples) num_axes = std::max(num_axes, s.axis + 1);
+  rc->per_axis.assign(num_axes, MisalignedSummary{});
+  for (int k = 0; k < num_axes; ++k) {
+    rc->per_axis[k] = Misaligned(rc->nominal, rc->identified, Subset(rc->samples, {k}));
+  }
+  rc->holdout = rc->identified;
+  rc->refit = false;
+  if (options.refit_all_axes && !val_kept.empty()) {
+    std::vector<int> all = cal_kept;
+    all.insert(all.end(), val_kept.begin(), val_kept.end());
+    std::sort(all.begin(), all.end());
+    const auto t1 = Clock::now();
+    NonlinearIdentificationResult f =
+        IdentifyNonlinear(rc->nominal, Subset(rc->samples, all), options.nonlinear);
+    rc->identification_s += Seconds(t1);
+    if (f.status != NonlinearIdentificationStatus::kFailed) {
+      rc->identified = f.model;
+      rc->method = std::string(f.depth_used ? "ceres_with_scale" : "ceres") + "_all_axes";
+      rc->refit_result = std::move(f);
+      rc->refit = true;
+    }
+  }
+}
+
+OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& knowledge,
+                                            const OpticalAxisOptions& options) {
+  ValidateOpticalAxisOptions(options);
+  ValidateBoardGeometry(knowledge.board, "CellKnowledge.board");
+  for (int k = 0; k < 2; ++k) ValidateModel(knowledge.nominal[k], "CellKnowledge.nominal[" + std::to_string(k) + "]");
+  auto say = [&](const std::string& line) {
+    if (options.progress) options.progress(line);
+  };
+  auto name = [&](int robot) {
+    return knowledge.nominal[robot].name.empty() ? "robot " + std::to_string(robot + 1)
+                                                 : knowledge.nominal[robot].name;
+  };
+  OpticalAxisResult out;
+  // Where the cell starts: the camera sees the board (the scenario's set-up pose).
+  const std::array<JointVector, 2> home = {cell.ReadEncoders(0), cell.ReadEncoders(1)};
+  auto go_home = [&](int robot) {
+    const MoveResult m = MoveAvoidingSweep(cell, robot, home[robot]);
+    if (m.status != MoveStatus::kSettled) {
+      throw InputError(name(robot), std::string("cannot return to the start pose: ") +
+                                        ToString(m.status) + ": " + m.reason);
+    }
+  };
+
+  // 1. Intrinsics (section VI.A), board views around the start pose.
+  {
+    const auto t0 = Clock::now();
+    const int board_robot = 1 - cell.CameraRobot();
+    say("intrinsics: " + std::to_string(options.intrinsics_views) + " board views (Zhang)");
+    // Views designed in the camera frame (spread over the image, tilted) from the rough
+    // knowledge: the camera in the board robot's base.
+    const int camera_robot = 1 - board_robot;
+    const Transform X_BbBa = board_robot == 1 ? Transform(knowledge.X_B1B2.inverse())
+                                              : knowledge.X_B1B2;
+    const Transform X_BbC =
+        X_BbBa * ForwardKinematics(knowledge.nominal[camera_robot], home[camera_robot]).flange() *
+        knowledge.X_FC;
+    const std::vector<JointVector> views = PlannedIntrinsicsViews(
+        BoardRobotModel(knowledge.nominal[board_robot], knowledge.X_FT), home[board_robot], X_BbC,
+        options.intrinsics_views, options.seed);
+    out.intrinsics = CalibrateIntrinsics(cell, board_robot, views, knowledge.board,
+                                         options.intrinsics);
+    go_home(board_robot);
+    out.intrinsics_s = Seconds(t0);
+    if (out.intrinsics.status != IntrinsicsStatus::kSuccess) {
+      throw InputError("intrinsics", std::string(ToString(out.intrinsics.status)) + ": " +
+                                         out.intrinsics.reason +
+                                         " (does the camera see the board at the start pose?)");
+    }
+    const PinholeIntrinsics& k = out.intrinsics.intrinsics;
+    say("intrinsics: fx " + Fixed(k.fx, 2) + ", fy " + Fixed(k.fy, 2) + ", cx " + Fixed(k.cx, 2) +
+        ", cy " + Fixed(k.cy, 2) + " px, RMS " + Fixed(out.intrinsics.rms_px, 3) + " px from " +
+        std::to_string(out.intrinsics.views_used) + " views");
+  }
+
+  for (const int r : options.robots) {
+    const int a = 1 - r;
+    // 5. Roles: the camera must be on the other robot (section II: exchange the roles).
+    if (cell.CameraRobot() != a) {
+      go_home(0);
+      go_home(1);
+      say("exchanging camera and board: " + name(r) + " becomes the passive robot");
+      const MoveResult ex = cell.ExchangeTools();
+      if (ex.status != MoveStatus::kSettled || cell.CameraRobot() != a) {
+        throw InputError(name(r), std::string("cannot exchange the tools: ") +
+                                      ToString(ex.status) + ": " + ex.reason);
+      }
+    }
+    RobotCalibration rc;
+    rc.robot = r;
+    rc.camera_robot = a;
+    rc.nominal = BoardRobotModel(knowledge.nominal[r], knowledge.X_FT);
+    const KinematicModel& active = knowledge.nominal[a];
+    const Transform X_BaBp = a == 0 ? knowledge.X_B1B2 : Transform(knowledge.X_B1B2.inverse());
+
+    // 2a. Pose planning (section IV).
+    auto t0 = Clock::now();
+    say(name(r) + ": planning " + std::to_string(options.planner.num_axes) + " axes x " +
+        std::to_string(options.planner.positions_per_axis) + " positions (PSO, " +
+        std::to_string(options.planner.runs) + " runs x " +
+        std::to_string(options.planner.iterations) + " iterations)");
+    rc.plan = PlanCalibrationPoses(active, rc.nominal, X_BaBp, knowledge.X_FC, options.planner);
+    rc.planning_s = Seconds(t0);
+    if (rc.plan.status != PosePlannerStatus::kSuccess) {
+      throw InputError(name(r) + " planning", rc.plan.reason);
+    }
+    {
+      std::ostringstream os;
+      os.precision(4);
+      os << name(r) << ": best fitness 1/O1 = " << rc.plan.best_fitness << " (run "
+         << rc.plan.best_run + 1 << "), " << Fixed(rc.planning_s, 1) << " s";
+      say(os.str());
+    }
+
+    // 2b. Measurement steps 1-5 of section VI.C.
+    t0 = Clock::now();
+    ServoSetup setup;
+    setup.active_model = active;
+    setup.passive_model = rc.nominal;
+    setup.passive_robot = r;
+    setup.R_BaBp = X_BaBp.linear();
+    setup.R_FC = knowledge.X_FC.linear();
+    setup.intrinsics = out.intrinsics.intrinsics;
+    setup.board = knowledge.board;
+    const int num_axes = static_cast<int>(rc.plan.axes.size());
+    for (int k = 0; k < num_axes; ++k) {
+      const PlannedAxis& axis = rc.plan.axes[k];
+      const int p = static_cast<int>(axis.q_passive.size());
+      auto fail_axis = [&](const std::string& reason) {
+        for (int i = 0; i < p; ++i) rc.failed.push_back({k, i, "active_move_failed", reason, 0});
+        say(name(r) + ": axis " + std::to_string(k + 1) + " skipped: " + reason);
+      };
+      // Step 1: the active robot to its pose (after the passive robot moved to its first
+      // position: the planned pair is collision-free by construction of the axis geometry).
+      MoveResult m = MoveAvoidingSweep(cell, r, axis.q_passive[0]);
+      if (m.status == MoveStatus::kSettled) m = MoveAvoidingSweep(cell, a, axis.q_active);
+      if (m.status != MoveStatus::kSettled) {
+        // One retry from the start poses (a path between two planned poses may sweep through
+        // the other robot).
+        if (MoveAvoidingSweep(cell, r, home[r]).status == MoveStatus::kSettled &&
+            MoveAvoidingSweep(cell, a, axis.q_active).status == MoveStatus::kSettled) {
+          m = MoveResult{};
+        }
+      }
+      if (m.status != MoveStatus::kSettled) {
+        fail_axis(std::string(ToString(m.status)) + ": " + m.reason);
+        continue;
+      }
+      setup.q_active = cell.ReadEncoders(a);
+      const Matrix3 R_BpC = setup.R_BaBp.transpose() *
+                            ForwardKinematics(active, setup.q_active).flange().linear() *
+                            setup.R_FC;
+      Vector3 correction = Vector3::Zero();
+      bool have_correction = false;
+      // Steps 2-4: each position servoed onto the axis and its joint angles saved.
+      for (int i = 0; i < p; ++i) {
+        const JointVector& planned = axis.q_passive[i];
+        JointVector start = planned;
+        if (options.carry_correction && have_correction) {
+          Transform target = EndPose(rc.nominal, planned);
+          target.translation() += correction;
+          const IkResult ik = SolveIk(rc.nominal, target, planned);
+          if (ik.status == IkStatus::kSuccess && WithinLimits(rc.nominal, ik.q)) start = ik.q;
+        }
+        const ServoResult sr = AlignFeatureToOpticalAxis(cell, setup, start, options.servo);
+        std::string where = name(r) + " axis " + std::to_string(k + 1) + "/" +
+                            std::to_string(num_axes) + " position " + std::to_string(i + 1) +
+                            "/" + std::to_string(p);
+        if (sr.status != ServoStatus::kAligned) {
+          rc.failed.push_back({k, i, ToString(sr.status), sr.reason, sr.frames});
+          say(where + ": skipped (" + ToString(sr.status) + "): " + sr.reason);
+          continue;
+        }
+        const std::optional<Vector3> p_C =
+            FeaturePointInCamera(sr.image_after, knowledge.board, out.intrinsics);
+        if (!p_C) {
+          rc.failed.push_back({k, i, "board_pose_failed",
+                               "aligned, but solvePnP found no board pose in the last image",
+                               sr.frames});
+          say(where + ": skipped: no board pose");
+          continue;
+        }
+        AlignedPose ap;
+        ap.axis = k;
+        ap.index = i;
+        ap.q_passive = sr.q_passive;
+        ap.q_active = setup.q_active;
+        ap.pixel_error = sr.pixel_error;
+        ap.p_C = *p_C;
+        ap.offset = R_BpC * Vector3(p_C->x(), p_C->y(), 0.0);
+        ap.frames = sr.frames;
+        ap.moves = sr.moves;
+        rc.aligned.push_back(ap);
+        AxisSample smp;
+        smp.axis = k;
+        smp.q = sr.q_passive;
+        smp.offset = ap.offset;
+        smp.depth = p_C->z();
+        rc.samples.push_back(smp);
+        correction = EndPose(rc.nominal, sr.q_passive).translation() -
+                     EndPose(rc.nominal, planned).translation();
+        have_correction = true;
+        if (static_cast<int>(rc.images.size()) < options.kept_images && i == 0) {
+          ServoImages im;
+          im.axis = k;
+          im.index = i;
+          im.before = sr.image_before;
+          im.after = sr.image_after;
+          const FeatureDetection d0 = DetectFeaturePoint(sr.image_before, knowledge.board);
+          if (d0.status == DetectionStatus::kFound) {
+            im.error_before = cv::Point2d(d0.feature_px.x - setup.intrinsics.cx,
+                                          d0.feature_px.y - setup.intrinsics.cy);
+          }
+          im.error_after = sr.pixel_error;
+          rc.images.push_back(im);
+        }
+        say(where + ": aligned in " + std::to_string(sr.frames) + " frames, (" +
+            Fixed(sr.pixel_error.x, 3) + ", " + Fixed(sr.pixel_error.y, 3) + ") px, depth " +
+            Fixed(1000.0 * p_C->z(), 1) + " mm");
+      }
+    }
+    rc.servoing_s = Seconds(t0);
+
+    // 3-4. Split by whole axes and identify.
+    std::vector<int> cal_axes, val_axes;
+    const auto t_split = Clock::now();
+    SplitAxes(rc.nominal, rc.samples, num_axes, options, &cal_axes, &val_axes,
+              &rc.split_candidates);
+    rc.identification_s += Seconds(t_split);
+    if (!rc.split_candidates.empty()) {
+      std::string axes;
+      for (int k : cal_axes) axes += (axes.empty() ? "" : ", ") + std::to_string(k + 1);
+      say(name(r) + ": calibration axes " + axes + " of " + std::to_string(num_axes) +
+          " (best conditioned of " + std::to_string(rc.split_candidates.size()) + " subsets)");
+    }
+    say(name(r) + ": identifying from " + std::to_string(rc.samples.size()) + " aligned poses (" +
+        std::to_string(rc.failed.size()) + " skipped)");
+    IdentifyRobot(cal_axes, val_axes, options, &rc);
+    say(name(r) + ": mean misaligned error (eq. 46) calibration " +
+        Fixed(1000 * rc.calibration_error.before, 4) + " -> " +
+        Fixed(1000 * rc.calibration_error.after, 4) + " mm, validation " +
+        Fixed(1000 * rc.validation_error.before, 4) + " -> " +
+        Fixed(1000 * rc.validation_error.after, 4) + " mm (" + rc.method + ")");
+    out.robots.push_back(std::move(rc));
+  }
+  return out;
+}
+
+}  // namespace twin

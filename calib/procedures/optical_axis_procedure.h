@@ -1,0 +1,190 @@
+// The whole optical-axis self-calibration of a dual-robot cell (Zhu et al. 2019, section VI),
+// run through the Cell interface exactly as on hardware:
+//   1. camera intrinsics by Zhang's method from board views (section VI.A);
+//   2. for each robot to calibrate (the passive robot, carrying the board), with the camera on
+//      the other (the active robot): PSO pose planning (section IV, eq. 24-41), then for each
+//      optical axis, the active robot to its pose and the passive robot servoed onto the axis
+//      at each planned position (section V.A, eq. 42-43; the measurement steps 1-5 of VI.C);
+//   3. split by whole optical axes into calibration and validation sets (VI.C: 30 / 20);
+//   4. identification on the calibration set (section V.B): the paper's linearized recursive
+//      LM (eq. 45-49) and the Ceres formulation with nuisance lines plus the scale measurement
+//      (nonlinear_identification.h); the mean misaligned error (eq. 46) before and after on both
+//      sets;
+//   5. the roles exchanged (Cell::ExchangeTools) and the other robot calibrated.
+// Estimator side only: what it knows is CellKnowledge (nominal models, rough transforms, the
+// board as printed and mounted by drawing); nothing of the truth.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "calib/cell/cell.h"
+#include "calib/vision/feature_detector.h"
+#include "calib/vision/intrinsics_calibration.h"
+#include "calib/identification/linearized_identification.h"
+#include "calib/identification/nonlinear_identification.h"
+#include "calib/planning/pose_planner.h"
+#include "calib/vision/visual_servo.h"
+
+namespace twin {
+
+/// What the estimator is told about the cell (section VI.B): nothing needs to be accurate
+/// except the printed board.
+struct CellKnowledge {
+  std::array<KinematicModel, 2> nominal;  ///< the controllers' nominal models (flange = L6;
+                                          ///< their tool link is not used)
+  Transform X_B1B2 = Transform::Identity();  ///< rough pose of robot 2's base in robot 1's
+  Transform X_FC = Transform::Identity();    ///< rough hand-eye: camera optical frame in the
+                                             ///< flange (the same bracket on either robot)
+  Transform X_FT = Transform::Identity();    ///< board mount by drawing: board frame (origin at
+                                             ///< the feature point, z out of the face) in the
+                                             ///< flange; link 7 of the passive model
+  BoardGeometry board;                       ///< the printed board
+};
+
+/// Options of RunOpticalAxisCalibration. Defaults are the paper's where it gives them.
+struct OpticalAxisOptions {
+  std::vector<int> robots = {1, 0};  ///< robots to calibrate (passive), in this order
+  int intrinsics_views = 40;         ///< board views for Zhang's method [-]
+  IntrinsicsOptions intrinsics;      ///< options of CalibrateIntrinsics
+  std::uint64_t seed = 1;            ///< seed of the intrinsics view poses
+  PosePlannerOptions planner;        ///< PSO (q, p, swarm, iterations, runs, C1-C5)
+  ServoOptions servo;                ///< alignment (tolerance 0.1 px, iteration limit)
+  int calibration_axes = 3;          ///< axes in the calibration set, the rest validate
+                                     ///< (paper: 30 / 20 poses of 5 x 10, by whole axes)
+  /// Which whole axes calibrate: the first calibration_axes (kFirst), or the subset whose
+  /// identification Jacobian has the largest smallest identifiable singular value
+  /// (kBestConditioned, the minimum-singular-value observability index: the weakest
+  /// identifiable combination is determined best). Uses the recorded joint angles only.
+  enum class Split { kFirst, kBestConditioned };
+  Split split = Split::kBestConditioned;
+  /// After the hold-out validation (the paper's metric, eq. 46, on the validation axes), the
+  /// delivered model is identified again from all aligned axes (true), as one refits on all
+  /// data after cross-validation; false delivers the calibration-set model.
+  bool refit_all_axes = true;
+  /// Start each position of an axis with the correction the servo found at the previous one
+  /// (the kinematic error changes little over 20 mm), so the servo starts close.
+  bool carry_correction = true;
+  LinearizedIdentificationOptions linearized;  ///< the paper's method
+  NonlinearIdentificationOptions nonlinear;    ///< Ceres, with the scale measurement
+  int kept_images = 3;               ///< servo before/after image pairs kept per robot
+  /// Progress lines (one per aligned pose, stage changes); may be empty.
+  std::function<void(const std::string&)> progress;
+};
+
+/// Throws InputError naming the bad field and value.
+void ValidateOpticalAxisOptions(const OpticalAxisOptions& options);
+
+/// The passive robot's estimator model: the nominal model with link 7 the board mount (Zhu et
+/// al. 2019, VI.A: "the calibration target is considered as the link 7"): link 7 holds the
+/// mount's translation as eq. 2 parameters (theta = atan2(y, x), d = z, a = distance from the
+/// flange axis, alpha = beta = 0) and X_L7E its rotation, so that L7 X_L7E = X_FT: the end
+/// frame E is the board frame, origin the feature point, and link 7's parameters move that
+/// point in every direction to first order.
+KinematicModel BoardRobotModel(const KinematicModel& nominal, const Transform& X_FT);
+
+/// One aligned pose: what a hardware cell records (measurements.csv).
+struct AlignedPose {
+  int axis = 0;                       ///< optical axis index of the plan
+  int index = 0;                      ///< position index on the axis (0 = nearest)
+  JointVector q_passive = JointVector::Zero();  ///< recorded passive joint angles [rad]
+  JointVector q_active = JointVector::Zero();   ///< active joint angles (encoders) [rad]
+  cv::Point2d pixel_error{0, 0};      ///< final (du, dv) [px]
+  Vector3 p_C = Vector3::Zero();      ///< feature point in the camera frame from the board
+                                      ///< pose (solvePnP, known square) [m]
+  Vector3 offset = Vector3::Zero();   ///< AxisSample::offset: (p_C.x, p_C.y, 0) in Bp [m]
+  int frames = 0;                     ///< images grabbed for this pose
+  int moves = 0;                      ///< corrective moves
+};
+
+/// One pose the servo could not align; skipped, the run goes on.
+struct FailedPose {
+  int axis = 0;
+  int index = 0;
+  std::string status;  ///< ServoStatus name or "active_move_failed"
+  std::string reason;
+  int frames = 0;
+};
+
+/// Misaligned error (eq. 46) of one set, nominal vs identified [m].
+struct MisalignedSummary {
+  double before = 0.0;
+  double after = 0.0;
+  int samples = 0;
+};
+
+/// A servo image pair for reports (Zhu et al. 2019, Fig. 12).
+struct ServoImages {
+  int axis = 0, index = 0;
+  cv::Mat before, after;
+  cv::Point2d error_before{0, 0}, error_after{0, 0};  ///< (du, dv) [px]
+};
+
+/// Everything about one calibrated (passive) robot.
+struct RobotCalibration {
+  int robot = 0;                       ///< passive robot index
+  int camera_robot = 1;                ///< active robot index
+  KinematicModel nominal;              ///< BoardRobotModel of the nominal model
+  PosePlanResult plan;
+  std::vector<AlignedPose> aligned;
+  std::vector<FailedPose> failed;
+  std::vector<AxisSample> samples;     ///< all aligned poses, axis = plan axis index
+  std::vector<int> calibration_axes;   ///< plan axis indices in the calibration set
+  std::vector<int> validation_axes;    ///< ... in the validation set
+  /// kBestConditioned: each candidate calibration subset (plan axes) and its smallest
+  /// identifiable singular value (observability.h scaling); empty for kFirst.
+  std::vector<std::pair<std::vector<int>, double>> split_candidates;
+  LinearizedIdentificationResult linearized;  ///< paper, eq. 45-49, on the calibration set
+  NonlinearIdentificationResult nonlinear;    ///< Ceres + scale, on the calibration set
+  KinematicModel identified;           ///< the delivered model (see refit_all_axes)
+  std::string method;                  ///< "ceres_with_scale", "ceres", or "linearized",
+                                       ///< with "_all_axes" appended after the refit
+  KinematicModel holdout;              ///< the calibration-set model (nonlinear unless it
+                                       ///< failed): what the misaligned errors are of
+  bool refit = false;                  ///< identified is the all-axes refit
+  NonlinearIdentificationResult refit_result;  ///< Ceres on all usable axes, when refit
+  MisalignedSummary calibration_error, validation_error;  ///< eq. 46
+  std::vector<MisalignedSummary> per_axis;  ///< per plan axis (samples 0 when dropped)
+  std::vector<ServoImages> images;
+  double planning_s = 0, servoing_s = 0, identification_s = 0;  ///< wall times [s]
+};
+
+/// Outcome of RunOpticalAxisCalibration.
+struct OpticalAxisResult {
+  IntrinsicsResult intrinsics;
+  std::vector<RobotCalibration> robots;
+  double intrinsics_s = 0;             ///< wall time of the intrinsics step [s]
+};
+
+/// Runs the procedure (header). Throws InputError for bad options or knowledge, when the
+/// camera does not see the board at the start (intrinsics), when planning finds no feasible
+/// poses, or when too few poses align to identify (each message names the robot and step).
+/// Failed single poses are skipped and listed.
+OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& knowledge,
+                                            const OpticalAxisOptions& options);
+
+/// Splits plan axes 0..num_axes-1 into calibration and validation sets by whole axes:
+/// options.calibration_axes of them calibrate, chosen by options.split among the axes with 3
+/// or more samples (kBestConditioned: every subset is identified from `nominal` and the one
+/// with the largest smallest identifiable singular value wins; `candidates` lists each subset
+/// and that value, empty for kFirst or when there is no choice).
+void SplitAxes(const KinematicModel& nominal, const std::vector<AxisSample>& samples,
+               int num_axes, const OpticalAxisOptions& options,
+               std::vector<int>* calibration_axes, std::vector<int>* validation_axes,
+               std::vector<std::pair<std::vector<int>, double>>* candidates);
+
+/// Identification of one robot from recorded samples (the part that runs on recorded data):
+/// `samples` axis indices are plan axes; `calibration_axes` / `validation_axes` split them.
+/// Fills linearized, nonlinear, holdout, the misaligned summaries and per_axis (all of the
+/// calibration-set model), then identified and method (the refit on all axes when
+/// options.refit_all_axes and there are validation axes, else the calibration-set model).
+void IdentifyRobot(const std::vector<int>& calibration_axes,
+                   const std::vector<int>& validation_axes, const OpticalAxisOptions& options,
+                   RobotCalibration* robot);
+
+}  // namespace twin

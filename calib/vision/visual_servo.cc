@@ -1,0 +1,196 @@
+#include "calib/vision/visual_servo.h"
+
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include <opencv2/calib3d.hpp>
+
+#include "calib/cell/cell_moves.h"
+#include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
+#include "calib/kinematics/inverse_kinematics.h"
+
+namespace twin {
+namespace {
+
+std::string Num(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// Depth z_f of P along the optical axis [m], from the board pose by solvePnP (planar IPPE).
+// The object grid follows OpenCV's detection order, so it needs no knowledge of that order:
+// the centre corner is P in either case. Returns a non-positive value when it fails.
+double DepthFromPnp(const FeatureDetection& det, const BoardGeometry& board,
+                    const PinholeIntrinsics& k) {
+  const cv::Size n = det.pattern_size;
+  std::vector<cv::Point3f> object;
+  object.reserve(det.corners.size());
+  for (int r = 0; r < n.height; ++r) {
+    for (int c = 0; c < n.width; ++c) {
+      object.emplace_back(static_cast<float>(c * board.square_m),
+                          static_cast<float>(r * board.square_m), 0.0f);
+    }
+  }
+  const cv::Matx33d K(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
+  cv::Vec3d rvec, tvec;
+  if (!cv::solvePnP(object, det.corners, K, cv::noArray(), rvec, tvec, false,
+                    cv::SOLVEPNP_IPPE)) {
+    return -1.0;
+  }
+  cv::Matx33d R;
+  cv::Rodrigues(rvec, R);
+  const cv::Vec3d p_centre((n.width / 2) * board.square_m, (n.height / 2) * board.square_m, 0);
+  const cv::Vec3d p_C = R * p_centre + tvec;
+  return p_C[2];
+}
+
+}  // namespace
+
+void ValidateServoOptions(const ServoOptions& o) {
+  const std::string where = "ServoOptions";
+  if (!std::isfinite(o.tolerance_px) || o.tolerance_px <= 0) {
+    throw InputError(where, "tolerance_px = " + Num(o.tolerance_px) + ": expected > 0 [px]");
+  }
+  if (o.max_iterations < 0) {
+    throw InputError(where,
+                     "max_iterations = " + std::to_string(o.max_iterations) + ": expected >= 0");
+  }
+  if (!std::isfinite(o.gain) || o.gain <= 0 || o.gain >= 2) {
+    throw InputError(where, "gain = " + Num(o.gain) + ": expected in (0, 2)");
+  }
+  if (!std::isfinite(o.nominal_depth_m) || o.nominal_depth_m < 0) {
+    throw InputError(where, "nominal_depth_m = " + Num(o.nominal_depth_m) +
+                                ": expected >= 0 [m] (0: estimate by solvePnP)");
+  }
+  if (!std::isfinite(o.max_step_m) || o.max_step_m <= 0) {
+    throw InputError(where, "max_step_m = " + Num(o.max_step_m) + ": expected > 0 [m]");
+  }
+}
+
+const char* ToString(ServoStatus status) {
+  switch (status) {
+    case ServoStatus::kAligned: return "aligned";
+    case ServoStatus::kBoardNotFound: return "board_not_found";
+    case ServoStatus::kIkFailed: return "ik_failed";
+    case ServoStatus::kMoveFailed: return "move_failed";
+    case ServoStatus::kJointLimits: return "joint_limits";
+    case ServoStatus::kNotConverged: return "not_converged";
+  }
+  return "unknown";
+}
+
+ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
+                                      const JointVector& q_passive_start,
+                                      const ServoOptions& options) {
+  ValidateServoOptions(options);
+  ValidateBoardGeometry(setup.board, "ServoSetup.board");
+  if (setup.passive_robot != 0 && setup.passive_robot != 1) {
+    throw InputError("ServoSetup", "passive_robot = " + std::to_string(setup.passive_robot) +
+                                       ": expected 0 or 1");
+  }
+  const PinholeIntrinsics& k = setup.intrinsics;
+  if (!(k.fx > 0) || !(k.fy > 0) || !std::isfinite(k.cx) || !std::isfinite(k.cy)) {
+    throw InputError("ServoSetup.intrinsics", "fx = " + Num(k.fx) + ", fy = " + Num(k.fy) +
+                                                  ": expected positive focal lengths");
+  }
+  const int passive = setup.passive_robot;
+  ServoResult result;
+  auto finish = [&](ServoStatus status, const std::string& reason) {
+    result.status = status;
+    result.reason = reason;
+    result.q_passive = cell.ReadEncoders(passive);
+    return result;
+  };
+
+  if (!WithinLimits(setup.passive_model, q_passive_start)) {
+    return finish(ServoStatus::kJointLimits,
+                  "start pose of robot " + std::to_string(passive) + " is outside its limits");
+  }
+  const MoveResult start = MoveAvoidingSweep(cell, passive, q_passive_start);
+  if (start.status != MoveStatus::kSettled) {
+    return finish(start.status == MoveStatus::kOutOfLimits ? ServoStatus::kJointLimits
+                                                           : ServoStatus::kMoveFailed,
+                  std::string("move to the start pose: ") + ToString(start.status) + ": " +
+                      start.reason);
+  }
+
+  // Eq. 43, read right to left: camera C -> active flange F -> active base Ba -> passive base
+  // Bp, i.e. R_BpC = R_BpBa R_BaF R_FC with R_BpBa = R_BaBp^T and R_BaF from the nominal FK at
+  // the active encoder reading.
+  const Matrix3 R_BaF =
+      ForwardKinematics(setup.active_model, setup.q_active).flange().linear();
+  const Matrix3 R_BpC = setup.R_BaBp.transpose() * R_BaF * setup.R_FC;
+
+  IkOptions ik_options;
+  for (int iteration = 0;; ++iteration) {
+    const cv::Mat image = cell.GrabImage();
+    ++result.frames;
+    if (result.image_before.empty()) result.image_before = image.clone();
+    result.image_after = image;
+    const FeatureDetection det = DetectFeaturePoint(image, setup.board);
+    if (det.status != DetectionStatus::kFound) {
+      return finish(ServoStatus::kBoardNotFound,
+                    "frame " + std::to_string(result.frames) + ": " + det.reason);
+    }
+    // Eq. 31: pixel deviation of P from the principal point.
+    const double du = det.feature_px.x - k.cx;
+    const double dv = det.feature_px.y - k.cy;
+    result.pixel_error = cv::Point2d(du, dv);
+    if (std::abs(du) < options.tolerance_px && std::abs(dv) < options.tolerance_px) {
+      return finish(ServoStatus::kAligned, "");
+    }
+    if (iteration >= options.max_iterations) {
+      return finish(ServoStatus::kNotConverged,
+                    "pixel error (" + Num(du) + ", " + Num(dv) + ") px after " +
+                        std::to_string(result.moves) + " moves (max_iterations = " +
+                        std::to_string(options.max_iterations) + ")");
+    }
+
+    double z = options.nominal_depth_m;
+    if (z <= 0) {
+      z = DepthFromPnp(det, setup.board, k);
+      if (!(z > 0) || !std::isfinite(z)) {
+        return finish(ServoStatus::kBoardNotFound,
+                      "frame " + std::to_string(result.frames) +
+                          ": solvePnP gave no board pose in front of the camera");
+      }
+    }
+    // Eq. 42: offset of P from the axis in C (x right, y down), then in Bp. P must move by
+    // minus that offset to reach the axis.
+    const Vector3 dP_C(du * z / k.fx, dv * z / k.fy, 0.0);
+    const Vector3 step_Bp = -options.gain * (R_BpC * dP_C);
+    if (step_Bp.norm() > options.max_step_m) {
+      return finish(ServoStatus::kNotConverged,
+                    "correction of " + Num(step_Bp.norm()) + " m exceeds max_step_m = " +
+                        Num(options.max_step_m));
+    }
+
+    const JointVector q_now = cell.ReadEncoders(passive);
+    Transform X_BpE_target = EndPose(setup.passive_model, q_now);
+    X_BpE_target.translation() += step_Bp;
+    const IkResult ik = SolveIk(setup.passive_model, X_BpE_target, q_now, ik_options);
+    if (ik.status == IkStatus::kJointLimits) {
+      return finish(ServoStatus::kJointLimits, "nominal IK: " + ik.reason);
+    }
+    if (ik.status != IkStatus::kSuccess) {
+      return finish(ServoStatus::kIkFailed,
+                    std::string("nominal IK: ") + ToString(ik.status) + ": " + ik.reason);
+    }
+    if (!WithinLimits(setup.passive_model, ik.q)) {
+      return finish(ServoStatus::kJointLimits, "IK solution outside the joint limits");
+    }
+    const MoveResult move = cell.MoveTo(passive, ik.q);
+    ++result.moves;
+    if (move.status != MoveStatus::kSettled) {
+      return finish(move.status == MoveStatus::kOutOfLimits ? ServoStatus::kJointLimits
+                                                            : ServoStatus::kMoveFailed,
+                    "move " + std::to_string(result.moves) + ": " + ToString(move.status) +
+                        ": " + move.reason);
+    }
+  }
+}
+
+}  // namespace twin

@@ -1,0 +1,662 @@
+#include "sim/cell/twin_cell.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <utility>
+
+#include <mujoco/mujoco.h>
+
+#include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
+#include "calib/procedures/handclasp_procedure.h"
+#include "calib/kinematics/inverse_kinematics.h"
+#include "sim/render/camera_image.h"
+#include "sim/world/mjcf_writer.h"
+#include "sim/world/mujoco_handles.h"
+#include "sim/render/renderer.h"
+
+namespace twin {
+namespace {
+
+constexpr int kMaxOverviewWidth = 1600;   // the MJCF's offscreen buffer is sized for these [px]
+constexpr int kMaxOverviewHeight = 1200;
+// A move that starts in contact (after a collision stop) may back out: contacts present at its
+// start are tolerated while they get no deeper than this [m] (the stop halts the robot, so
+// only the other robot's servo settling can deepen them, by far less).
+constexpr double kBackOutSlack = 1e-4;
+
+// The Euler step with implicit damping of a critically damped servo is stable while
+// omega dt < 2 + 2 sqrt(2) ~ 4.83 (omega = sqrt(kp / M_ii)); measured: armature 0.1 kg m^2 at
+// dt = 2 ms holds kp = 5.5e5 (4.69) and diverges at 6e5 (4.90). The margin covers the inertia
+// changing with the pose.
+constexpr double kMaxOmegaDt = 4.5;
+
+// The simulated operator's handclasp: stand-off in front of the other tip [m], straight
+// approach waypoints from there, corrective jogs before giving up, tip-axis rolls tried.
+constexpr double kHandclaspStandoff = 0.05;
+constexpr int kApproachWaypoints = 5;
+constexpr int kMaxCorrectiveJogs = 8;
+constexpr int kHandclaspRolls = 8;
+
+// An independent random stream per purpose, so that grabbing images does not change encoder
+// noise and vice versa.
+std::mt19937_64 Stream(std::uint64_t seed, std::uint32_t stream) {
+  std::seed_seq seq{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32),
+                    stream};
+  return std::mt19937_64(seq);
+}
+
+std::string Deg(double rad) {
+  std::ostringstream os;
+  os.precision(6);
+  os << RadToDeg(rad);
+  return os.str();
+}
+
+Transform FromMj(const mjtNum* pos, const mjtNum* mat) {
+  Transform X = Transform::Identity();
+  X.translation() = Vector3(pos[0], pos[1], pos[2]);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) X.linear()(r, c) = mat[3 * r + c];
+  }
+  return X;
+}
+
+std::string Prefix(int robot) { return "robot" + std::to_string(robot + 1) + "_"; }
+
+}  // namespace
+
+struct TwinCell::Impl {
+  TwinSpec spec;
+  std::string where;
+  std::vector<std::unique_ptr<Effect>> effects;
+  std::array<KinematicModel, kNumRobots> models;
+  std::array<std::array<JointDrive, kNumJoints>, kNumRobots> drives;
+  std::string mjcf;
+  MjModelPtr m;
+  MjDataPtr d;
+  std::mt19937_64 encoder_rng, image_rng, operator_rng;
+  double operator_sigma = 0.0;   // operator alignment error per axis [m]
+  double last_gap = 0.0;         // jogged tip to aim point after the last contact [m]
+  std::array<JointVector, kNumRobots> motor;      // commanded motor angles [rad]
+  std::array<JointVector, kNumRobots> direction;  // sign of each joint's last motion
+  std::array<std::array<int, kNumJoints>, kNumRobots> qadr, dadr, act;
+  std::array<std::array<int, kNumLinks + 1>, kNumRobots> site_L;
+  std::array<int, kNumRobots> site_tip;
+  int camera = -1, board_body = -1;
+  std::optional<DistortionMapper> distortion;     // only when the lens distorts
+  Intrinsics canvas;
+  std::unique_ptr<OffscreenRenderer> hand_renderer, overview_renderer;
+  int last_steps = 0;
+
+  int Id(mjtObj type, const std::string& name) const {
+    const int id = mj_name2id(m.get(), type, name.c_str());
+    if (id < 0) throw std::logic_error("twin MJCF lacks " + name);  // our bug
+    return id;
+  }
+
+  std::string BodyName(int geom) const {
+    const char* name = mj_id2name(m.get(), mjOBJ_BODY, m->geom_bodyid[geom]);
+    return name ? name : "body " + std::to_string(m->geom_bodyid[geom]);
+  }
+
+  std::string GeomName(int geom) const {
+    const char* name = mj_id2name(m.get(), mjOBJ_GEOM, geom);
+    return name ? name : "geom " + std::to_string(geom);
+  }
+
+  std::string ContactText(const mjContact& c) const {
+    return BodyName(c.geom1) + " touches " + BodyName(c.geom2) + " (geoms " + GeomName(c.geom1) +
+           ", " + GeomName(c.geom2) + ")";
+  }
+
+  // Contacts between geoms of different bodies (MuJoCo already dropped excluded, parent and
+  // contype-filtered pairs). Returns the first one not tolerated by `allowed` (pair -> depth).
+  const mjContact* Collision(const std::map<std::pair<int, int>, double>& allowed) const {
+    for (int i = 0; i < d->ncon; ++i) {
+      const mjContact& c = d->contact[i];
+      if (m->geom_bodyid[c.geom1] == m->geom_bodyid[c.geom2]) continue;
+      const auto it = allowed.find({c.geom1, c.geom2});
+      if (it != allowed.end() && c.dist >= it->second - kBackOutSlack) continue;
+      return &c;
+    }
+    return nullptr;
+  }
+
+  std::map<std::pair<int, int>, double> CurrentContacts() const {
+    std::map<std::pair<int, int>, double> contacts;
+    for (int i = 0; i < d->ncon; ++i) {
+      const mjContact& c = d->contact[i];
+      const auto key = std::make_pair(c.geom1, c.geom2);
+      const auto it = contacts.find(key);
+      contacts[key] = it == contacts.end() ? c.dist : std::min(it->second, c.dist);
+    }
+    return contacts;
+  }
+
+  // Link-side minus motor-side angle of robot k's joints now.
+  JointVector TransmissionOffset(int k) const {
+    JointVector offset = JointVector::Zero();
+    for (const auto& e : effects) e->ApplyToTransmission(k, motor[k], direction[k], &offset);
+    return offset;
+  }
+
+  // Position targets and gravity feed-forward of both robots for the coming step (call after
+  // mj_step1, which computed qfrc_bias of the current state).
+  void WriteControls() {
+    for (int k = 0; k < kNumRobots; ++k) {
+      const JointVector link = motor[k] + TransmissionOffset(k);
+      for (int i = 0; i < kNumJoints; ++i) {
+        d->ctrl[act[k][i]] = link(i);
+        const int dof = dadr[k][i];
+        d->qfrc_applied[dof] = drives[k][i].gravity_feedforward ? d->qfrc_bias[dof] : 0.0;
+      }
+    }
+  }
+
+  // Largest joint speed of robot `robot`, or of both robots for -1 [rad/s].
+  double MaxSpeed(int robot) const {
+    double speed = 0.0;
+    for (int k = 0; k < kNumRobots; ++k) {
+      if (robot >= 0 && k != robot) continue;
+      for (int i = 0; i < kNumJoints; ++i) speed = std::max(speed, std::abs(d->qvel[dadr[k][i]]));
+    }
+    return speed;
+  }
+
+  // Protective stop: robot `robot`'s joints stop where they are and its motor command holds
+  // there, so that a later move can back out of the contact.
+  void Halt(int robot) {
+    for (int i = 0; i < kNumJoints; ++i) d->qvel[dadr[robot][i]] = 0.0;
+    JointVector link;
+    for (int i = 0; i < kNumJoints; ++i) link(i) = d->qpos[qadr[robot][i]];
+    motor[robot] = link - TransmissionOffset(robot);
+  }
+
+  // Steps the world: robot `robot`'s motor command ramps to `target` (all joints arriving
+  // together at max_joint_speed) and then holds, until it has settled. robot = -1 holds both
+  // robots and waits for both.
+  MoveResult Run(int robot, const JointVector& target) {
+    const PhysicsSpec& ph = spec.physics;
+    const double dt = m->opt.timestep;
+    JointVector start = JointVector::Zero(), delta = JointVector::Zero();
+    double ramp_time = 0.0;
+    if (robot >= 0) {
+      start = motor[robot];
+      delta = target - start;
+      for (int i = 0; i < kNumJoints; ++i) {
+        if (delta(i) != 0.0) direction[robot](i) = delta(i) > 0.0 ? 1.0 : -1.0;
+      }
+      ramp_time = delta.cwiseAbs().maxCoeff() / ph.max_joint_speed;
+    }
+    const auto tolerated = CurrentContacts();
+    const double t0 = d->time;
+    const int warnings = WarningCount(d.get());
+    MoveResult result;
+    int steps = 0, calm = 0;
+    for (;;) {
+      if (steps >= ph.max_steps) {
+        std::ostringstream os;
+        os.precision(3);
+        os << "still moving after " << steps << " steps (physics.max_steps): largest joint speed "
+           << MaxSpeed(robot) << " rad/s, settled below " << ph.settle_speed << " rad/s";
+        result.status = MoveStatus::kNotSettled;
+        result.reason = os.str();
+        break;
+      }
+      bool ramp_done = true;
+      if (robot >= 0) {
+        const double t = (steps + 1) * dt;
+        ramp_done = t >= ramp_time;
+        motor[robot] = ramp_done ? target : JointVector(start + (t / ramp_time) * delta);
+      }
+      mj_step1(m.get(), d.get());
+      if (const mjContact* c = Collision(tolerated)) {
+        result.status = MoveStatus::kCollision;
+        result.reason = ContactText(*c);
+        if (robot >= 0) Halt(robot);
+        break;
+      }
+      WriteControls();
+      mj_step2(m.get(), d.get());
+      ++steps;
+      if (WarningCount(d.get()) > warnings) {  // MuJoCo reset the state after a divergence
+        result.status = MoveStatus::kNotSettled;
+        result.reason = "the simulation diverged (MuJoCo warning); lower physics.stiffness or "
+                        "raise physics.armature";
+        break;
+      }
+      calm = ramp_done && MaxSpeed(robot) < ph.settle_speed ? calm + 1 : 0;
+      if (calm >= ph.settle_steps) break;
+    }
+    mj_forward(m.get(), d.get());  // kinematics, cameras and contacts of the final state
+    if (result.status == MoveStatus::kSettled) {
+      if (const mjContact* c = Collision(tolerated)) {
+        result.status = MoveStatus::kCollision;
+        result.reason = ContactText(*c);
+      }
+    }
+    result.duration_s = d->time - t0;
+    last_steps = steps;
+    return result;
+  }
+
+  // Throws InputError if a joint's servo would make the Euler step diverge (at the current
+  // pose's joint-space inertia, armature included).
+  void CheckServoStability(const std::string& where) const {
+    const double dt = m->opt.timestep;
+    for (int k = 0; k < kNumRobots; ++k) {
+      for (int i = 0; i < kNumJoints; ++i) {
+        const int dof = dadr[k][i];
+        const double inertia = d->qM[m->dof_Madr[dof]];
+        const double omega_dt = dt * std::sqrt(drives[k][i].stiffness / inertia);
+        if (omega_dt < kMaxOmegaDt) continue;
+        std::ostringstream os;
+        os.precision(4);
+        os << "physics.stiffness: robot " << k << " joint " << i + 1 << " has a drive stiffness of "
+           << drives[k][i].stiffness << " N m/rad on an inertia of " << inertia
+           << " kg m^2 (armature included): omega * timestep = " << omega_dt
+           << " makes the simulation diverge (must stay below " << kMaxOmegaDt
+           << "); lower physics.stiffness or physics.timestep_s, or raise physics.armature";
+        throw InputError(where, os.str());
+      }
+    }
+  }
+
+  // (Re)builds the MJCF, the MuJoCo model and data and the name lookups from spec and models;
+  // the renderers are dropped (their GL context holds the old model).
+  void Build() {
+    hand_renderer.reset();
+    overview_renderer.reset();
+    mjcf = WriteTwinMjcf(spec, models, drives);
+    d.reset();
+    m = LoadMjcfFromString(mjcf);
+    d.reset(mj_makeData(m.get()));
+    if (!d) throw std::runtime_error("MuJoCo could not allocate mjData");
+    for (int k = 0; k < kNumRobots; ++k) {
+      const std::string p = Prefix(k);
+      for (int i = 0; i < kNumJoints; ++i) {
+        const int j = Id(mjOBJ_JOINT, p + "j" + std::to_string(i + 1));
+        qadr[k][i] = m->jnt_qposadr[j];
+        dadr[k][i] = m->jnt_dofadr[j];
+        act[k][i] = Id(mjOBJ_ACTUATOR, p + "a" + std::to_string(i + 1));
+      }
+      for (int i = 0; i <= kNumLinks; ++i) site_L[k][i] = Id(mjOBJ_SITE, p + "L" + std::to_string(i));
+      site_tip[k] = Id(mjOBJ_SITE, p + "tip");
+    }
+    camera = Id(mjOBJ_CAMERA, kHandCameraName);
+    board_body = Id(mjOBJ_BODY, Prefix(spec.board.robot) + "board");
+  }
+
+  OffscreenRenderer& HandRenderer() {
+    if (!hand_renderer) {
+      hand_renderer = std::make_unique<OffscreenRenderer>(m.get(), canvas.width, canvas.height,
+                                                          spec.camera.msaa_samples);
+      hand_renderer->SetClipPlanes(spec.camera.near_m, spec.camera.far_m);
+    }
+    return *hand_renderer;
+  }
+};
+
+TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new Impl) {
+  Impl& s = *impl_;
+  ValidateTwinSpec(spec, where);
+  s.spec = spec;
+  s.where = where;
+  for (const EffectSpec& e : spec.effects) s.effects.push_back(MakeEffect(e));
+  std::mt19937_64 geometry_rng = Stream(spec.seed, 0);
+  s.encoder_rng = Stream(spec.seed, 1);
+  s.image_rng = Stream(spec.seed, 2);
+  s.operator_rng = Stream(spec.seed, 3);
+  for (int k = 0; k < kNumRobots; ++k) {
+    s.models[k] = spec.robots[k].model;
+    for (const auto& e : s.effects) e->ApplyToGeometry(k, &s.models[k], &geometry_rng);
+    s.drives[k].fill({spec.physics.stiffness, true});
+    for (const auto& e : s.effects) e->ApplyToDrive(k, &s.drives[k]);
+  }
+  if (spec.camera.distortion.Any()) {
+    s.distortion.emplace(spec.camera.intrinsics, spec.camera.distortion);
+    s.canvas = s.distortion->canvas();
+  } else {
+    s.canvas = spec.camera.intrinsics;
+  }
+  s.Build();
+  // Start at rest at the link-side angles of the initial motor angles.
+  for (int k = 0; k < kNumRobots; ++k) {
+    s.motor[k] = spec.robots[k].q_initial;
+    s.direction[k] = JointVector::Zero();
+    const JointVector link = s.motor[k] + s.TransmissionOffset(k);
+    for (int i = 0; i < kNumJoints; ++i) s.d->qpos[s.qadr[k][i]] = link(i);
+  }
+  mj_forward(s.m.get(), s.d.get());
+  s.CheckServoStability(where);
+  if (const mjContact* c = s.Collision({})) {
+    throw InputError(where, "robots[*].q_initial: the initial pose is in collision: " +
+                                s.ContactText(*c));
+  }
+  const MoveResult settle = s.Run(-1, JointVector::Zero());
+  if (settle.status != MoveStatus::kSettled) {
+    throw InputError(where, std::string("robots[*].q_initial: the cell does not settle at its "
+                                        "initial pose (") + ToString(settle.status) + "): " +
+                                settle.reason);
+  }
+}
+
+TwinCell::~TwinCell() = default;
+
+MoveResult TwinCell::MoveTo(int robot, const JointVector& q_target) {
+  Impl& s = *impl_;
+  MoveResult result;
+  if (robot < 0 || robot >= kNumRobots) {
+    result.status = MoveStatus::kInvalidInput;
+    result.reason = "robot index " + std::to_string(robot) + " is not 0 or 1";
+    return result;
+  }
+  if (!q_target.allFinite()) {
+    result.status = MoveStatus::kInvalidInput;
+    result.reason = "joint targets of robot " + std::to_string(robot) + " are not all finite";
+    return result;
+  }
+  const KinematicModel& model = s.spec.robots[robot].model;
+  for (int i = 0; i < kNumJoints; ++i) {
+    const JointLimits& lim = model.links[i].limits;
+    if (q_target(i) < lim.lower || q_target(i) > lim.upper) {
+      result.status = MoveStatus::kOutOfLimits;
+      result.reason = "robot " + std::to_string(robot) + " joint " + std::to_string(i + 1) +
+                      " target " + Deg(q_target(i)) + " deg is outside its limits [" +
+                      Deg(lim.lower) + ", " + Deg(lim.upper) + "] deg";
+      return result;
+    }
+  }
+  return s.Run(robot, q_target);
+}
+
+MoveResult TwinCell::ExchangeTools() {
+  Impl& s = *impl_;
+  // The operator re-mounts both tools on the same brackets while the robots hold still: the
+  // state (link angles, motor commands) carries over to the rebuilt world.
+  std::array<JointVector, kNumRobots> link;
+  for (int k = 0; k < kNumRobots; ++k) {
+    for (int i = 0; i < kNumJoints; ++i) link[k](i) = s.d->qpos[s.qadr[k][i]];
+  }
+  const double time = s.d->time;
+  // Swap the tools and rebuild the world with the robots where they stand.
+  const auto swap_tools = [&]() {
+    std::swap(s.spec.camera.robot, s.spec.board.robot);
+    s.Build();
+    s.d->time = time;
+    for (int k = 0; k < kNumRobots; ++k) {
+      for (int i = 0; i < kNumJoints; ++i) s.d->qpos[s.qadr[k][i]] = link[k](i);
+    }
+    mj_forward(s.m.get(), s.d.get());
+  };
+  swap_tools();
+  MoveResult result;
+  if (const mjContact* c = s.Collision({})) {
+    // The contact lives in the data the rebuild below replaces: its text first.
+    const std::string contact = s.ContactText(*c);
+    swap_tools();  // the tools back: a cell never stays in an inconsistent state
+    result.status = MoveStatus::kCollision;
+    result.reason = "after exchanging the tools " + contact +
+                    "; tools left where they were (move the robots apart first)";
+    return result;
+  }
+  result = s.Run(-1, JointVector::Zero());
+  return result;
+}
+
+int TwinCell::CameraRobot() { return impl_->spec.camera.robot; }
+
+void TwinCell::SetOperatorAlignmentError(double sigma_m) {
+  if (!(std::isfinite(sigma_m) && sigma_m >= 0.0)) {
+    throw InputError("SetOperatorAlignmentError",
+                     "sigma must be a finite number >= 0 m, got " + std::to_string(sigma_m));
+  }
+  impl_->operator_sigma = sigma_m;
+}
+
+double TwinCell::last_contact_gap_m() const { return impl_->last_gap; }
+
+MoveResult TwinCell::JogTipToContact(int j) {
+  Impl& s = *impl_;
+  MoveResult result;
+  if (j < 0 || j >= kNumRobots) {
+    result.status = MoveStatus::kInvalidInput;
+    result.reason = "robot index " + std::to_string(j) + " is not 0 or 1";
+    return result;
+  }
+  const int o = 1 - j;
+  const std::string who = "handclasp of robot " + std::to_string(j) + " onto robot " +
+                          std::to_string(o) + "'s tip: ";
+  // The operator sees the true geometry (truth side): the true arm with the tip as its tool.
+  const KinematicModel model = WithTipTool(s.models[j], s.spec.tips[j].X_FTip);
+  const Transform X_BW = s.spec.robots[j].X_WB.inverse();
+  const Transform X_WTipO = FromMj(s.d->site_xpos + 3 * s.site_tip[o],
+                                   s.d->site_xmat + 9 * s.site_tip[o]);
+  // Aim point: the other tip plus the operator's alignment error (drawn for every contact, so
+  // the stream does not depend on sigma).
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Vector3 error;
+  for (int i = 0; i < 3; ++i) error(i) = normal(s.operator_rng);
+  const Vector3 p_W_aim = X_WTipO.translation() + s.operator_sigma * error;
+  const Vector3 z_o = X_WTipO.linear().col(2);
+
+  JointVector q_link;
+  for (int i = 0; i < kNumJoints; ++i) q_link(i) = s.d->qpos[s.qadr[j][i]];
+  const auto pose_B = [&](const Matrix3& R_W, const Vector3& p_W) {
+    Transform X = Transform::Identity();
+    X.linear() = R_W;
+    X.translation() = p_W;
+    return X_BW * X;
+  };
+  // Facing orientation and roll: IK solutions, the closest to the current pose first.
+  IkOptions ik;
+  ik.random_restarts = 8;
+  ik.seed = s.spec.seed;
+  IkOptions near = ik;
+  near.random_restarts = 0;
+  struct Candidate {
+    double cost;
+    JointVector standoff, goal;
+    Matrix3 R_W;
+  };
+  std::vector<Candidate> candidates;
+  std::string ik_reason;
+  for (int r = 0; r < kHandclaspRolls; ++r) {
+    const Matrix3 R_W = FacingTipRotation(X_WTipO.linear(), 2.0 * kPi * r / kHandclaspRolls);
+    const IkResult st =
+        SolveIk(model, pose_B(R_W, p_W_aim + kHandclaspStandoff * z_o), q_link, ik);
+    if (st.status != IkStatus::kSuccess) {
+      ik_reason = st.reason;
+      continue;
+    }
+    const IkResult goal = SolveIk(model, pose_B(R_W, p_W_aim), st.q, near);
+    if (goal.status != IkStatus::kSuccess) {
+      ik_reason = goal.reason;
+      continue;
+    }
+    candidates.push_back({(st.q - q_link).cwiseAbs().maxCoeff(), st.q, goal.q, R_W});
+  }
+  if (candidates.empty()) {
+    result.status = MoveStatus::kOutOfLimits;
+    result.reason = who + "the other tip is out of reach (IK: " + ik_reason + "); nothing moved";
+    return result;
+  }
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
+  // Motor commands for link targets, and one settled move with the limits of MoveTo.
+  const auto move = [&](const JointVector& q_link_target, const std::string& stage) {
+    const JointVector motor = q_link_target - s.TransmissionOffset(j);
+    MoveResult m;
+    if (!WithinLimits(s.spec.robots[j].model, motor)) {
+      m.status = MoveStatus::kOutOfLimits;
+      m.reason = who + stage + ": a joint target is outside the joint limits";
+      return m;
+    }
+    m = s.Run(j, motor);
+    result.duration_s += m.duration_s;
+    if (m.status != MoveStatus::kSettled) m.reason = who + stage + ": " + m.reason;
+    return m;
+  };
+  // The operator tries the next roll when the way to the stand-off is blocked, backing out to
+  // the start pose first.
+  const JointVector motor_start = s.motor[j];
+  MoveResult m;
+  size_t chosen = 0;
+  for (; chosen < candidates.size(); ++chosen) {
+    m = move(candidates[chosen].standoff, "moving to the stand-off");
+    if (m.status == MoveStatus::kSettled) break;
+    if (m.status != MoveStatus::kCollision) return m;
+    const MoveResult back = s.Run(j, motor_start);
+    result.duration_s += back.duration_s;
+    if (back.status != MoveStatus::kSettled) {
+      m.reason += "; backing out: " + back.reason;
+      return m;
+    }
+  }
+  if (chosen == candidates.size()) {
+    m.reason += " (every one of " + std::to_string(candidates.size()) + " tip rolls blocked)";
+    return m;
+  }
+  const Candidate& best = candidates[chosen];
+  const Matrix3 R_W_goal = best.R_W;
+  // Straight approach along the other tip's axis.
+  JointVector q = best.standoff;
+  for (int k = 1; k <= kApproachWaypoints; ++k) {
+    const double back = kHandclaspStandoff * (1.0 - static_cast<double>(k) / kApproachWaypoints);
+    const IkResult step = SolveIk(model, pose_B(R_W_goal, p_W_aim + back * z_o), q, near);
+    if (step.status != IkStatus::kSuccess) {
+      m.status = MoveStatus::kOutOfLimits;
+      m.reason = who + "approach: " + step.reason;
+      return m;
+    }
+    q = step.q;
+    m = move(q, "approaching");
+    if (m.status != MoveStatus::kSettled) return m;
+  }
+  // Corrective jogs on what the operator sees (true site positions), by the true Jacobian.
+  const Transform X_BW_inv = X_BW;
+  for (int jog = 0;; ++jog) {
+    const Vector3 p_W = Vector3(s.d->site_xpos + 3 * s.site_tip[j]);
+    const Vector3 gap_W = p_W_aim - p_W;
+    if (gap_W.norm() <= kContactToleranceM) {
+      s.last_gap = gap_W.norm();
+      result.status = MoveStatus::kSettled;
+      return result;
+    }
+    if (jog >= kMaxCorrectiveJogs) {
+      std::ostringstream os;
+      os << who << "the tips are still " << gap_W.norm() * 1e3 << " mm from contact after "
+         << kMaxCorrectiveJogs << " corrective jogs";
+      result.status = MoveStatus::kNotSettled;
+      result.reason = os.str();
+      return result;
+    }
+    JointVector q_now;
+    for (int i = 0; i < kNumJoints; ++i) q_now(i) = s.d->qpos[s.qadr[j][i]];
+    const Matrix3 R_W_now = FromMj(s.d->site_xpos + 3 * s.site_tip[j],
+                                   s.d->site_xmat + 9 * s.site_tip[j]).linear();
+    Eigen::Matrix<double, 6, 1> twist;
+    twist.head<3>() = X_BW_inv.linear() * gap_W;
+    const Eigen::AngleAxisd w(R_W_goal * R_W_now.transpose());
+    twist.tail<3>() = X_BW_inv.linear() * (w.angle() * w.axis());
+    const JointVector dq =
+        ManipulatorJacobian(model, q_now).colPivHouseholderQr().solve(twist);
+    // The jog is relative to the current command (what the operator's pendant holds).
+    m = move(s.motor[j] + s.TransmissionOffset(j) + dq, "jogging");
+    if (m.status != MoveStatus::kSettled) return m;
+  }
+}
+
+JointVector TwinCell::ReadEncoders(int robot) {
+  Impl& s = *impl_;
+  if (robot < 0 || robot >= kNumRobots) {
+    throw InputError("ReadEncoders", "robot index " + std::to_string(robot) + " is not 0 or 1");
+  }
+  JointVector reading = s.motor[robot];
+  for (const auto& e : s.effects) e->ApplyToEncoder(robot, &reading, &s.encoder_rng);
+  return reading;
+}
+
+cv::Mat TwinCell::GrabImage() {
+  Impl& s = *impl_;
+  cv::Mat image = s.HandRenderer().RenderPinhole(s.m.get(), s.d.get(), s.camera, s.canvas);
+  if (s.distortion) image = s.distortion->Apply(image);
+  for (const auto& e : s.effects) e->ApplyToImage(&image, &s.image_rng);
+  return image;
+}
+
+TwinTruth TwinCell::Truth() const {
+  const Impl& s = *impl_;
+  TwinTruth t;
+  t.models = s.models;
+  t.camera = s.spec.camera;
+  t.board = s.spec.board;
+  for (int k = 0; k < kNumRobots; ++k) {
+    t.X_WB[k] = s.spec.robots[k].X_WB;
+    for (int i = 0; i < kNumJoints; ++i) t.q_link[k](i) = s.d->qpos[s.qadr[k][i]];
+    t.q_motor[k] = s.motor[k];
+    t.p_WTip[k] = Vector3(s.d->site_xpos + 3 * s.site_tip[k]);
+  }
+  // MuJoCo's camera looks along -z with y up; the optical frame C is it turned by pi about x.
+  t.X_WC = FromMj(s.d->cam_xpos + 3 * s.camera, s.d->cam_xmat + 9 * s.camera) *
+           Transform(Eigen::AngleAxisd(kPi, Vector3::UnitX()));
+  t.X_WT = FromMj(s.d->xpos + 3 * s.board_body, s.d->xmat + 9 * s.board_body);
+  return t;
+}
+
+const std::string& TwinCell::mjcf() const { return impl_->mjcf; }
+
+cv::Mat TwinCell::RenderOverview(int width, int height, double azimuth_deg,
+                                 double elevation_deg) {
+  Impl& s = *impl_;
+  if (width < 1 || width > kMaxOverviewWidth || height < 1 || height > kMaxOverviewHeight) {
+    throw InputError("RenderOverview", "size " + std::to_string(width) + "x" +
+                                           std::to_string(height) + " px must be within 1x1 to " +
+                                           std::to_string(kMaxOverviewWidth) + "x" +
+                                           std::to_string(kMaxOverviewHeight));
+  }
+  if (!s.overview_renderer || s.overview_renderer->width() != width ||
+      s.overview_renderer->height() != height) {
+    s.overview_renderer.reset();  // one context at a time
+    s.overview_renderer = std::make_unique<OffscreenRenderer>(s.m.get(), width, height,
+                                                              s.spec.camera.msaa_samples);
+  }
+  const Vector3 b0 = s.spec.robots[0].X_WB.translation();
+  const Vector3 b1 = s.spec.robots[1].X_WB.translation();
+  const Vector3 lookat = 0.5 * (b0 + b1) + Vector3(0, 0, 0.35);
+  mjvCamera cam;
+  mjv_defaultCamera(&cam);
+  cam.type = mjCAMERA_FREE;
+  for (int i = 0; i < 3; ++i) cam.lookat[i] = lookat(i);
+  cam.distance = 1.0 + 1.4 * (b1 - b0).norm();
+  cam.azimuth = azimuth_deg;
+  cam.elevation = elevation_deg;
+  return s.overview_renderer->RenderFree(s.m.get(), s.d.get(), cam);
+}
+
+std::array<Transform, kNumLinks + 1> TwinCell::SiteFrames(int robot) const {
+  const Impl& s = *impl_;
+  if (robot < 0 || robot >= kNumRobots) {
+    throw InputError("SiteFrames", "robot index " + std::to_string(robot) + " is not 0 or 1");
+  }
+  std::array<Transform, kNumLinks + 1> frames;
+  for (int i = 0; i <= kNumLinks; ++i) {
+    const int site = s.site_L[robot][i];
+    frames[i] = FromMj(s.d->site_xpos + 3 * site, s.d->site_xmat + 9 * site);
+  }
+  return frames;
+}
+
+int TwinCell::last_move_steps() const { return impl_->last_steps; }
+
+void TwinCell::RenderBare() {
+  Impl& s = *impl_;
+  s.HandRenderer().RenderBare(s.m.get(), s.d.get(), s.camera);
+}
+
+}  // namespace twin

@@ -1,0 +1,80 @@
+// The MuJoCo twin of a dual-robot cell. It implements the Cell interface (what the estimator
+// may use) and, separately and explicitly, TwinCell::Truth() for scoring in bench/.
+#pragma once
+
+#include <array>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "calib/cell/cell.h"
+#include "sim/effects/effect.h"
+#include "sim/world/twin_spec.h"
+
+namespace twin {
+
+/// What only the twin knows; bench/ reads it for scoring after a procedure, never calib/.
+struct TwinTruth {
+  std::array<KinematicModel, kNumRobots> models;   ///< true geometry, effects applied
+  std::array<Transform, kNumRobots> X_WB;          ///< base poses in the world
+  std::array<JointVector, kNumRobots> q_link;      ///< current link-side joint angles [rad]
+  std::array<JointVector, kNumRobots> q_motor;     ///< current motor-side angles [rad]
+  Transform X_WC;                                  ///< camera optical frame in the world now
+  Transform X_WT;                                  ///< board frame (origin P) in the world now
+  std::array<Vector3, kNumRobots> p_WTip;          ///< measuring tip points in the world now
+  CameraSpec camera;                               ///< true intrinsics, distortion, hand-eye
+  BoardSpec board;                                 ///< true board geometry and mount
+};
+
+class TwinCell : public Cell {
+ public:
+  /// Validates `spec`, applies geometry effects, builds the MJCF and the MuJoCo model, places
+  /// both robots at their initial angles and lets them settle. Throws InputError for bad spec
+  /// values (naming `where`) and for initial poses that collide or leave the limits.
+  explicit TwinCell(const TwinSpec& spec, const std::string& where = "scenario");
+  ~TwinCell() override;
+
+  MoveResult MoveTo(int robot, const JointVector& q_target) override;
+  JointVector ReadEncoders(int robot) override;
+  cv::Mat GrabImage() override;
+  MoveResult ExchangeTools() override;
+  int CameraRobot() override;
+  /// The simulated operator's handclasp (Gan et al. 2014, section 3): using the true
+  /// kinematics (a person looking at the tips), robot `jogged_robot` is driven by settled moves
+  /// to a stand-off in front of the other tip, then along the common tip axis, then by small
+  /// corrective jogs, until its true tip point is within kContactToleranceM of the other true
+  /// tip point plus the operator's alignment error (drawn per contact, N(0, sigma) per world
+  /// axis). Tips do not collide with each other in the MJCF, so contact is decided from the
+  /// MuJoCo site positions.
+  MoveResult JogTipToContact(int jogged_robot) override;
+
+  /// Standard deviation of the operator's alignment error per world axis [m] (default 0).
+  /// Throws InputError for a negative or non-finite value.
+  void SetOperatorAlignmentError(double sigma_m);
+  /// Distance between the jogged tip and the operator's aim point after the last successful
+  /// JogTipToContact [m] (tests: the settling floor of the contact).
+  double last_contact_gap_m() const;
+  /// Contact is confirmed when the jogged tip is this close to the aim point [m]: about the
+  /// servo settling floor (measured ~1e-11 m: settled below 1e-6 rad/s for 20 steps).
+  static constexpr double kContactToleranceM = 1e-9;
+
+  /// Ground truth for scoring (bench/ only).
+  TwinTruth Truth() const;
+  /// The generated MJCF text (for inspection and tests).
+  const std::string& mjcf() const;
+  /// A third-person view of the whole cell, width x height, from `azimuth`/`elevation` [deg].
+  cv::Mat RenderOverview(int width, int height, double azimuth_deg, double elevation_deg);
+  /// Poses in the world of MuJoCo's sites for DH frames L0..L7 of robot `robot` (tests).
+  std::array<Transform, kNumLinks + 1> SiteFrames(int robot) const;
+  /// Steps taken by the last MoveTo (benchmarks).
+  int last_move_steps() const;
+  /// The benchmark baseline: bare mjr_render + mjr_readPixels of the hand camera.
+  void RenderBare();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace twin

@@ -1,0 +1,25 @@
+#include "sim/effects/effect.h"
+
+#include <cassert>
+
+namespace twin {
+
+// The do-nothing defaults: an effect overrides only the hooks it acts through.
+void Effect::ApplyToGeometry(int, KinematicModel*, std::mt19937_64*) const {}
+void Effect::ApplyToDrive(int, std::array<JointDrive, kNumJoints>*) const {}
+void Effect::ApplyToTransmission(int, const JointVector&, const JointVector&,
+                                 JointVector*) const {}
+void Effect::ApplyToEncoder(int, JointVector*, std::mt19937_64*) const {}
+void Effect::ApplyToImage(cv::Mat*, std::mt19937_64*) const {}
+
+bool Effect::Applies(int robot) const {
+  assert(robot >= 0 && robot < kNumRobots);
+  return spec().robot == -1 || spec().robot == robot;
+}
+
+bool Effect::Applies(int robot, int joint) const {
+  assert(joint >= 0 && joint < kNumJoints);
+  return Applies(robot) && (spec().joint == -1 || spec().joint == joint);
+}
+
+}  // namespace twin

@@ -1,0 +1,56 @@
+// Effects on the truth side of the twin. An effect changes what the twin does, never what the
+// estimator is told. Each effect is one class in sim/effects/ plus one line in the registry
+// (sim/effects/registry.cc); it checks its own parameters. Hooks that an effect does not need
+// keep their do-nothing defaults.
+#pragma once
+
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "calib/kinematics/kinematic_model.h"
+#include "sim/world/twin_spec.h"
+
+namespace twin {
+
+/// Per-joint drive settings an effect may change.
+struct JointDrive {
+  double stiffness = 0.0;          ///< position-actuator kp [N m/rad]
+  bool gravity_feedforward = true; ///< false: the link sags by gravity torque / stiffness
+};
+
+class Effect {
+ public:
+  virtual ~Effect() = default;
+  /// The spec it was made from (type, declared, robot, joint, params).
+  virtual const EffectSpec& spec() const = 0;
+  /// Static change of robot `robot`'s true geometry, before the world is built.
+  virtual void ApplyToGeometry(int robot, KinematicModel* model, std::mt19937_64* rng) const;
+  /// Drive settings of robot `robot`'s joints.
+  virtual void ApplyToDrive(int robot, std::array<JointDrive, kNumJoints>* drives) const;
+  /// Adds to `link_offset` the link-side minus motor-side angle of each joint for motor angles
+  /// `motor`, approached moving in `direction` (+1, -1 per joint; 0 if never moved) [rad].
+  virtual void ApplyToTransmission(int robot, const JointVector& motor,
+                                   const JointVector& direction, JointVector* link_offset) const;
+  /// Changes the encoder reading (motor side) of robot `robot` [rad].
+  virtual void ApplyToEncoder(int robot, JointVector* reading, std::mt19937_64* rng) const;
+  /// Changes a rendered camera image (8-bit BGR).
+  virtual void ApplyToImage(cv::Mat* image, std::mt19937_64* rng) const;
+
+ protected:
+  /// True if this effect acts on `robot` / `joint` (its spec's -1 means all).
+  bool Applies(int robot) const;
+  bool Applies(int robot, int joint) const;
+};
+
+/// Builds the effect named by spec.type; throws InputError naming spec.where for an unknown
+/// type (listing the known ones), an unknown or missing parameter, or a bad value.
+std::unique_ptr<Effect> MakeEffect(const EffectSpec& spec);
+
+/// Names of the registered effect types.
+std::vector<std::string> EffectTypes();
+
+}  // namespace twin

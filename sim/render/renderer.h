@@ -1,0 +1,49 @@
+// Off-screen rendering of a MuJoCo scene with OSMesa, with exact pinhole intrinsics (fx, fy,
+// cx, cy in OpenCV's pixel-centre convention). Several renderers may live in one process; each
+// owns its OSMesa context and makes it current for every call. Not thread-safe per instance.
+#pragma once
+
+#include <memory>
+
+#include <mujoco/mujoco.h>
+#include <opencv2/core.hpp>
+
+#include "sim/world/twin_spec.h"
+
+namespace twin {
+
+class OffscreenRenderer {
+ public:
+  /// Creates an OSMesa context and MuJoCo render context for `model` with an offscreen
+  /// framebuffer of width x height pixels and `msaa` samples; these override the model's
+  /// <global offwidth/offheight> and <quality offsamples> (set on a private copy of the model).
+  OffscreenRenderer(const mjModel* model, int width, int height, int msaa);
+  ~OffscreenRenderer();
+  OffscreenRenderer(const OffscreenRenderer&) = delete;
+  OffscreenRenderer& operator=(const OffscreenRenderer&) = delete;
+
+  /// Near and far clipping distances [m] for RenderPinhole; until called, the model's
+  /// <map znear/zfar> times its extent are used. Throws std::invalid_argument unless
+  /// 0 < near < far.
+  void SetClipPlanes(double near_m, double far_m);
+
+  /// Renders MJCF camera `camera_id` as an ideal pinhole with `K` (width/height of K must equal
+  /// the renderer's). Returns 8-bit BGR in OpenCV row order.
+  cv::Mat RenderPinhole(const mjModel* model, mjData* data, int camera_id, const Intrinsics& K);
+
+  /// Renders a free (third-person) camera; returns 8-bit BGR in OpenCV row order.
+  cv::Mat RenderFree(const mjModel* model, mjData* data, const mjvCamera& camera);
+
+  /// The benchmark baseline: mjv_updateScene + mjr_render + mjr_readPixels of camera
+  /// `camera_id`, nothing else (no intrinsics, no flip, no conversion).
+  void RenderBare(const mjModel* model, mjData* data, int camera_id);
+
+  int width() const;
+  int height() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace twin

@@ -1,0 +1,119 @@
+// The description of a twin cell: everything sim/ needs to build the MuJoCo world, as plain
+// structs (no MuJoCo, no YAML). bench/ fills it from a scenario file; sim/ never reads files.
+// Frames (calib/common/frames.h): W world, B robot base, F flange (DH frame L6 of the true model),
+// C camera (OpenCV optical frame), T board (origin at the feature point P), Tip measuring tip.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "calib/kinematics/kinematic_model.h"
+
+namespace twin {
+
+constexpr int kNumRobots = 2;
+
+/// How a robot base is mounted (Gan et al. 2014): base z up, horizontal, or down.
+enum class Installation { kFloor, kWall, kCeiling };
+
+/// Name of an installation ("floor", "wall", "ceiling").
+const char* ToString(Installation installation);
+
+/// One arm of the cell.
+struct RobotSpec {
+  KinematicModel model;                     ///< true geometry before geometry effects
+  Installation installation = Installation::kFloor;
+  Transform X_WB = Transform::Identity();   ///< base pose in the world
+  JointVector q_initial = JointVector::Zero();  ///< motor-side joint angles at start [rad]
+};
+
+/// Pinhole intrinsics in OpenCV's convention (pixel centres at integer coordinates).
+struct Intrinsics {
+  int width = 1024;     ///< [px]
+  int height = 768;     ///< [px]
+  double fx = 834.31;   ///< [px] (Zhu et al. 2019, section VI.A)
+  double fy = 833.38;   ///< [px]
+  double cx = 513.56;   ///< [px]
+  double cy = 403.95;   ///< [px]
+};
+
+/// Brown-Conrady lens distortion, OpenCV's (k1, k2, p1, p2, k3); all zero means none.
+struct Distortion {
+  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+  bool Any() const { return k1 != 0 || k2 != 0 || p1 != 0 || p2 != 0 || k3 != 0; }
+};
+
+/// The hand camera, rigidly on one robot's flange.
+struct CameraSpec {
+  int robot = 0;                            ///< the active robot carrying the camera
+  Transform X_FC = Transform::Identity();   ///< hand-eye: camera optical frame in the flange
+  Intrinsics intrinsics;
+  Distortion distortion;
+  int msaa_samples = 4;                     ///< off-screen multisampling (llvmpipe clamps to 4)
+  double near_m = 0.02;                     ///< near clipping plane [m]
+  double far_m = 5.0;                       ///< far clipping plane [m]
+};
+
+/// The chessboard on the passive robot's flange. Board frame T: origin at the feature point P
+/// (the centre inner corner), on the printed face, z out of the face, x along a row of squares.
+struct BoardSpec {
+  int robot = 1;                            ///< the passive robot carrying the board
+  int squares_x = 4;                        ///< squares along x (inner corners: squares - 1)
+  int squares_y = 4;                        ///< squares along y
+  double square_m = 0.02;                   ///< side of one square [m]
+  double margin_m = 0.01;                   ///< white border around the squares [m]
+  double thickness_m = 0.004;               ///< plate thickness [m]
+  double mass_kg = 0.2;                     ///< mass of board and bracket [kg]
+  Transform X_FT = Transform::Identity();   ///< board frame in the flange
+};
+
+/// A measuring tip on a flange for handclasp contacts (Gan et al. 2014).
+struct TipSpec {
+  Transform X_FTip = Transform::Identity();  ///< tip point frame in the flange (origin = tip)
+  double length_m = 0.08;                    ///< tip body length behind the point [m]
+  double radius_m = 0.004;                   ///< tip radius [m]
+};
+
+/// Joint drive and settling. Without the compliance effect the drive holds the link exactly at
+/// its target (gravity is fed forward); with it the link sags by gravity torque / stiffness.
+struct PhysicsSpec {
+  double timestep_s = 0.002;        ///< physics step [s]
+  double stiffness = 1e5;           ///< position-actuator gain kp [N m/rad]
+  double armature = 0.1;            ///< reflected rotor inertia per joint [kg m^2]
+  double max_joint_speed = 1.0;     ///< speed of the commanded ramp [rad/s]
+  double settle_speed = 1e-6;       ///< settled when every joint is slower than this [rad/s]
+  int settle_steps = 20;            ///< ... for this many consecutive steps
+  int max_steps = 20000;            ///< step limit of one move (settling included)
+  bool gravity = true;              ///< gravity on (9.81 m/s^2 along -z of the world)
+};
+
+/// One effect on the truth side: `type` names it, `params` are its numbers, keyed with units
+/// in the key (e.g. "amplitude_deg"); an effect checks its own keys.
+struct EffectSpec {
+  std::string type;                       ///< e.g. "transmission_error"
+  bool declared = true;                   ///< false: the estimator is not told about it
+  int robot = -1;                         ///< 0 or 1, or -1 for both
+  int joint = -1;                         ///< 0..5, or -1 for every joint
+  std::map<std::string, double> params;   ///< numbers by name
+  std::string where;                      ///< where it was written, for messages
+};
+
+/// A whole twin cell.
+struct TwinSpec {
+  std::array<RobotSpec, kNumRobots> robots;
+  CameraSpec camera;
+  BoardSpec board;
+  std::array<TipSpec, kNumRobots> tips;
+  PhysicsSpec physics;
+  std::vector<EffectSpec> effects;
+  std::uint64_t seed = 1;                 ///< seed of every random effect
+};
+
+/// Checks values before anything is built; throws InputError naming `where`, the field and the
+/// bad value (e.g. a negative square size, a zero focal length, a bad robot index).
+void ValidateTwinSpec(const TwinSpec& spec, const std::string& where);
+
+}  // namespace twin

@@ -1,0 +1,227 @@
+// The handclasp base-frame calibration on the twin (bench/runs/handclasp_run.h): exact recovery in
+// closed loop with true kinematics, the paper's three set-ups as a seeded batch, the report,
+// and the section's input errors.
+#include "bench/runs/handclasp_run.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
+#include "sim/world/mujoco_handles.h"
+
+namespace twin {
+namespace {
+
+const std::string kDir = std::string(TWIN_SOURCE_DIR) + "/scenarios/";
+const char* const kSetups[] = {"floor_floor", "floor_ceiling", "floor_wall"};
+
+class HandclaspRunTest : public ::testing::Test {
+ protected:
+  void SetUp() override { InstallMujocoErrorHandlers(); }
+};
+
+Transform FromZyzMm(double x, double y, double z, double a, double b, double c) {
+  Transform X = Transform::Identity();
+  X.linear() = RotationFromZyz(Vector3(DegToRad(a), DegToRad(b), DegToRad(c)));
+  X.translation() = 1e-3 * Vector3(x, y, z);
+  return X;
+}
+
+// The paper's set-up with its installation made exact (Table 1's truth rounded onto the
+// constraint), so that the constrained solution can be exact too.
+Scenario IdealSetup(const std::string& name) {
+  Scenario sc = LoadScenario(kDir + "gan2014_" + name + ".yaml");
+  Transform X_B1B2;
+  if (name == "floor_floor") X_B1B2 = FromZyzMm(37.9, 1476.5, 54.5, 0, 0, -44.5);
+  if (name == "floor_ceiling") X_B1B2 = FromZyzMm(1500.1, 500.0, 1499.9, 0, 180, 0.001);
+  if (name == "floor_wall") X_B1B2 = FromZyzMm(1303.3, -102.3, 1386.3, 180, 90, -179.997);
+  sc.twin.robots[1].X_WB = sc.twin.robots[0].X_WB * X_B1B2;
+  sc.handclasp = YamlField{YAML::Load("{operator_error_mm: 0, coupled_motion: true}"),
+                           "scenario.handclasp"};
+  return sc;
+}
+
+TEST_F(HandclaspRunTest, RecoversTheBaseFrameExactlyWithTrueKinematicsInClosedLoop) {
+  // Geometry errors stay on; the controllers use the TRUE models, the operator aligns exactly.
+  // Then every contact pair is exact up to the twin's contact tolerance (1e-9 m) and the servo
+  // settling between commanded and actual angles (measured below), so both solutions recover
+  // X_B1B2. Bound 1e-5 mm (1e-8 m) and 1e-6 deg: measured ~1e-6 mm and ~4e-8 deg (contacts
+  // within 1e-9 m, angles settled to ~1e-9 rad); the bound keeps a factor of ~10.
+  for (const char* name : kSetups) {
+    const Scenario sc = IdealSetup(name);
+    TwinCell cell(sc.twin, sc.path);
+    const std::array<KinematicModel, 2> truth_models = cell.Truth().models;
+    std::ostringstream progress;
+    const HandclaspStageResult r = RunHandclaspStage(cell, sc, truth_models, progress);
+    ASSERT_TRUE(r.ok) << name << ": " << r.report.dump(1) << progress.str();
+    const nlohmann::json& rep = r.report;
+    // A blocked contact is skipped (on the wall the operator's way in can hit robot 2's own
+    // base: 2 of 7 measured); at least 5 must remain for an over-determined, spread set.
+    EXPECT_GE(rep["contacts"].size(), 5u) << name << progress.str();
+    for (const char* which : {"general", "constrained"}) {
+      const double e_tran = rep[which]["e_tran_mm"].get<double>();
+      const double e_rot = rep[which]["e_rot_deg"].get<double>();
+      std::printf("[ measured ] %s %s exact: e_tran %.3g mm, e_rot %.3g deg, rms %.3g mm\n",
+                  name, which, e_tran, e_rot, rep[which]["rms_residual_mm"].get<double>());
+      EXPECT_LT(e_tran, 1e-5) << name << " " << which;
+      EXPECT_LT(e_rot, 1e-6) << name << " " << which;
+    }
+    // Coupled motion through an exact estimate with exact kinematics: the tips stay together
+    // up to the IK tolerance (1e-7 m per robot) and settling; 1e-3 mm keeps a margin of 5.
+    ASSERT_EQ(rep["coupled_motion"]["status"], "ok") << rep["coupled_motion"].dump();
+    const double dev = rep["coupled_motion"]["max_deviation_mm"].get<double>();
+    std::printf("[ measured ] %s coupled motion max deviation %.3g mm\n", name, dev);
+    EXPECT_LT(dev, 1e-3) << name;
+  }
+}
+
+TEST_F(HandclaspRunTest, ScoresAgainstTheFramesTheKinematicModelsUse) {
+  // Explicit link-1 errors on both robots (no other geometry error): robot 1 theta +0.5 deg,
+  // d +3 mm; robot 2 theta -0.3 deg, d -2 mm. The pendant models are the TRUE models with link
+  // 1's theta and d put back to nominal (what any kinematic calibration ends with: those two
+  // are unidentifiable), the operator exact. The handclasp then recovers X_B1'B2' exactly
+  // (bounds of the closed-loop exact test above), while the physical X_B1B2 differs by the
+  // link-1 offsets: 0.5 + 0.3 deg about z, so the physical e_rot must be near 0.8 deg and the
+  // physical e_tran several mm (3 + 2 mm along z, plus the rotation's lever).
+  Scenario sc = IdealSetup("floor_floor");
+  sc.twin.effects.clear();
+  const std::pair<double, double> link1[2] = {{0.5, 3.0}, {-0.3, -2.0}};
+  for (int k = 0; k < 2; ++k) {
+    EffectSpec e;
+    e.type = "geometry_errors";
+    e.robot = k;
+    e.params = {{"link1.theta_deg", link1[k].first}, {"link1.d_mm", link1[k].second}};
+    e.where = "test";
+    sc.twin.effects.push_back(e);
+  }
+  TwinCell cell(sc.twin, sc.path);
+  std::array<KinematicModel, 2> pendant = cell.Truth().models;
+  for (int k = 0; k < 2; ++k) pendant[k].links[0].dh = [&] {
+    DhParameters dh = pendant[k].links[0].dh;
+    dh.theta_offset = sc.twin.robots[k].model.links[0].dh.theta_offset;
+    dh.d = sc.twin.robots[k].model.links[0].dh.d;
+    return dh;
+  }();
+  // The offset of eq. 2's link-1 part alone: FK_true = X_BB' * FK_pendant for any q.
+  const JointVector q = (JointVector() << 0.3, -0.4, 0.5, 0.2, -0.6, 0.7).finished();
+  for (int k = 0; k < 2; ++k) {
+    const Transform lhs = EndPose(cell.Truth().models[k], q);
+    const Transform rhs = KinematicBaseOffset(cell.Truth().models[k], pendant[k]) *
+                          EndPose(pendant[k], q);
+    EXPECT_LT((lhs.matrix() - rhs.matrix()).norm(), 1e-12) << "robot " << k;
+  }
+  std::ostringstream progress;
+  const HandclaspStageResult r = RunHandclaspStage(cell, sc, pendant, progress);
+  ASSERT_TRUE(r.ok) << r.report.dump(1) << progress.str();
+  const nlohmann::json& rep = r.report;
+  for (const char* which : {"general", "constrained"}) {
+    const double e_tran = rep[which]["e_tran_mm"], e_rot = rep[which]["e_rot_deg"];
+    const double p_tran = rep["physical_truth"][which]["e_tran_mm"];
+    const double p_rot = rep["physical_truth"][which]["e_rot_deg"];
+    std::printf("[ measured ] %s: kinematic frame e_tran %.3g mm, e_rot %.3g deg; physical "
+                "e_tran %.3g mm, e_rot %.3g deg\n", which, e_tran, e_rot, p_tran, p_rot);
+    EXPECT_LT(e_tran, 1e-5) << which;
+    EXPECT_LT(e_rot, 1e-6) << which;
+    EXPECT_NEAR(p_rot, 0.8, 0.01) << which;  // 0.5 + 0.3 deg about z; 0.01: ZYZ split slack
+    EXPECT_GT(p_tran, 2.0) << which;
+  }
+  EXPECT_NEAR(rep["scoring_frame"]["link1_offsets"][0]["dd1_mm"].get<double>(), 3.0, 1e-9);
+  EXPECT_NEAR(rep["scoring_frame"]["link1_offsets"][1]["dtheta1_deg"].get<double>(), -0.3, 1e-9);
+}
+
+TEST_F(HandclaspRunTest, ConstrainedIsNotWorseThanGeneralOverASeededBatch) {
+  // The paper's set-ups with nominal pendant models (geometry errors of a well-kept factory
+  // arm, sigma 0.5 mm / 0.05 deg) and 0.5 mm operator error; 3 trials each (seeds 11..13). The claim of the paper
+  // (Table 1, section 4) is checked on the batch means.
+  for (const char* name : kSetups) {
+    const std::string out = ::testing::TempDir() + "/hc_batch_" + name;
+    const std::string scenario = out + ".yaml";
+    {
+      std::ifstream in(kDir + "gan2014_" + name + ".yaml");
+      std::stringstream text;
+      text << in.rdbuf();
+      std::string s = text.str();
+      const std::string from = "trials: 10", to = "trials: 3";
+      ASSERT_NE(s.find(from), std::string::npos);
+      s.replace(s.find(from), from.size(), to);
+      // Model paths are relative to the scenario's folder: make them absolute.
+      for (const std::string m : {"reinovo_r1.yaml", "reinovo_r2.yaml"}) {
+        const std::string rel = "../models/" + m;
+        s.replace(s.find(rel), rel.size(), std::string(TWIN_SOURCE_DIR) + "/models/" + m);
+      }
+      std::ofstream(scenario) << s;
+    }
+    std::ostringstream progress;
+    const int rc = RunHandclaspScenario(scenario, out, progress);
+    ASSERT_EQ(rc, 0) << name << "\n" << progress.str();
+    std::ifstream f(out + "/report.json");
+    const nlohmann::json rep = nlohmann::json::parse(f);
+    const nlohmann::json& b = rep["base_frame"]["batch"];
+    const double g_t = b["general"]["mean_e_tran_mm"], g_r = b["general"]["mean_e_rot_deg"];
+    const double c_t = b["constrained"]["mean_e_tran_mm"], c_r = b["constrained"]["mean_e_rot_deg"];
+    std::printf("[ measured ] %s over 3 trials: general e_tran %.2f mm, e_rot %.3f deg; "
+                "constrained e_tran %.2f mm, e_rot %.3f deg\n", name, g_t, g_r, c_t, c_r);
+    // On the means of 3 trials. The refinement fixes rotation angles, so e_rot may not grow
+    // beyond 1% (the free angle stays the general one's, up to re-fitting). e_tran is re-fitted
+    // by eq. 12 with the new rotation and can move either way: the paper's own Table 1 row 1
+    // has the constrained e_tran 3.5% worse (5.9 vs 5.7 mm), hence a 5% allowance.
+    // Floor-wall: the paper's H_tru stands 0.126 deg off a perfect wall (middle ZYZ angle
+    // 89.874), and the refinement forces 90 deg (eq. 17-21), so the constrained middle angle is
+    // off by exactly 0.126 deg whatever the data; where the general error is smaller, e_rot
+    // grows up to that (the paper's own row 12: 0.126 vs 0.121 deg). Allowed on top.
+    const double wall_tilt_deg = std::string(name) == "floor_wall" ? 90.0 - 89.874 : 0.0;
+    EXPECT_LE(c_r, 1.01 * g_r + wall_tilt_deg) << name;
+    EXPECT_LE(c_t, 1.05 * g_t) << name;
+    EXPECT_EQ(rep["base_frame"]["installation"], std::string(name) == "floor_floor" ? "floor-floor"
+                                                 : std::string(name) == "floor_wall" ? "floor-wall"
+                                                                                      : "floor-ceiling");
+    EXPECT_FALSE(std::filesystem::exists(out + "/report.json.tmp"));
+  }
+}
+
+void ExpectSectionError(const std::string& section, const std::string& where_part,
+                        const std::string& message_part) {
+  Scenario sc = LoadScenario(kDir + "gan2014_floor_floor.yaml");
+  sc.handclasp = YamlField{YAML::Load(section), "scenario.handclasp"};
+  try {
+    ParseHandclaspConfig(sc);
+    ADD_FAILURE() << "no InputError for " << section;
+  } catch (const InputError& e) {
+    EXPECT_NE(e.where().find(where_part), std::string::npos) << e.what();
+    EXPECT_NE(e.message().find(message_part), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(HandclaspRunTest, SectionErrorsNameTheKey) {
+  ExpectSectionError("{pointz: auto}", "scenario.handclasp", "pointz");
+  ExpectSectionError("{points: some}", "scenario.handclasp.points", "auto");
+  ExpectSectionError("{points: [[0, 0, 500], [100, 0, 500]]}", "scenario.handclasp.points",
+                     "at least 4");
+  ExpectSectionError("{operator_error_mm: -1}", "scenario.handclasp.operator_error_mm", ">= 0");
+  ExpectSectionError("{constraint: floor_roof}", "scenario.handclasp.constraint", "floor_wall");
+  ExpectSectionError("{trials: 0}", "scenario.handclasp.trials", "1..1000");
+}
+
+TEST_F(HandclaspRunTest, SectionDefaultsFollowTheInstallations) {
+  for (const char* name : kSetups) {
+    Scenario sc = LoadScenario(kDir + "gan2014_" + name + ".yaml");
+    sc.handclasp = YamlField{};
+    const HandclaspConfig c = ParseHandclaspConfig(sc);
+    EXPECT_TRUE(c.auto_points);
+    EXPECT_EQ(c.trials, 1);
+    EXPECT_EQ(c.operator_error_m, 0.0);
+    EXPECT_EQ(std::string(ToString(c.constraint)),
+              std::string(name) == "floor_floor"     ? "floor-floor"
+              : std::string(name) == "floor_ceiling" ? "floor-ceiling"
+                                                     : "floor-wall");
+  }
+}
+
+}  // namespace
+}  // namespace twin

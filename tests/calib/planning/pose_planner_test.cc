@@ -1,0 +1,217 @@
+#include "calib/planning/pose_planner.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include <gtest/gtest.h>
+
+#include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
+#include "test_models.h"
+
+namespace twin {
+namespace {
+
+using testing::ReinovoLikeModel;
+
+// Bases 1.2 m apart facing each other; camera 50 mm along the flange z.
+Transform BaseToBase(double distance = 1.2) {
+  Transform X = Transform::Identity();
+  X.translation() = Vector3(distance, 0.0, 0.0);
+  X.linear() = Eigen::AngleAxisd(kPi, Vector3::UnitZ()).toRotationMatrix();
+  return X;
+}
+
+Transform HandEye() {
+  Transform X = Transform::Identity();
+  X.translation() = Vector3(0.0, 0.0, 0.05);
+  return X;
+}
+
+PosePlannerOptions SmallOptions(std::uint64_t seed = 7) {
+  PosePlannerOptions o;
+  o.swarm_size = 6;
+  o.iterations = 15;
+  o.runs = 2;
+  o.num_axes = 3;
+  o.positions_per_axis = 5;
+  o.seed = seed;
+  return o;
+}
+
+// Camera pose in the passive base from the active joint angles, by FK of the flange (L6).
+Transform CameraInPassiveBase(const KinematicModel& active, const JointVector& q) {
+  return BaseToBase().inverse() * ForwardKinematics(active, q).flange() * HandEye();
+}
+
+double JointLimitDistance(const KinematicModel& m, const JointVector& q) {
+  double d = 1e9;
+  for (int i = 0; i < kNumJoints; ++i) {
+    d = std::min({d, q(i) - m.links[i].limits.lower, m.links[i].limits.upper - q(i)});
+  }
+  return d;
+}
+
+class PosePlannerTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    const auto t0 = std::chrono::steady_clock::now();
+    result_ = new PosePlanResult(PlanCalibrationPoses(ReinovoLikeModel(0), ReinovoLikeModel(1),
+                                                      BaseToBase(), HandEye(), SmallOptions()));
+    const double s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const RejectionCounts& r = result_->rejections;
+    std::printf("plan: %s, best 1/O1 %.6g (run %d), %.2f s, %d evaluations, rejected %d "
+                "(active_ik %d passive_ik %d C1 %d C2 %d C3 %d C4 %d C5 %d)\n",
+                ToString(result_->status), result_->best_fitness, result_->best_run, s,
+                result_->evaluations, r.total(), r.active_ik, r.passive_ik, r.c1_joint_limits,
+                r.c2_singularity, r.c3_visibility, r.c4_min_distance, r.c5_max_distance);
+    for (const auto& h : result_->fitness_history) {
+      std::printf("  history: %.6g -> %.6g\n", h.front(), h.back());
+    }
+  }
+  static void TearDownTestSuite() { delete result_; }
+  static PosePlanResult* result_;
+};
+PosePlanResult* PosePlannerTest::result_ = nullptr;
+
+TEST_F(PosePlannerTest, ReturnsPosesThatSatisfyAllConstraintsWhenRecheckedWithFk) {
+  const PosePlanResult& r = *result_;
+  ASSERT_EQ(r.status, PosePlannerStatus::kSuccess) << r.reason;
+  const PosePlannerOptions o = SmallOptions();
+  const KinematicModel active = ReinovoLikeModel(0), passive = ReinovoLikeModel(1);
+  ASSERT_EQ(static_cast<int>(r.axes.size()), o.num_axes);
+  EXPECT_TRUE(std::isfinite(r.best_fitness));
+  EXPECT_GT(r.best_fitness, 0.0);
+  for (const PlannedAxis& axis : r.axes) {
+    ASSERT_EQ(static_cast<int>(axis.q_passive.size()), o.positions_per_axis);
+    const Transform X_BpC = CameraInPassiveBase(active, axis.q_active);
+    const Vector3 p_c = X_BpC.translation();
+    const Vector3 mu = X_BpC.linear().col(2);
+    // Reported axis equals the FK axis (IK tolerance 1e-7 m / rad).
+    EXPECT_LT((p_c - axis.camera_origin).norm(), 1e-6);
+    EXPECT_LT((mu - axis.direction).norm(), 1e-6);
+    // C1/C2 for the active robot: the check uses the thresholds exactly, no tolerance needed.
+    EXPECT_GE(JointLimitDistance(active, axis.q_active), o.min_joint_limit_distance);
+    EXPECT_TRUE(WithinLimits(active, axis.q_active));
+    for (size_t i = 0; i < axis.q_passive.size(); ++i) {
+      const JointVector& q = axis.q_passive[i];
+      EXPECT_TRUE(WithinLimits(passive, q));
+      EXPECT_GE(JointLimitDistance(passive, q), o.min_joint_limit_distance);
+      EXPECT_GE(JacobianSingularValues(passive, q)(kNumJoints - 1), o.min_singular_value);
+      const Transform X_BpE = EndPose(passive, q);
+      const Vector3 v = X_BpE.translation() - p_c;
+      // Board origin on the optical axis: both IKs hold 1e-7 m, so 1e-6 m has margin.
+      EXPECT_LT(v.cross(mu).norm(), 1e-6) << "axis point " << i;
+      EXPECT_GT(v.dot(mu), 0.0) << "board in front of the camera";
+      const double D = v.norm();
+      EXPECT_GE(D, o.min_distance);
+      EXPECT_LE(D, std::min(o.max_distance, o.planning_max_distance));
+      EXPECT_NEAR(D, axis.distances[i], 1e-6);
+      const Vector3 n = X_BpE.linear() * o.board_normal_in_E;
+      EXPECT_LT(std::acos(std::clamp(n.dot(-mu), -1.0, 1.0)), o.max_visibility_angle);
+    }
+    // Flange model singular values (the camera's frame) are what C2 checks for the active arm.
+    KinematicModel flange = active;
+    flange.links[kNumJoints].dh = DhParameters{};
+    flange.X_L7E = Transform::Identity();
+    EXPECT_GE(JacobianSingularValues(flange, axis.q_active)(kNumJoints - 1),
+              o.min_singular_value);
+  }
+  // The returned fitness is the fitness of the returned poses.
+  std::vector<std::vector<JointVector>> q;
+  std::vector<Vector3> mu;
+  for (const PlannedAxis& a : r.axes) {
+    q.push_back(a.q_passive);
+    mu.push_back(a.direction);
+  }
+  EXPECT_NEAR(PoseSetFitness(passive, q, mu, o.rank_tolerance), r.best_fitness,
+              1e-9 * r.best_fitness);
+}
+
+TEST_F(PosePlannerTest, BestFitnessHistoryIsNonIncreasing) {
+  const PosePlanResult& r = *result_;
+  ASSERT_EQ(r.status, PosePlannerStatus::kSuccess) << r.reason;
+  const PosePlannerOptions o = SmallOptions();
+  ASSERT_EQ(static_cast<int>(r.fitness_history.size()), o.runs);
+  double best = 1e300;
+  for (const auto& h : r.fitness_history) {
+    ASSERT_EQ(static_cast<int>(h.size()), o.iterations + 1);
+    for (size_t i = 1; i < h.size(); ++i) EXPECT_LE(h[i], h[i - 1]);
+    best = std::min(best, h.back());
+  }
+  EXPECT_DOUBLE_EQ(best, r.best_fitness);
+  EXPECT_DOUBLE_EQ(r.fitness_history[r.best_run].back(), r.best_fitness);
+}
+
+TEST_F(PosePlannerTest, SameSeedIsIdenticalDifferentSeedDiffers) {
+  PosePlannerOptions o = SmallOptions();
+  o.runs = 1;
+  o.iterations = 3;
+  const PosePlanResult a = PlanCalibrationPoses(ReinovoLikeModel(0), ReinovoLikeModel(1),
+                                                BaseToBase(), HandEye(), o);
+  const PosePlanResult b = PlanCalibrationPoses(ReinovoLikeModel(0), ReinovoLikeModel(1),
+                                                BaseToBase(), HandEye(), o);
+  o.seed = 8;
+  const PosePlanResult c = PlanCalibrationPoses(ReinovoLikeModel(0), ReinovoLikeModel(1),
+                                                BaseToBase(), HandEye(), o);
+  ASSERT_EQ(a.status, PosePlannerStatus::kSuccess) << a.reason;
+  ASSERT_EQ(c.status, PosePlannerStatus::kSuccess) << c.reason;
+  // Same seed: bit-identical (same code path, same random numbers).
+  EXPECT_EQ(a.best_fitness, b.best_fitness);
+  EXPECT_EQ(a.fitness_history, b.fitness_history);
+  EXPECT_EQ(a.rejections.total(), b.rejections.total());
+  for (size_t k = 0; k < a.axes.size(); ++k) {
+    EXPECT_EQ(a.axes[k].q_active, b.axes[k].q_active);
+    for (size_t i = 0; i < a.axes[k].q_passive.size(); ++i) {
+      EXPECT_EQ(a.axes[k].q_passive[i], b.axes[k].q_passive[i]);
+    }
+  }
+  EXPECT_NE(a.best_fitness, c.best_fitness);
+  EXPECT_GT((a.axes[0].q_active - c.axes[0].q_active).norm(), 1e-6);
+}
+
+TEST(PosePlanner, EmptyDistanceWindowGivesNoFeasiblePoses) {
+  PosePlannerOptions o = SmallOptions();
+  o.min_distance = 0.7;  // > max_distance = 0.6
+  const PosePlanResult r = PlanCalibrationPoses(ReinovoLikeModel(0), ReinovoLikeModel(1),
+                                                BaseToBase(), HandEye(), o);
+  EXPECT_EQ(r.status, PosePlannerStatus::kNoFeasiblePoses);
+  EXPECT_NE(r.reason.find("distance window empty"), std::string::npos) << r.reason;
+  EXPECT_TRUE(r.axes.empty());
+}
+
+TEST(PosePlanner, BasesTooFarApartGiveNoFeasiblePoses) {
+  PosePlannerOptions o = SmallOptions();
+  o.max_draws_per_axis = 40;  // every draw fails the same way; 40 shows it without waiting
+  const PosePlanResult r = PlanCalibrationPoses(ReinovoLikeModel(0), ReinovoLikeModel(1),
+                                                BaseToBase(10.0), HandEye(), o);
+  EXPECT_EQ(r.status, PosePlannerStatus::kNoFeasiblePoses);
+  EXPECT_NE(r.reason.find("no feasible pose for axis 0"), std::string::npos) << r.reason;
+  EXPECT_EQ(r.rejections.total(), 40);
+  // The board is out of the passive arm's reach: no draw gets past its IK (draws that fail
+  // earlier, on the active arm's C1/C2, are counted there).
+  EXPECT_GT(r.rejections.passive_ik, 0) << r.reason;
+  EXPECT_EQ(r.rejections.c3_visibility + r.rejections.c4_min_distance +
+                r.rejections.c5_max_distance, 0) << r.reason;
+}
+
+TEST(PosePlanner, InvalidOptionNamesFieldAndValue) {
+  PosePlannerOptions o;
+  o.swarm_size = 0;
+  try {
+    ValidatePosePlannerOptions(o);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("PosePlannerOptions.swarm_size"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("= 0"), std::string::npos);
+  }
+  o = PosePlannerOptions{};
+  o.max_visibility_angle = 2.0;
+  EXPECT_THROW(ValidatePosePlannerOptions(o), InputError);
+  EXPECT_NO_THROW(ValidatePosePlannerOptions(PosePlannerOptions{}));
+}
+
+}  // namespace
+}  // namespace twin

@@ -1,0 +1,366 @@
+#include "sim/cell/twin_cell.h"
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
+#include "sim/world/mujoco_handles.h"
+#include "tests/sim/test_twin_specs.h"
+
+namespace twin {
+namespace {
+
+using testing::DemoPose;
+using testing::DemoTwinSpec;
+
+// MuJoCo warnings throw (DESIGN.md convention 10), so any warning fails the test.
+class TwinCellTest : public ::testing::Test {
+ protected:
+  void SetUp() override { InstallMujocoErrorHandlers(); }
+};
+
+// An effect on robot `robot` (-1: both), joint `joint` (-1: all).
+EffectSpec EffectOf(const std::string& type, std::map<std::string, double> params, int robot,
+                    int joint) {
+  EffectSpec e;
+  e.type = type;
+  e.params = std::move(params);
+  e.robot = robot;
+  e.joint = joint;
+  e.where = "test effects";
+  return e;
+}
+
+// A free-space target for robot 0 from the demo pose (no contact on the way).
+JointVector FreeTarget() {
+  JointVector q = DemoPose();
+  q += (JointVector() << 0.2, -0.1, 0.15, 0.3, -0.2, 0.5).finished();
+  return q;
+}
+
+TEST_F(TwinCellTest, DemoPosePointsTheCameraAtTheBoard) {
+  // Checked with calib's FK only: the board origin P lies 0.3-0.6 m along the optical axis,
+  // close to it, and the board faces the camera.
+  const TwinSpec spec = DemoTwinSpec();
+  const Transform X_WC = spec.robots[0].X_WB *
+                         ForwardKinematics(spec.robots[0].model, DemoPose()).flange() *
+                         spec.camera.X_FC;
+  const Transform X_WT = spec.robots[1].X_WB *
+                         ForwardKinematics(spec.robots[1].model, DemoPose()).flange() *
+                         spec.board.X_FT;
+  const Vector3 p_CT = X_WC.inverse() * X_WT.translation();
+  EXPECT_GT(p_CT.z(), 0.3);
+  EXPECT_LT(p_CT.z(), 0.6);
+  EXPECT_LT(p_CT.head<2>().norm(), 0.1 * p_CT.z());  // within 6 deg of the axis (FOV +-25)
+  EXPECT_LT((X_WC.linear().transpose() * X_WT.linear()).col(2).z(), -0.95);
+}
+
+TEST_F(TwinCellTest, GrabImageShowsTheBoardInTheDemoPose) {
+  TwinCell cell(DemoTwinSpec());
+  const cv::Mat image = cell.GrabImage();
+  ASSERT_EQ(image.cols, 1024);
+  ASSERT_EQ(image.rows, 768);
+  ASSERT_EQ(image.type(), CV_8UC3);
+  cv::Mat gray;
+  cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  std::vector<cv::Point2f> corners;
+  EXPECT_TRUE(cv::findChessboardCorners(gray, cv::Size(3, 3), corners));
+  EXPECT_EQ(corners.size(), 9u);
+  const cv::Mat overview = cell.RenderOverview(800, 600, 140, -25);
+  EXPECT_EQ(overview.cols, 800);
+  EXPECT_EQ(overview.rows, 600);
+  EXPECT_THROW(cell.RenderOverview(2000, 600, 0, 0), InputError);
+}
+
+TEST_F(TwinCellTest, DistortedNoisyImageStillShowsTheBoard) {
+  TwinSpec spec = DemoTwinSpec();
+  spec.camera.distortion.k1 = -0.12;
+  spec.camera.distortion.p1 = 0.001;
+  spec.effects.push_back(EffectOf("image_noise", {{"sigma_levels", 2.0}}, -1, -1));
+  TwinCell cell(spec);
+  const cv::Mat image = cell.GrabImage();
+  ASSERT_EQ(image.cols, 1024);  // the canvas is larger; the remap returns the camera's size
+  ASSERT_EQ(image.rows, 768);
+  ASSERT_EQ(image.type(), CV_8UC3);
+  cv::Mat gray;
+  cv::cvtColor(image, gray, cv::COLOR_BGR2GRAY);
+  std::vector<cv::Point2f> corners;
+  EXPECT_TRUE(cv::findChessboardCorners(gray, cv::Size(3, 3), corners));
+  cell.RenderBare();  // the benchmark baseline runs on the same renderer
+}
+
+TEST_F(TwinCellTest, GeometryEffectsMakeTheTrueModel) {
+  TwinSpec spec = DemoTwinSpec();
+  spec.effects.push_back(
+      EffectOf("geometry_errors", {{"sigma_length_mm", 0.5}, {"sigma_angle_deg", 0.05}}, -1, -1));
+  TwinCell cell(spec);
+  const TwinTruth truth = cell.Truth();
+  for (int k = 0; k < kNumRobots; ++k) {
+    EXPECT_NE(truth.models[k].links[1].dh.a, spec.robots[k].model.links[1].dh.a);
+    // The twin's frames follow the perturbed model exactly (see mjcf_writer_test for 1e-9).
+    const FrameSet f = ForwardKinematics(truth.models[k], truth.q_link[k]);
+    const auto sites = cell.SiteFrames(k);
+    for (int i = 0; i <= kNumLinks; ++i) {
+      const Transform expected = spec.robots[k].X_WB * f.X_BL[i];
+      EXPECT_LT((sites[i].translation() - expected.translation()).norm(), 1e-9);
+      EXPECT_LT((sites[i].linear() - expected.linear()).norm(), 1e-9);
+    }
+  }
+  // Same seed, same truth.
+  EXPECT_EQ(TwinCell(spec).Truth().models[0].links[2].dh.d, truth.models[0].links[2].dh.d);
+}
+
+TEST_F(TwinCellTest, StartsAtRestAtTheInitialPoseWithTheTrueGeometry) {
+  const TwinSpec spec = DemoTwinSpec();
+  TwinCell cell(spec);
+  const TwinTruth truth = cell.Truth();
+  for (int k = 0; k < kNumRobots; ++k) {
+    // Gravity is fed forward: the link holds its target to rounding (see the move test).
+    EXPECT_LT((truth.q_link[k] - DemoPose()).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_EQ(truth.q_motor[k], DemoPose());
+    const FrameSet f = ForwardKinematics(spec.robots[k].model, truth.q_link[k]);
+    const auto sites = cell.SiteFrames(k);
+    for (int i = 0; i <= kNumLinks; ++i) {
+      const Transform expected = spec.robots[k].X_WB * f.X_BL[i];
+      EXPECT_LT((sites[i].translation() - expected.translation()).norm(), 1e-9);
+    }
+  }
+  const Transform X_WC_fk = spec.robots[0].X_WB *
+                            ForwardKinematics(spec.robots[0].model, truth.q_link[0]).flange() *
+                            spec.camera.X_FC;
+  EXPECT_LT((truth.X_WC.translation() - X_WC_fk.translation()).norm(), 1e-9);
+  EXPECT_LT((truth.X_WC.linear() - X_WC_fk.linear()).norm(), 1e-9);
+}
+
+TEST_F(TwinCellTest, SettledMoveHoldsTheLinkAtTheMotorTarget) {
+  const TwinSpec spec = DemoTwinSpec();
+  TwinCell cell(spec);
+  const JointVector target = FreeTarget();
+  const TwinTruth before = cell.Truth();
+  const MoveResult r = cell.MoveTo(0, target);
+  ASSERT_EQ(r.status, MoveStatus::kSettled) << r.reason;
+  EXPECT_TRUE(r.reason.empty());
+  const TwinTruth t = cell.Truth();
+  const double err = (t.q_link[0] - target).cwiseAbs().maxCoeff();
+  std::printf("[ measured ] settled link - motor: %.3g rad after %d steps (%.3f s)\n", err,
+              cell.last_move_steps(), r.duration_s);
+  // The settle test stops once every joint is slower than settle_speed (1e-6 rad/s); the
+  // position error left is about speed / omega with omega ~ 100-1000 rad/s, below 1e-8 rad,
+  // and in practice far less as the servo keeps converging during the settle_steps.
+  EXPECT_LT(err, 1e-9);
+  // All joints arrive together at max_joint_speed: the ramp takes max |dq| / speed.
+  const double ramp = (target - DemoPose()).cwiseAbs().maxCoeff() / spec.physics.max_joint_speed;
+  EXPECT_GE(r.duration_s, ramp);
+  EXPECT_LT(r.duration_s, ramp + 2.0);
+  EXPECT_NEAR(r.duration_s, cell.last_move_steps() * spec.physics.timestep_s, 1e-9);
+  EXPECT_EQ(cell.ReadEncoders(0), target);
+  // The other robot kept holding.
+  EXPECT_LT((t.q_link[1] - before.q_link[1]).cwiseAbs().maxCoeff(), 1e-9);
+  EXPECT_EQ(t.q_motor[1], before.q_motor[1]);
+}
+
+TEST_F(TwinCellTest, CompliantJointSagsByGravityTorqueOverStiffness) {
+  constexpr double kStiffness = 2e4;  // N m/rad
+  TwinSpec spec = DemoTwinSpec();
+  spec.effects.push_back(
+      EffectOf("joint_compliance", {{"stiffness_Nm_per_rad", kStiffness}}, 0, 1));
+  TwinCell cell(spec);
+  // Upper arm leant forward, forearm down: joint 2 carries a large gravity torque.
+  const JointVector target = (JointVector() << 0.1, -0.3, 0.0, 0.2, 1.3, 0.4).finished();
+  const MoveResult r = cell.MoveTo(0, target);
+  ASSERT_EQ(r.status, MoveStatus::kSettled) << r.reason;
+  const TwinTruth t = cell.Truth();
+  const double sag = t.q_motor[0](1) - t.q_link[0](1);
+  // MuJoCo's gravity torque on joint 2 in the final state, from a copy of the twin's model.
+  const MjModelPtr m = LoadMjcfFromString(cell.mjcf());
+  MjDataPtr d(mj_makeData(m.get()));
+  for (int k = 0; k < kNumRobots; ++k) {
+    for (int i = 0; i < kNumJoints; ++i) {
+      const std::string name = "robot" + std::to_string(k + 1) + "_j" + std::to_string(i + 1);
+      d->qpos[m->jnt_qposadr[mj_name2id(m.get(), mjOBJ_JOINT, name.c_str())]] = t.q_link[k](i);
+    }
+  }
+  mj_forward(m.get(), d.get());
+  const int dof = m->jnt_dofadr[mj_name2id(m.get(), mjOBJ_JOINT, "robot1_j2")];
+  const double expected = d->qfrc_bias[dof] / kStiffness;
+  const double ratio_error = std::abs(sag / expected - 1.0);
+  std::printf("[ measured ] joint-2 sag %.6g rad, gravity torque / k %.6g rad, ratio error %.2g\n",
+              sag, expected, ratio_error);
+  EXPECT_GT(std::abs(expected), 1e-3);  // the pose loads joint 2
+  // 1%: the settle criterion leaves speed/omega < 1e-8 rad against a sag of > 1e-3 rad; the
+  // physics gives the ratio to ~1e-5 (the torque balance is exact at rest).
+  EXPECT_LT(ratio_error, 0.01);
+  // The stiff (fed-forward) joints hold their targets.
+  for (int i : {0, 2, 3, 4, 5}) EXPECT_NEAR(t.q_link[0](i), target(i), 1e-7);
+}
+
+TEST_F(TwinCellTest, BacklashLeavesTheLinkOnTheApproachSide) {
+  const double width = DegToRad(0.5);
+  TwinSpec spec = DemoTwinSpec();
+  spec.effects.push_back(EffectOf("backlash", {{"width_deg", 0.5}}, 0, 0));
+  TwinCell cell(spec);
+  JointVector target = DemoPose();
+  target(0) = 0.3;
+  JointVector below = target, above = target;
+  below(0) -= 0.2;
+  above(0) += 0.2;
+  // 1e-7 rad: the settled position error (speed/omega, see above) is far below it, and it is
+  // four orders below the half width of 4.4e-3 rad.
+  ASSERT_EQ(cell.MoveTo(0, below).status, MoveStatus::kSettled);
+  ASSERT_EQ(cell.MoveTo(0, target).status, MoveStatus::kSettled);
+  EXPECT_NEAR(cell.Truth().q_link[0](0), target(0) - width / 2, 1e-7);
+  ASSERT_EQ(cell.MoveTo(0, above).status, MoveStatus::kSettled);
+  ASSERT_EQ(cell.MoveTo(0, target).status, MoveStatus::kSettled);
+  EXPECT_NEAR(cell.Truth().q_link[0](0), target(0) + width / 2, 1e-7);
+  EXPECT_EQ(cell.ReadEncoders(0), target);  // the encoder sits on the motor side
+}
+
+TEST_F(TwinCellTest, TransmissionErrorFollowsTheMotorAngle) {
+  const double A = DegToRad(0.3), h = 2, phase = DegToRad(40);
+  TwinSpec spec = DemoTwinSpec();
+  spec.effects.push_back(EffectOf(
+      "transmission_error", {{"amplitude_deg", 0.3}, {"harmonic", 2}, {"phase_deg", 40}}, 0, 3));
+  TwinCell cell(spec);
+  for (double q4 : {-1.0, 0.4, 1.3}) {
+    JointVector target = DemoPose();
+    target(3) = q4;
+    ASSERT_EQ(cell.MoveTo(0, target).status, MoveStatus::kSettled);
+    const double offset = cell.Truth().q_link[0](3) - target(3);
+    // 1e-7 rad: settled position error (see above) against an amplitude of 5e-3 rad.
+    EXPECT_NEAR(offset, A * std::sin(h * q4 + phase), 1e-7) << "q4 = " << q4;
+  }
+}
+
+TEST_F(TwinCellTest, CollisionStopsTheMoveAndNamesTheBodies) {
+  TwinCell cell(DemoTwinSpec());
+  JointVector into = DemoPose();
+  into(1) = -1.1;  // lean forward with the forearm level: the camera runs into the board
+  into(2) = 1.1;
+  const MoveResult r = cell.MoveTo(0, into);
+  ASSERT_EQ(r.status, MoveStatus::kCollision) << r.reason;
+  EXPECT_NE(r.reason.find("robot1_"), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("robot2_"), std::string::npos) << r.reason;
+  EXPECT_GT(r.duration_s, 0.0);
+  // The robot stopped where it hit: the encoders read that (between start and target).
+  const JointVector stopped = cell.ReadEncoders(0);
+  EXPECT_GT(stopped(1), into(1));
+  EXPECT_LT(stopped(1), DemoPose()(1));
+  std::printf("[ measured ] collision after %.3f s: %s\n", r.duration_s, r.reason.c_str());
+  // Backing out of the contact is allowed.
+  const MoveResult back = cell.MoveTo(0, DemoPose());
+  EXPECT_EQ(back.status, MoveStatus::kSettled) << back.reason;
+}
+
+TEST_F(TwinCellTest, RejectedTargetsMoveNothing) {
+  TwinSpec spec = DemoTwinSpec();
+  TwinCell cell(spec);
+  const TwinTruth before = cell.Truth();
+  JointVector outside = DemoPose();
+  outside(1) = DegToRad(130);  // joint 2 travels +-120 deg
+  MoveResult r = cell.MoveTo(0, outside);
+  EXPECT_EQ(r.status, MoveStatus::kOutOfLimits);
+  EXPECT_NE(r.reason.find("joint 2"), std::string::npos) << r.reason;
+  r = cell.MoveTo(2, DemoPose());
+  EXPECT_EQ(r.status, MoveStatus::kInvalidInput);
+  JointVector nan = DemoPose();
+  nan(4) = std::nan("");
+  EXPECT_EQ(cell.MoveTo(1, nan).status, MoveStatus::kInvalidInput);
+  const TwinTruth after = cell.Truth();
+  for (int k = 0; k < kNumRobots; ++k) {
+    EXPECT_EQ(after.q_link[k], before.q_link[k]);
+    EXPECT_EQ(after.q_motor[k], before.q_motor[k]);
+  }
+  EXPECT_THROW(cell.ReadEncoders(-1), InputError);
+}
+
+TEST_F(TwinCellTest, MoveRunsOutOfStepsWithATinyLimit) {
+  TwinSpec spec = DemoTwinSpec();
+  spec.physics.max_steps = 25;
+  TwinCell cell(spec);
+  const MoveResult r = cell.MoveTo(0, FreeTarget());
+  EXPECT_EQ(r.status, MoveStatus::kNotSettled);
+  EXPECT_NE(r.reason.find("rad/s"), std::string::npos) << r.reason;
+  EXPECT_EQ(cell.last_move_steps(), 25);
+}
+
+TEST_F(TwinCellTest, QuantizedEncodersReadWholeCounts) {
+  constexpr double kCounts = 4096;
+  TwinSpec spec = DemoTwinSpec();
+  spec.effects.push_back(EffectOf("encoder_quantization", {{"counts_per_rev", kCounts}}, -1, -1));
+  TwinCell cell(spec);
+  ASSERT_EQ(cell.MoveTo(0, FreeTarget()).status, MoveStatus::kSettled);
+  const double count = 2 * kPi / kCounts;
+  for (int k = 0; k < kNumRobots; ++k) {
+    const JointVector reading = cell.ReadEncoders(k);
+    for (int i = 0; i < kNumJoints; ++i) {
+      const double n = reading(i) / count;
+      EXPECT_NEAR(n, std::round(n), 1e-9) << "robot " << k << " joint " << i;
+      EXPECT_LE(std::abs(reading(i) - cell.Truth().q_motor[k](i)), 0.5 * count + 1e-12);
+    }
+  }
+}
+
+TEST_F(TwinCellTest, InitialPoseInCollisionIsAnInputErrorNamingTheBodies) {
+  TwinSpec spec = DemoTwinSpec();
+  spec.robots[0].q_initial(1) = -1.0;  // the camera inside the board
+  spec.robots[0].q_initial(2) = 1.0;
+  try {
+    TwinCell cell(spec, "scenario.yaml");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(e.where(), "scenario.yaml");
+    EXPECT_NE(what.find("robot1_"), std::string::npos) << what;
+    EXPECT_NE(what.find("robot2_"), std::string::npos) << what;
+  }
+}
+
+TEST_F(TwinCellTest, UnstableServoIsAnInputError) {
+  TwinSpec spec = DemoTwinSpec();
+  spec.physics.stiffness = 6e5;  // omega dt = 4.9 on the wrist (armature 0.1): diverges
+  try {
+    TwinCell cell(spec, "scenario.yaml");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("physics.stiffness"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace twin
+
+namespace twin {
+namespace {
+
+TEST(TwinCellTools, ExchangeSwapsTheToolsAndBackAndARefusalNamesTheRealContact) {
+  TwinCell cell(testing::DemoTwinSpec());
+  const int camera = cell.CameraRobot();
+  ASSERT_EQ(cell.ExchangeTools().status, MoveStatus::kSettled);
+  EXPECT_EQ(cell.CameraRobot(), 1 - camera);
+  ASSERT_EQ(cell.ExchangeTools().status, MoveStatus::kSettled);
+  EXPECT_EQ(cell.CameraRobot(), camera);
+  // Camera against the board (as in CollisionStopsTheMoveAndNamesTheBodies): exchanged there,
+  // the tools overlap, the exchange is refused and the reason names the bodies that touch.
+  JointVector into = testing::DemoPose();
+  into(1) = -1.1;
+  into(2) = 1.1;
+  ASSERT_EQ(cell.MoveTo(0, into).status, MoveStatus::kCollision);
+  const MoveResult r = cell.ExchangeTools();
+  ASSERT_EQ(r.status, MoveStatus::kCollision) << r.reason;
+  EXPECT_EQ(cell.CameraRobot(), camera);  // nothing changed
+  EXPECT_NE(r.reason.find("robot"), std::string::npos) << r.reason;
+  EXPECT_EQ(r.reason.find("world touches world"), std::string::npos) << r.reason;
+  std::printf("[ measured ] refused exchange: %s\n", r.reason.c_str());
+}
+
+}  // namespace
+}  // namespace twin

@@ -1,0 +1,182 @@
+// Closed-loop visual servo on the MuJoCo twin: the estimator side uses only nominal models,
+// rough rotations and the true intrinsics; the twin's true geometry is perturbed.
+#include "calib/vision/visual_servo.h"
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "calib/common/errors.h"
+#include "sim/world/mujoco_handles.h"
+#include "sim/cell/twin_cell.h"
+#include "tests/sim/test_twin_specs.h"
+
+namespace twin {
+namespace {
+
+using testing::DemoPose;
+using testing::DemoTwinSpec;
+
+// MuJoCo warnings throw (DESIGN.md convention 10), so any warning fails the test.
+class VisualServoTest : public ::testing::Test {
+ protected:
+  void SetUp() override { InstallMujocoErrorHandlers(); }
+};
+
+// The demo cell with geometry errors on both arms (0.5 mm, 0.1 deg per parameter).
+TwinSpec PerturbedSpec() {
+  TwinSpec spec = DemoTwinSpec();
+  EffectSpec e;
+  e.type = "geometry_errors";
+  e.params = {{"sigma_length_mm", 0.5}, {"sigma_angle_deg", 0.1}};
+  e.where = "visual_servo_test";
+  spec.effects.push_back(e);
+  spec.seed = 7;
+  return spec;
+}
+
+Matrix3 Rot(const Vector3& axis, double angle_deg) {
+  return Eigen::AngleAxisd(DegToRad(angle_deg), axis.normalized()).toRotationMatrix();
+}
+
+// Estimator-side knowledge: nominal models (the spec's models before the geometry errors),
+// true intrinsics, and base-to-base and hand-eye rotations that are off by about 1 deg.
+ServoSetup SetupFor(const TwinSpec& spec, Cell& cell) {
+  ServoSetup s;
+  s.active_model = spec.robots[0].model;
+  s.passive_model = spec.robots[1].model;
+  s.passive_robot = 1;
+  s.R_BaBp = (spec.robots[0].X_WB.inverse() * spec.robots[1].X_WB).linear() *
+             Rot(Vector3(0.3, -1.0, 0.5), 1.0);
+  s.R_FC = spec.camera.X_FC.linear() * Rot(Vector3(1.0, 0.4, -0.2), 1.0);
+  const Intrinsics& k = spec.camera.intrinsics;
+  s.intrinsics = PinholeIntrinsics{k.fx, k.fy, k.cx, k.cy};
+  s.board = BoardGeometry{spec.board.squares_x, spec.board.squares_y, spec.board.square_m};
+  s.q_active = cell.ReadEncoders(0);
+  return s;
+}
+
+// A start a few degrees off the demo pose, putting P 10-30 px off the principal point.
+JointVector OffsetStart() {
+  return DemoPose() + (JointVector() << 0.03, 0.02, 0.0, 0.0, 0.0, 0.05).finished();
+}
+
+TEST_F(VisualServoTest, AlignsTheFeaturePointWithinTenIterations) {
+  const TwinSpec spec = PerturbedSpec();
+  TwinCell cell(spec, "visual_servo_test");
+  const ServoSetup setup = SetupFor(spec, cell);
+  ServoOptions options;  // paper defaults: 0.1 px, 10 iterations, gain 1
+  const ServoResult r = AlignFeatureToOpticalAxis(cell, setup, OffsetStart(), options);
+  ASSERT_FALSE(r.image_before.empty());
+  const FeatureDetection first = DetectFeaturePoint(r.image_before, setup.board);
+  ASSERT_EQ(first.status, DetectionStatus::kFound);
+  const double du0 = first.feature_px.x - setup.intrinsics.cx;
+  const double dv0 = first.feature_px.y - setup.intrinsics.cy;
+  std::printf("servo: start error (%.2f, %.2f) px, status %s, frames %d, moves %d, final "
+              "error (%.4f, %.4f) px\n",
+              du0, dv0, ToString(r.status), r.frames, r.moves, r.pixel_error.x,
+              r.pixel_error.y);
+  // The start must be a real test: 10-30 px off the principal point.
+  EXPECT_GE(std::hypot(du0, dv0), 10.0);
+  EXPECT_LE(std::hypot(du0, dv0), 30.0);
+  ASSERT_EQ(r.status, ServoStatus::kAligned) << r.reason;
+  EXPECT_TRUE(r.reason.empty());
+  EXPECT_LT(std::abs(r.pixel_error.x), 0.1);  // the paper's alignment criterion
+  EXPECT_LT(std::abs(r.pixel_error.y), 0.1);
+  EXPECT_LE(r.moves, 10);
+  EXPECT_EQ(r.frames, r.moves + 1);
+  EXPECT_FALSE(r.image_after.empty());
+  EXPECT_TRUE(r.q_passive.isApprox(cell.ReadEncoders(1)));
+  // Cross-check against the twin's truth (tests only): P is on the optical axis, so its
+  // lateral offset in C is about 0.1 px * z / f, a few hundredths of a millimetre.
+  const TwinTruth truth = cell.Truth();
+  const Vector3 p_CP = truth.X_WC.inverse() * truth.X_WT.translation();
+  EXPECT_LT(std::hypot(p_CP.x(), p_CP.y()), 1e-4) << p_CP.transpose();
+}
+
+TEST_F(VisualServoTest, OneIterationIsNotEnough) {
+  const TwinSpec spec = PerturbedSpec();
+  TwinCell cell(spec, "visual_servo_test");
+  const ServoSetup setup = SetupFor(spec, cell);
+  ServoOptions options;
+  options.max_iterations = 1;
+  const ServoResult r = AlignFeatureToOpticalAxis(cell, setup, OffsetStart(), options);
+  std::printf("servo, 1 iteration: status %s, frames %d, error (%.4f, %.4f) px: %s\n",
+              ToString(r.status), r.frames, r.pixel_error.x, r.pixel_error.y,
+              r.reason.c_str());
+  EXPECT_EQ(r.status, ServoStatus::kNotConverged);
+  EXPECT_NE(r.reason.find("max_iterations = 1"), std::string::npos) << r.reason;
+  EXPECT_EQ(r.moves, 1);
+  EXPECT_EQ(r.frames, 2);
+  // The sign of eq. 42: one full-gain move must shrink the ~13 px start error to a small
+  // fraction (rough rotations of 1 deg and nominal IK leave under a pixel); moving the
+  // wrong way would double it.
+  const FeatureDetection first = DetectFeaturePoint(r.image_before, setup.board);
+  ASSERT_EQ(first.status, DetectionStatus::kFound);
+  const double start = std::hypot(first.feature_px.x - setup.intrinsics.cx,
+                                  first.feature_px.y - setup.intrinsics.cy);
+  EXPECT_LT(std::hypot(r.pixel_error.x, r.pixel_error.y), 0.2 * start);
+}
+
+TEST_F(VisualServoTest, BoardOutOfViewIsReported) {
+  const TwinSpec spec = PerturbedSpec();
+  TwinCell cell(spec, "visual_servo_test");
+  const ServoSetup setup = SetupFor(spec, cell);
+  // Turning the passive robot's base joint swings the board sideways out of the image.
+  JointVector away = DemoPose();
+  away(0) += 1.0;
+  const ServoResult r = AlignFeatureToOpticalAxis(cell, setup, away, ServoOptions{});
+  std::printf("servo, board away: status %s: %s\n", ToString(r.status), r.reason.c_str());
+  EXPECT_EQ(r.status, ServoStatus::kBoardNotFound);
+  EXPECT_NE(r.reason.find("inner-corner grid"), std::string::npos) << r.reason;
+  EXPECT_EQ(r.frames, 1);
+  EXPECT_EQ(r.moves, 0);
+}
+
+TEST_F(VisualServoTest, ACorrectionAboveMaxStepIsRefused) {
+  const TwinSpec spec = PerturbedSpec();
+  TwinCell cell(spec, "visual_servo_test");
+  const ServoSetup setup = SetupFor(spec, cell);
+  // Half a radian on the base joint leaves the board at the image edge, about 0.18 m off axis.
+  JointVector far = DemoPose();
+  far(0) += 0.5;
+  const ServoResult r = AlignFeatureToOpticalAxis(cell, setup, far, ServoOptions{});
+  EXPECT_EQ(r.status, ServoStatus::kNotConverged);
+  EXPECT_NE(r.reason.find("exceeds max_step_m = 0.05"), std::string::npos) << r.reason;
+  EXPECT_EQ(r.moves, 0);
+}
+
+TEST_F(VisualServoTest, StartOutsideTheLimitsIsRefused) {
+  const TwinSpec spec = PerturbedSpec();
+  TwinCell cell(spec, "visual_servo_test");
+  const ServoSetup setup = SetupFor(spec, cell);
+  JointVector bad = DemoPose();
+  bad(2) = setup.passive_model.links[2].limits.upper + 0.1;
+  const ServoResult r = AlignFeatureToOpticalAxis(cell, setup, bad, ServoOptions{});
+  EXPECT_EQ(r.status, ServoStatus::kJointLimits);
+  EXPECT_NE(r.reason.find("outside its limits"), std::string::npos) << r.reason;
+  EXPECT_EQ(r.frames, 0);
+}
+
+TEST_F(VisualServoTest, BadOptionsThrowNamingTheField) {
+  ServoOptions o;
+  o.gain = 0.0;
+  try {
+    ValidateServoOptions(o);
+    FAIL() << "gain 0 accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("gain = 0"), std::string::npos) << e.what();
+  }
+  o = ServoOptions{};
+  o.tolerance_px = -1;
+  EXPECT_THROW(ValidateServoOptions(o), InputError);
+  o = ServoOptions{};
+  o.max_iterations = -1;
+  EXPECT_THROW(ValidateServoOptions(o), InputError);
+}
+
+}  // namespace
+}  // namespace twin

@@ -1,0 +1,331 @@
+#include "sim/world/twin_spec.h"
+
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "calib/common/errors.h"
+#include "tests/calib/test_models.h"
+
+namespace twin {
+namespace {
+
+const std::string kWhere = "cell.yaml";
+
+Matrix3 RotX(double deg) { return Eigen::AngleAxisd(DegToRad(deg), Vector3::UnitX()).matrix(); }
+Matrix3 RotY(double deg) { return Eigen::AngleAxisd(DegToRad(deg), Vector3::UnitY()).matrix(); }
+Matrix3 RotZ(double deg) { return Eigen::AngleAxisd(DegToRad(deg), Vector3::UnitZ()).matrix(); }
+
+/// A valid cell: two Reinovo-like arms on the floor, 1.2 m apart and facing each other.
+TwinSpec ValidSpec() {
+  TwinSpec spec;
+  for (int i = 0; i < kNumRobots; ++i) {
+    spec.robots[i].model = testing::ReinovoLikeModel();
+    spec.robots[i].model.name = i == 0 ? "r1" : "r2";
+  }
+  spec.robots[1].X_WB.translation() = Vector3(1.2, 0.0, 0.0);
+  spec.robots[1].X_WB.linear() = RotZ(180);
+  spec.robots[0].q_initial << 0, 0.5, -0.5, 0, 1.5, 0;
+  spec.camera.robot = 0;
+  spec.board.robot = 1;
+  EffectSpec e;
+  e.type = "transmission_error";
+  e.robot = 1;
+  e.joint = 2;
+  e.params["amplitude_deg"] = 0.02;
+  spec.effects.push_back(e);
+  return spec;
+}
+
+::testing::AssertionResult Contains(const std::string& text, const std::string& part) {
+  if (text.find(part) != std::string::npos) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "'" << text << "' lacks '" << part << "'";
+}
+
+/// The message of the InputError that validating `spec` throws (a test failure if none).
+std::string ErrorOf(const TwinSpec& spec) {
+  try {
+    ValidateTwinSpec(spec, kWhere);
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), kWhere);
+    return e.what();
+  }
+  ADD_FAILURE() << "expected an InputError";
+  return "";
+}
+
+/// ErrorOf(ValidSpec() changed by `change`).
+std::string ErrorAfter(const std::function<void(TwinSpec*)>& change) {
+  TwinSpec spec = ValidSpec();
+  change(&spec);
+  return ErrorOf(spec);
+}
+
+bool Valid(const std::function<void(TwinSpec*)>& change) {
+  TwinSpec spec = ValidSpec();
+  change(&spec);
+  try {
+    ValidateTwinSpec(spec, kWhere);
+  } catch (const InputError& e) {
+    ADD_FAILURE() << e.what();
+    return false;
+  }
+  return true;
+}
+
+TEST(TwinSpecTest, InstallationNames) {
+  EXPECT_STREQ(ToString(Installation::kFloor), "floor");
+  EXPECT_STREQ(ToString(Installation::kWall), "wall");
+  EXPECT_STREQ(ToString(Installation::kCeiling), "ceiling");
+}
+
+TEST(TwinSpecTest, ValidSpecPasses) {
+  EXPECT_NO_THROW(ValidateTwinSpec(ValidSpec(), kWhere));
+}
+
+TEST(TwinSpecTest, DefaultsOfTheStructsAreValid) {
+  // Default intrinsics, board, tips and physics with the two robots placed apart.
+  TwinSpec spec;
+  for (RobotSpec& r : spec.robots) r.model = testing::ReinovoLikeModel();
+  spec.robots[1].X_WB.translation() = Vector3(1.2, 0.0, 0.0);
+  EXPECT_NO_THROW(ValidateTwinSpec(spec, kWhere));
+}
+
+// ---- Board ----
+
+TEST(TwinSpecErrorTest, NegativeSquareSize) {
+  const std::string msg = ErrorAfter([](TwinSpec* s) { s->board.square_m = -0.02; });
+  EXPECT_TRUE(Contains(msg, kWhere + ": board.square_m must be a finite number > 0 m, got -0.02"));
+}
+
+TEST(TwinSpecErrorTest, NonFiniteSquareSize) {
+  const std::string msg = ErrorAfter(
+      [](TwinSpec* s) { s->board.square_m = std::numeric_limits<double>::quiet_NaN(); });
+  EXPECT_TRUE(Contains(msg, "board.square_m must be a finite number > 0 m, got nan"));
+}
+
+TEST(TwinSpecErrorTest, BoardNeedsTwoSquaresEachWay) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.squares_y = 1; }),
+                       "board.squares_y must be >= 2, got 1"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.squares_x = 0; }),
+                       "board.squares_x must be >= 2, got 0"));
+}
+
+TEST(TwinSpecErrorTest, BoardMarginThicknessMass) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.margin_m = -0.001; }),
+                       "board.margin_m must be a finite number >= 0 m, got -0.001"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.thickness_m = 0.0; }),
+                       "board.thickness_m must be a finite number > 0 m, got 0"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.mass_kg = -1.0; }),
+                       "board.mass_kg must be a finite number >= 0 kg, got -1"));
+  EXPECT_TRUE(Valid([](TwinSpec* s) { s->board.margin_m = 0.0; }));
+}
+
+TEST(TwinSpecErrorTest, BoardMountMustBeRigid) {
+  const std::string msg =
+      ErrorAfter([](TwinSpec* s) { s->board.X_FT.linear() = 1.01 * Matrix3::Identity(); });
+  EXPECT_TRUE(Contains(msg, "board.X_FT must be a rigid transform"));
+  EXPECT_TRUE(Contains(msg, "|R^T R - I| = "));
+  const std::string mirrored =
+      ErrorAfter([](TwinSpec* s) { s->board.X_FT.linear() = -Matrix3::Identity(); });
+  EXPECT_TRUE(Contains(mirrored, "board.X_FT must be a rigid transform"));
+  EXPECT_TRUE(Contains(mirrored, "det R = -1"));
+}
+
+// ---- Camera ----
+
+TEST(TwinSpecErrorTest, ZeroFocalLength) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.intrinsics.fx = 0.0; }),
+                       "camera.intrinsics.fx must be a finite number > 0 px, got 0"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) {
+                         s->camera.intrinsics.fy = std::numeric_limits<double>::infinity();
+                       }),
+                       "camera.intrinsics.fy must be a finite number > 0 px, got inf"));
+}
+
+TEST(TwinSpecErrorTest, ImageSize) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.intrinsics.width = 0; }),
+                       "camera.intrinsics.width must be from 1 to 4096, got 0"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.intrinsics.height = 5000; }),
+                       "camera.intrinsics.height must be from 1 to 4096, got 5000"));
+}
+
+TEST(TwinSpecErrorTest, PrincipalPointOutsideImage) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.intrinsics.cx = 1100; }),
+                       "camera.intrinsics.cx must lie inside the image, [-0.5, 1023.5] px, "
+                       "got 1100"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.intrinsics.cy = -3; }),
+                       "camera.intrinsics.cy must lie inside the image, [-0.5, 767.5] px, "
+                       "got -3"));
+  // The edges of the outermost pixels are still inside.
+  EXPECT_TRUE(Valid([](TwinSpec* s) {
+    s->camera.intrinsics.cx = -0.5;
+    s->camera.intrinsics.cy = 767.5;
+  }));
+}
+
+TEST(TwinSpecErrorTest, DistortionMustBeFinite) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) {
+                         s->camera.distortion.p2 = std::numeric_limits<double>::quiet_NaN();
+                       }),
+                       "camera.distortion.p2 must be a finite number, got nan"));
+}
+
+TEST(TwinSpecErrorTest, MsaaSamples) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.msaa_samples = 3; }),
+                       "camera.msaa_samples must be 0, 1, 2, 4 or 8"));
+  EXPECT_TRUE(Valid([](TwinSpec* s) { s->camera.msaa_samples = 0; }));
+  EXPECT_TRUE(Valid([](TwinSpec* s) { s->camera.msaa_samples = 8; }));
+}
+
+TEST(TwinSpecErrorTest, ClippingPlanes) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.near_m = 0.0; }),
+                       "camera.near_m must be a finite number > 0 m, got 0"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) {
+                         s->camera.near_m = 0.5;
+                         s->camera.far_m = 0.5;
+                       }),
+                       "camera.far_m must be beyond camera.near_m = 0.5 m, got 0.5"));
+}
+
+TEST(TwinSpecErrorTest, HandEyeMustBeRigid) {
+  const std::string msg = ErrorAfter([](TwinSpec* s) {
+    s->camera.X_FC.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  });
+  EXPECT_TRUE(Contains(msg, "camera.X_FC must be a finite transform"));
+}
+
+// ---- Robots ----
+
+TEST(TwinSpecErrorTest, CameraAndBoardOnTheSameRobot) {
+  const std::string msg = ErrorAfter([](TwinSpec* s) { s->board.robot = 0; });
+  EXPECT_TRUE(Contains(msg, "board.robot must differ from camera.robot"));
+  EXPECT_TRUE(Contains(msg, "got both 0"));
+}
+
+TEST(TwinSpecErrorTest, RobotIndexOutOfRange) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.robot = 2; }),
+                       "camera.robot must be from 0 to 1, got 2"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.robot = -1; }),
+                       "board.robot must be from 0 to 1, got -1"));
+}
+
+TEST(TwinSpecErrorTest, InitialJointsOutOfLimits) {
+  // Joint 3 of the Reinovo-like model travels [-140, 140] deg.
+  const std::string msg =
+      ErrorAfter([](TwinSpec* s) { s->robots[1].q_initial(2) = DegToRad(150.0); });
+  EXPECT_TRUE(Contains(msg, "robots[1].q_initial[2] must be within joint 3's limits "
+                            "[-140, 140] deg, got 150 deg"));
+  EXPECT_TRUE(Valid([](TwinSpec* s) { s->robots[1].q_initial(2) = DegToRad(140.0); }));
+}
+
+TEST(TwinSpecErrorTest, NonFiniteInitialJoint) {
+  const std::string msg = ErrorAfter([](TwinSpec* s) {
+    s->robots[0].q_initial(5) = std::numeric_limits<double>::quiet_NaN();
+  });
+  EXPECT_TRUE(Contains(msg, "robots[0].q_initial[5] must be a finite number, got nan"));
+}
+
+TEST(TwinSpecErrorTest, InvalidModelIsNamed) {
+  const std::string msg = ErrorAfter([](TwinSpec* s) {
+    s->robots[1].model.links[3].limits = {1.0, -1.0};
+  });
+  EXPECT_TRUE(Contains(msg, "robots[1].model (r2): link 4 (link4): joint lower limit 1 rad "
+                            "must be below upper limit -1 rad"));
+}
+
+TEST(TwinSpecErrorTest, BasePoseMustBeRigid) {
+  const std::string msg =
+      ErrorAfter([](TwinSpec* s) { s->robots[1].X_WB.linear() *= 2.0; });
+  EXPECT_TRUE(Contains(msg, "robots[1].X_WB must be a rigid transform"));
+}
+
+TEST(TwinSpecErrorTest, WallInstallationWithVerticalBase) {
+  const std::string msg =
+      ErrorAfter([](TwinSpec* s) { s->robots[0].installation = Installation::kWall; });
+  EXPECT_TRUE(Contains(msg, "robots[0].installation is wall, but the base z axis in the "
+                            "world is (0, 0, 1), 90 deg above horizontal; expected within "
+                            "5 deg of horizontal"));
+}
+
+TEST(TwinSpecErrorTest, CeilingInstallationWithUprightBase) {
+  const std::string msg =
+      ErrorAfter([](TwinSpec* s) { s->robots[1].installation = Installation::kCeiling; });
+  EXPECT_TRUE(Contains(msg, "robots[1].installation is ceiling"));
+  EXPECT_TRUE(Contains(msg, "expected within 5 deg of -z (world down)"));
+}
+
+TEST(TwinSpecErrorTest, FloorInstallationToleratesFiveDegrees) {
+  // Tilted 4.9 deg: still a floor robot; 5.1 deg: not any more.
+  EXPECT_TRUE(Valid([](TwinSpec* s) { s->robots[0].X_WB.linear() = RotX(4.9); }));
+  const std::string msg =
+      ErrorAfter([](TwinSpec* s) { s->robots[0].X_WB.linear() = RotY(-5.1); });
+  EXPECT_TRUE(Contains(msg, "robots[0].installation is floor"));
+  EXPECT_TRUE(Contains(msg, "84.9 deg above horizontal; expected within 5 deg of +z"));
+}
+
+TEST(TwinSpecTest, WallAndCeilingInstallationsMatchTheirBases) {
+  // Gan et al. 2014, Table 1: a wall robot has its base z horizontal (ZYZ (180, 90, 180)),
+  // a ceiling robot has it pointing down (ZYZ (0, 180, 0)).
+  EXPECT_TRUE(Valid([](TwinSpec* s) {
+    s->robots[1].installation = Installation::kWall;
+    s->robots[1].X_WB.linear() = RotZ(180) * RotY(90) * RotZ(180);
+  }));
+  EXPECT_TRUE(Valid([](TwinSpec* s) {
+    s->robots[1].installation = Installation::kCeiling;
+    s->robots[1].X_WB.translation().z() = 1.5;
+    s->robots[1].X_WB.linear() = RotY(180);
+  }));
+  EXPECT_TRUE(Valid([](TwinSpec* s) {
+    s->robots[0].installation = Installation::kWall;
+    s->robots[0].X_WB.linear() = RotX(-94.0);  // 4 deg below horizontal
+  }));
+}
+
+// ---- Tips, physics, effects ----
+
+TEST(TwinSpecErrorTest, TipDimensions) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->tips[1].radius_m = -0.004; }),
+                       "tips[1].radius_m must be a finite number > 0 m, got -0.004"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->tips[0].length_m = 0.0; }),
+                       "tips[0].length_m must be a finite number > 0 m, got 0"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->tips[0].X_FTip.linear() *= 0.5; }),
+                       "tips[0].X_FTip must be a rigid transform"));
+}
+
+TEST(TwinSpecErrorTest, PhysicsValues) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->physics.timestep_s = 0.0; }),
+                       "physics.timestep_s must be a finite number > 0 s, got 0"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->physics.stiffness = -2.5; }),
+                       "physics.stiffness must be a finite number > 0 N m/rad, got -2.5"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->physics.armature = 0.0; }),
+                       "physics.armature must be a finite number > 0 kg m^2, got 0"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->physics.max_joint_speed = 0.0; }),
+                       "physics.max_joint_speed must be a finite number > 0 rad/s, got 0"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->physics.settle_speed = -1.0; }),
+                       "physics.settle_speed must be a finite number > 0 rad/s, got -1"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->physics.settle_steps = 0; }),
+                       "physics.settle_steps must be >= 1, got 0"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->physics.max_steps = 10; }),
+                       "physics.max_steps must be >= physics.settle_steps = 20"));
+}
+
+TEST(TwinSpecErrorTest, EffectIndices) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->effects[0].joint = 6; }),
+                       "effects[0].joint must be from -1 to 5, got 6"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->effects[0].robot = 2; }),
+                       "effects[0].robot must be from -1 to 1, got 2"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->effects[0].type.clear(); }),
+                       "effects[0].type must name an effect type"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) {
+                         s->effects[0].params["amplitude_deg"] =
+                             std::numeric_limits<double>::infinity();
+                       }),
+                       "effects[0].params.amplitude_deg must be a finite number, got inf"));
+}
+
+}  // namespace
+}  // namespace twin
