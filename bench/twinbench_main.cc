@@ -1,4 +1,5 @@
 // twinbench: the command-line entry point. User errors (InputError, bad arguments) exit 2.
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <random>
@@ -44,10 +45,26 @@ std::vector<double> ParseList(const std::string& text, int n, const std::string&
   return v;
 }
 
-JointVector ParseJointsDeg(const std::string& text, const std::string& option) {
-  const std::vector<double> v = ParseList(text, kNumJoints, option);
-  JointVector q;
-  for (int i = 0; i < kNumJoints; ++i) q(i) = DegToRad(v[i]);
+// One angle per joint of `model`, in degrees; refused (naming the joint) outside its limits.
+JointVector ParseJointsDeg(const std::string& text, const KinematicModel& model,
+                           const std::string& option) {
+  const int n = model.num_joints();
+  const std::vector<double> v = ParseList(text, n, option);
+  JointVector q(n);
+  for (int i = 0; i < n; ++i) {
+    if (!std::isfinite(v[i])) {
+      throw InputError(option, "joint " + std::to_string(i + 1) + ": expected a finite angle");
+    }
+    q(i) = DegToRad(v[i]);
+    const JointLimits& l = model.links[i].limits;
+    if (q(i) < l.lower || q(i) > l.upper) {
+      std::ostringstream os;
+      os << "joint " << i + 1 << " (" << model.links[i].name << ") at " << v[i]
+         << " deg is outside its limits [" << RadToDeg(l.lower) << ", " << RadToDeg(l.upper)
+         << "] deg";
+      throw InputError(option, os.str());
+    }
+  }
   return q;
 }
 
@@ -61,29 +78,28 @@ void PrintPose(const char* label, const Transform& X) {
 int RunInfo(const std::string& path) {
   const KinematicModel m = LoadRobotModel(path);
   std::printf("robot %s (%s)\n%-18s %12s\n", m.name.c_str(), path.c_str(), "parameter", "value");
-  for (int i = 0; i < kNumParams; ++i) {
+  for (int i = 0; i < m.num_parameters(); ++i) {
     const double v = GetParameters(m)(i);
     std::printf("%-18s %12.4f %s\n", ParameterName(m.name, i).c_str(),
                 IsLengthParameter(i) ? v * 1e3 : RadToDeg(v), IsLengthParameter(i) ? "mm" : "deg");
   }
   double mass = 0.0;
-  for (int i = 0; i < kNumJoints; ++i) {
+  for (int i = 0; i < m.num_joints(); ++i) {
     const Link& l = m.links[i];
     mass += l.inertia.mass;
     std::printf("joint %d limits [%.1f, %.1f] deg, link mass %.2f kg\n", i + 1,
                 RadToDeg(l.limits.lower), RadToDeg(l.limits.upper), l.inertia.mass);
   }
   std::printf("moving mass %.2f kg\n", mass);
-  PrintPose("end frame at q = 0", EndPose(m, JointVector::Zero()));
+  PrintPose("end frame at q = 0", EndPose(m, ZeroJoints(m)));
   return 0;
 }
 
 int RunFk(const std::string& path, const std::string& q_text) {
   const KinematicModel m = LoadRobotModel(path);
-  const JointVector q = ParseJointsDeg(q_text, "--q");
-  if (!WithinLimits(m, q)) throw InputError("--q", "joint angles outside the model's limits");
+  const JointVector q = ParseJointsDeg(q_text, m, "--q");
   PrintPose("end frame", EndPose(m, q));
-  std::printf("smallest Jacobian singular value: %.6f\n", JacobianSingularValues(m, q)(5));
+  std::printf("smallest Jacobian singular value: %.6f\n", SmallestJacobianSingularValue(m, q));
   return 0;
 }
 
@@ -95,7 +111,7 @@ int RunIk(const std::string& path, const std::string& xyz, const std::string& rp
   Transform target = Transform::Identity();
   target.translation() = Vector3(p[0], p[1], p[2]) * 1e-3;
   target.linear() = RpyToRotation(Vector3(DegToRad(r[0]), DegToRad(r[1]), DegToRad(r[2])));
-  const JointVector q0 = seed.empty() ? MidRange(m) : ParseJointsDeg(seed, "--seed");
+  const JointVector q0 = seed.empty() ? MidRange(m) : ParseJointsDeg(seed, m, "--seed");
   IkOptions options;
   options.position_only = position_only;
   const IkResult res = SolveIk(m, target, q0, options);
@@ -104,7 +120,7 @@ int RunIk(const std::string& path, const std::string& xyz, const std::string& rp
                                         "): " + res.reason);
   }
   std::printf("q [deg]:");
-  for (int i = 0; i < kNumJoints; ++i) std::printf(" %.6f", RadToDeg(res.q(i)));
+  for (int i = 0; i < m.num_joints(); ++i) std::printf(" %.6f", RadToDeg(res.q(i)));
   std::printf("\nposition error %.3g m, orientation error %.3g rad, %d iterations, %d starts\n",
               res.position_error, res.orientation_error, res.iterations, res.starts);
   return 0;
@@ -127,14 +143,14 @@ int RunDemo(const std::string& model_dir, int samples, unsigned seed) {
     double fk_max = 0.0, ik_max = 0.0, sv_min = 1e9;
     int solved = 0;
     for (int k = 0; k < samples; ++k) {
-      JointVector q;
-      for (int i = 0; i < kNumJoints; ++i) {
+      JointVector q(yaml.num_joints());
+      for (int i = 0; i < yaml.num_joints(); ++i) {
         q(i) = std::uniform_real_distribution<double>(yaml.links[i].limits.lower,
                                                       yaml.links[i].limits.upper)(rng);
       }
       const Transform X = EndPose(yaml, q);
       fk_max = std::max(fk_max, (X.translation() - EndPose(urdf, q).translation()).norm());
-      sv_min = std::min(sv_min, JacobianSingularValues(yaml, q)(5));
+      sv_min = std::min(sv_min, SmallestJacobianSingularValue(yaml, q));
       const IkResult r = SolveIk(yaml, X, MidRange(yaml));
       if (r.status == IkStatus::kSuccess) {
         ++solved;
@@ -167,7 +183,7 @@ int main(int argc, char** argv) {
   info->add_option("model", model, "model file (.yaml or .urdf)")->required();
   auto* fk = app.add_subcommand("fk", "forward kinematics of a model at joint angles");
   fk->add_option("model", model, "model file (.yaml or .urdf)")->required();
-  fk->add_option("--q", q, "six joint angles in degrees, comma-separated")->required();
+  fk->add_option("--q", q, "joint angles in degrees, one per joint, comma-separated")->required();
   auto* ik = app.add_subcommand("ik", "inverse kinematics of a model for an end-frame pose");
   ik->add_option("model", model, "model file (.yaml or .urdf)")->required();
   ik->add_option("--xyz", xyz, "target position in mm, comma-separated")->required();

@@ -117,13 +117,21 @@ double ParseAngleScale(const Reader& r, const Field& f) {
 }
 
 void ParseLinks(const Reader& r, const Field& f, double angle_scale, KinematicModel* model) {
-  if (!f.node.IsSequence() || f.node.size() != static_cast<std::size_t>(kNumJoints)) {
-    r.Fail(f, "expected " + std::to_string(kNumJoints) + " links, got " +
-                  (f.node.IsSequence() ? std::to_string(f.node.size()) : DescribeNode(f.node)));
+  // One entry per revolute joint, 1 to kMaxJoints of them (six for the papers' arms).
+  if (!f.node.IsSequence() || f.node.size() < 1 ||
+      f.node.size() > static_cast<std::size_t>(kMaxJoints)) {
+    r.Fail(f, "expected a list of 1 to " + std::to_string(kMaxJoints) +
+                  " links (one per joint), got " +
+                  (f.node.IsSequence() ? std::to_string(f.node.size()) + " entries"
+                                       : DescribeNode(f.node)));
   }
-  for (int i = 0; i < kNumJoints; ++i) {
+  const int n = static_cast<int>(f.node.size());
+  const Link tool = model->tool();
+  model->links.assign(n + 1, Link{});
+  for (int i = 0; i < n; ++i) {
     model->links[i] = ParseLink(r, f.Item(static_cast<std::size_t>(i)), angle_scale, false);
   }
+  model->tool() = tool;
 }
 
 KinematicModel ParseRobot(const Reader& r, const Field& f) {
@@ -132,11 +140,11 @@ KinematicModel ParseRobot(const Reader& r, const Field& f) {
   model.name = r.String(m.Get("name"));
   const double angle_scale = ParseAngleScale(r, m.Get("angle_unit"));
   ParseLinks(r, m.Get("links"), angle_scale, &model);
-  model.links[kNumJoints] = ParseLink(r, m.Get("tool"), angle_scale, true);
+  model.tool() = ParseLink(r, m.Get("tool"), angle_scale, true);
   if (const auto base = m.Find("base", false)) {
     model.X_BL0 = ParseTransform(r, *base, angle_scale);
   }
-  if (const auto end = m.Find("end", false)) model.X_L7E = ParseTransform(r, *end, angle_scale);
+  if (const auto end = m.Find("end", false)) model.X_LtE = ParseTransform(r, *end, angle_scale);
   return model;
 }
 
@@ -231,12 +239,12 @@ std::string ModelToYaml(const KinematicModel& model) {
      << "  angle_unit: deg\n";
   WriteTransform(os, "base", model.X_BL0);
   os << "  links:\n";
-  for (int i = 0; i < kNumJoints; ++i) {
+  for (int i = 0; i < model.num_joints(); ++i) {
     WriteEntries(os, LinkEntries(model.links[i], false), "    - ", "      ");
   }
   os << "  tool:\n";
   WriteEntries(os, LinkEntries(model.tool(), true), "    ", "    ");
-  WriteTransform(os, "end", model.X_L7E);
+  WriteTransform(os, "end", model.X_LtE);
   return os.str();
 }
 

@@ -189,9 +189,11 @@ class ScenarioParser {
     }
 
     const YamlField q = m.Get("initial_joints_deg");
-    const std::vector<double> q_deg = r_.Numbers(q, kNumJoints);
+    const int n = robot.model.num_joints();
+    const std::vector<double> q_deg = r_.Numbers(q, n);
     Locate(spec + ".q_initial", q);
-    for (int j = 0; j < kNumJoints; ++j) {
+    robot.q_initial = JointVector::Zero(n);
+    for (int j = 0; j < n; ++j) {
       robot.q_initial(j) = DegToRad(q_deg[static_cast<std::size_t>(j)]);
       Locate(spec + ".q_initial[" + std::to_string(j) + "]", q.Item(static_cast<std::size_t>(j)));
     }
@@ -363,8 +365,15 @@ class ScenarioParser {
       }
       if (const auto v = m.Find("joint", false)) {
         const int joint = r_.Integer(*v);
-        if (joint < 1 || joint > kNumJoints) {
-          r_.Fail(*v, "expected a joint number from 1 to " + std::to_string(kNumJoints) +
+        // The joint must exist on every robot the effect acts on (robots come first).
+        int joints = kMaxJoints;
+        for (int r = 0; r < kNumRobots; ++r) {
+          if (e.robot == -1 || e.robot == r) {
+            joints = std::min(joints, out_.twin.robots[r].model.num_joints());
+          }
+        }
+        if (joint < 1 || joint > joints) {
+          r_.Fail(*v, "expected a joint number from 1 to " + std::to_string(joints) +
                           ", got " + std::to_string(joint));
         }
         e.joint = joint - 1;

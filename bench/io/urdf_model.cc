@@ -136,8 +136,9 @@ std::vector<JointPtr> MovingJoints(const std::vector<JointPtr>& chain, const std
     moving.push_back(j);
     names.push_back(j->name);
   }
-  if (moving.size() != kNumJoints) {
-    throw InputError(source, "expected 6 revolute joints between '" + base + "' and '" + tip +
+  if (moving.empty() || moving.size() > static_cast<std::size_t>(kMaxJoints)) {
+    throw InputError(source, "expected 1 to " + std::to_string(kMaxJoints) +
+                                 " revolute joints between '" + base + "' and '" + tip +
                                  "', found " + std::to_string(moving.size()) + ": " +
                                  ListNames(names));
   }
@@ -237,7 +238,8 @@ void BuildGeometry(const std::vector<AxisLine>& axes, const Transform& X_BT,
                    KinematicModel* model) {
   model->X_BL0 = BaseToL0(axes[0]);
   Transform X_BL = model->X_BL0;
-  for (int i = 0; i + 1 < kNumJoints; ++i) {
+  const int n = model->num_joints();
+  for (int i = 0; i + 1 < n; ++i) {
     const Vector3 p = X_BL.inverse() * axes[i + 1].point;
     const Vector3 u = X_BL.linear().transpose() * axes[i + 1].dir;
     DhParameters& dh = model->links[i].dh;
@@ -249,9 +251,9 @@ void BuildGeometry(const std::vector<AxisLine>& axes, const Transform& X_BT,
     }
     X_BL = X_BL * LinkTransform(dh, 0.0);
   }
-  model->links[kNumJoints - 1].dh = FlangeDh(X_BL.inverse() * X_BT);
-  X_BL = X_BL * LinkTransform(model->links[kNumJoints - 1].dh, 0.0);  // L6 = L7
-  model->X_L7E = X_BL.inverse() * X_BT;
+  model->links[n - 1].dh = FlangeDh(X_BL.inverse() * X_BT);
+  X_BL = X_BL * LinkTransform(model->links[n - 1].dh, 0.0);  // L_N = L_t
+  model->X_LtE = X_BL.inverse() * X_BT;
 }
 
 // ---- Mass properties ------------------------------------------------------------------------
@@ -293,6 +295,7 @@ class MassCollector {
                 const FrameSet& frames)
       : urdf_(urdf), frames_(frames) {
     for (size_t k = 0; k < moving.size(); ++k) body_of_joint_[moving[k]->name] = int(k);
+    sums_.resize(moving.size());
   }
 
   void Visit(const urdf::Link& link, const Transform& X_B_link, int body) {
@@ -315,16 +318,16 @@ class MassCollector {
   const urdf::ModelInterface& urdf_;
   const FrameSet& frames_;
   std::map<std::string, int> body_of_joint_;
-  std::array<MassSums, kNumJoints> sums_;
+  std::vector<MassSums> sums_;
 };
 
 void AssignInertias(const urdf::ModelInterface& urdf, const urdf::Link& base,
                     const std::vector<JointPtr>& moving, KinematicModel* model) {
-  const FrameSet frames = ForwardKinematics(*model, JointVector::Zero());
+  const FrameSet frames = ForwardKinematics(*model, ZeroJoints(*model));
   MassCollector collector(urdf, moving, frames);
   collector.Visit(base, Transform::Identity(), -1);
-  for (int k = 0; k < kNumJoints; ++k) model->links[k].inertia = collector.Inertia(k);
-  model->links[kNumJoints].inertia = LinkInertia{};
+  for (int k = 0; k < model->num_joints(); ++k) model->links[k].inertia = collector.Inertia(k);
+  model->tool().inertia = LinkInertia{};
 }
 
 // ---- URDF writing ---------------------------------------------------------------------------
@@ -423,12 +426,11 @@ KinematicModel ParseUrdf(const std::string& text, const std::string& source,
   std::vector<AxisLine> axes;
   const Transform X_BT = ChainAtZero(chain, source, &axes);
 
-  KinematicModel model;
+  KinematicModel model(static_cast<int>(moving.size()));
   model.name = options.robot_name.empty() ? urdf->getName() : options.robot_name;
   BuildGeometry(axes, X_BT, moving, source, &model);
-  for (int i = 0; i < kNumLinks; ++i) {
-    model.links[i].name = i < kNumJoints ? "link" + std::to_string(i + 1) : "tool";
-    if (i < kNumJoints) model.links[i].limits = LimitsOf(*moving[i], source);
+  for (int i = 0; i < model.num_joints(); ++i) {
+    model.links[i].limits = LimitsOf(*moving[i], source);
   }
   AssignInertias(*urdf, *base, moving, &model);
   ValidateModel(model, source);
@@ -450,7 +452,7 @@ std::string ModelToUrdf(const KinematicModel& model) {
   // URDF link i is U_i = L(i-1) RotZ(theta_i + q_i); L_i = U_i M_i.
   std::string parent = "base_link";
   Transform X_parent_joint = model.X_BL0;
-  for (int i = 0; i < kNumJoints; ++i) {
+  for (int i = 0; i < model.num_joints(); ++i) {
     const Link& l = model.links[i];
     const std::string child = "link" + std::to_string(i + 1);
     WriteLink(os, child, l.inertia, AfterRotZ(l.dh));
@@ -463,7 +465,7 @@ std::string ModelToUrdf(const KinematicModel& model) {
   WriteJoint(os, "tool_joint", parent, "tool",
              X_parent_joint * LinkTransform(model.tool().dh, 0.0), nullptr);
   os << "  <link name=\"end\"/>\n";
-  WriteJoint(os, "end_joint", "tool", "end", model.X_L7E, nullptr);
+  WriteJoint(os, "end_joint", "tool", "end", model.X_LtE, nullptr);
   os << "</robot>\n";
   return os.str();
 }

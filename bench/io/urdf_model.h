@@ -19,7 +19,7 @@ struct UrdfImportOptions {
 /// Builds a model from URDF text. The chain from base_link to tip_link must hold exactly six
 /// revolute (or continuous) joints, any number of fixed joints and nothing else. The DH frames
 /// follow the joint axes; X_BL0 maps the base link frame to DH frame 0, link 7 is the identity
-/// and X_L7E maps it to the tip link frame, so EndPose equals the URDF's tip pose. Masses move
+/// and X_LtE maps it to the tip link frame, so EndPose equals the URDF's tip pose. Masses move
 /// to the DH link frames. Throws InputError naming `source`, the joint or link, and what was
 /// expected (wrong joint count or type, missing limits, parallel-and-coincident axes, ...).
 KinematicModel ParseUrdf(const std::string& text, const std::string& source,

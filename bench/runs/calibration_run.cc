@@ -86,13 +86,17 @@ std::string Csv(double v, int precision = 10) {
   return os.str();
 }
 
-const char* kCsvHeader =
-    "robot,camera_robot,axis,index,set,q1_deg,q2_deg,q3_deg,q4_deg,q5_deg,q6_deg,du_px,dv_px,"
-    "depth_mm,offset_x_mm,offset_y_mm,offset_z_mm,frames,moves";
+// Header of measurements.csv for robots of up to `joints` joints (q1_deg..qN_deg; a robot with
+// fewer joints leaves the last ones empty).
+std::string CsvHeader(int joints) {
+  std::string h = "robot,camera_robot,axis,index,set";
+  for (int i = 1; i <= joints; ++i) h += ",q" + std::to_string(i) + "_deg";
+  return h + ",du_px,dv_px,depth_mm,offset_x_mm,offset_y_mm,offset_z_mm,frames,moves";
+}
 
 // One CSV row per aligned pose (what a hardware cell records).
 void AppendRows(const RobotCalibration& rc, const std::string& robot, const std::string& camera,
-                std::ostringstream* csv) {
+                int joints, std::ostringstream* csv) {
   for (const AlignedPose& p : rc.aligned) {
     const bool cal = std::find(rc.calibration_axes.begin(), rc.calibration_axes.end(), p.axis) !=
                      rc.calibration_axes.end();
@@ -100,7 +104,10 @@ void AppendRows(const RobotCalibration& rc, const std::string& robot, const std:
                      rc.validation_axes.end();
     *csv << robot << ',' << camera << ',' << p.axis << ',' << p.index << ','
          << (cal ? "calibration" : val ? "validation" : "unused");
-    for (int i = 0; i < kNumJoints; ++i) *csv << ',' << Deg(p.q_passive(i));
+    for (int i = 0; i < joints; ++i) {
+      *csv << ',';
+      if (i < p.q_passive.size()) *csv << Deg(p.q_passive(i));
+    }
     *csv << ',' << Csv(p.pixel_error.x, 6) << ',' << Csv(p.pixel_error.y, 6) << ','
          << Csv(1000 * p.p_C.z()) << ',' << Csv(1000 * p.offset.x()) << ','
          << Csv(1000 * p.offset.y()) << ',' << Csv(1000 * p.offset.z()) << ',' << p.frames << ','
@@ -188,8 +195,12 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
        {{"fx", ei.fx - ti.fx}, {"fy", ei.fy - ti.fy}, {"cx", ei.cx - ti.cx}, {"cy", ei.cy - ti.cy}}},
       {"rms_reprojection_px", result.intrinsics.rms_px},
       {"views_used", result.intrinsics.views_used}};
+  int csv_joints = 0;
+  for (const RobotCalibration& rc : result.robots) {
+    csv_joints = std::max(csv_joints, rc.nominal.num_joints());
+  }
   std::ostringstream csv;
-  csv << kCsvHeader << '\n';
+  csv << CsvHeader(csv_joints) << '\n';
   double planning = 0, servoing = 0, identification = 0;
   json robots = json::object();
   for (const RobotCalibration& rc : result.robots) {
@@ -336,20 +347,20 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
         {"linearized_vs_ceres_max_parameter_difference",
          {{"mm", 1000 * [&] {
              double m = 0;
-             for (int i = 0; i < kNumParams; ++i)
+             for (int i = 0; i < lin.correction.size(); ++i)
                if (IsLengthParameter(i))
                  m = std::max(m, std::abs(lin.correction(i) - nl.correction(i)));
              return m;
            }()},
           {"deg", RadToDeg([&] {
              double m = 0;
-             for (int i = 0; i < kNumParams; ++i)
+             for (int i = 0; i < lin.correction.size(); ++i)
                if (!IsLengthParameter(i))
                  m = std::max(m, std::abs(lin.correction(i) - nl.correction(i)));
              return m;
            }())}}}};
     robots[name] = r;
-    AppendRows(rc, name, camera, &csv);
+    AppendRows(rc, name, camera, csv_joints, &csv);
     // The identified model, ready to load (tool link = board mount, as identified).
     std::ofstream(staging / ("identified_" + name + ".yaml")) << ModelToYaml(rc.identified);
   }
@@ -496,8 +507,9 @@ int RunIdentify(const IdentifyOptions& o) {
   const std::vector<std::string> header = SplitCsv(line);
   std::map<std::string, size_t> col;
   for (size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
-  for (const char* need : {"robot", "axis", "index", "set", "q1_deg", "q2_deg", "q3_deg",
-                                  "q4_deg", "q5_deg", "q6_deg"}) {
+  std::vector<std::string> needed = {"robot", "axis", "index", "set"};
+  for (int i = 1; i <= model.num_joints(); ++i) needed.push_back("q" + std::to_string(i) + "_deg");
+  for (const std::string& need : needed) {
     if (!col.count(need)) {
       throw InputError(o.measurements + ":1", "missing column '" + std::string(need) + "' (expected the "
                                               "header of `twinbench run`'s measurements.csv)");
@@ -524,7 +536,8 @@ int RunIdentify(const IdentifyOptions& o) {
     if (f[col["robot"]] != robot) continue;
     AxisSample s;
     s.axis = CsvInteger(f[col["axis"]], where + " axis");
-    for (int i = 0; i < kNumJoints; ++i) {
+    s.q = ZeroJoints(model);
+    for (int i = 0; i < model.num_joints(); ++i) {
       const std::string key = "q" + std::to_string(i + 1) + "_deg";
       s.q(i) = DegToRad(CsvNumber(f[col[key]], where + " " + key));
     }
@@ -576,7 +589,7 @@ int RunIdentify(const IdentifyOptions& o) {
   j["scale"] = {{"identified_length_ratio", nl.scale}, {"depth_used", nl.depth_used}};
   json corr = json::object();
   const ParameterVector d = GetParameters(rc.identified) - GetParameters(rc.nominal);
-  for (int i = 0; i < kNumParams; ++i) {
+  for (int i = 0; i < d.size(); ++i) {
     corr[ParameterName(robot, i)] = IsLengthParameter(i) ? 1000 * d(i) : RadToDeg(d(i));
   }
   j["correction_mm_or_deg"] = corr;

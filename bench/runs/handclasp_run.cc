@@ -122,7 +122,7 @@ nlohmann::json CoupledMotion(TwinCell& cell, const std::array<KinematicModel, 2>
 
 // A tip model with its tip moved by dt_F in the flange frame.
 KinematicModel WithTipCorrection(KinematicModel tip_model, const Vector3& dt_F) {
-  tip_model.X_L7E.translation() += dt_F;
+  tip_model.X_LtE.translation() += dt_F;
   return tip_model;
 }
 

@@ -51,8 +51,8 @@ std::vector<JointVector> RandomJointConfigurations(const KinematicModel& model, 
   std::mt19937_64 rng(seed);
   std::vector<JointVector> qs;
   for (int c = 0; c < n; ++c) {
-    JointVector q;
-    for (int i = 0; i < kNumJoints; ++i) {
+    JointVector q(model.num_joints());
+    for (int i = 0; i < model.num_joints(); ++i) {
       const JointLimits& l = model.links[i].limits;
       const double lo = l.lower + margin, hi = std::max(lo, l.upper - margin);
       q(i) = std::uniform_real_distribution<double>(lo, hi)(rng);
@@ -84,7 +84,7 @@ RobotScore ScoreRobot(const KinematicModel& nominal, const KinematicModel& ident
   const ParameterVector phi0 = GetParameters(nominal);
   const ParameterVector d_est = GetParameters(identified) - phi0;
   const ParameterVector d_true = GetParameters(truth) - phi0;
-  for (int i = 0; i < kNumParams; ++i) {
+  for (int i = 0; i < d_est.size(); ++i) {
     s.parameters.push_back({ParameterName(nominal.name, i), IsLengthParameter(i), d_est(i),
                             d_true(i)});
   }

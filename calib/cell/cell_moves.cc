@@ -11,8 +11,9 @@ MoveResult MoveAvoidingSweep(Cell& cell, int robot, const JointVector& target) {
     // move from there.
     if (cell.MoveTo(robot, start).status != MoveStatus::kSettled) return direct;
     JointVector via = start;
-    for (int i = 0; i < kNumJoints; ++i) {
-      if ((i >= 3) == wrist_first) via(i) = target(i);
+    const int wrist = static_cast<int>(start.size()) - 3;  // the last three joints
+    for (int i = 0; i < start.size(); ++i) {
+      if ((i >= wrist) == wrist_first) via(i) = target(i);
     }
     if (cell.MoveTo(robot, via).status == MoveStatus::kSettled) {
       const MoveResult last = cell.MoveTo(robot, target);

@@ -9,7 +9,7 @@
 namespace twin {
 namespace {
 
-using Square = Eigen::Matrix<double, kNumParams, kNumParams>;
+using Square = Eigen::MatrixXd;
 
 // E and the (optionally profiled) Phi of `model`, with each axis refitted by FitLine.
 struct Linearization {
@@ -79,11 +79,12 @@ const char* ToString(LinearizedIdentificationStatus status) {
 
 std::vector<ParameterVector> LineConstraintInvariants(const KinematicModel& model) {
   const ParameterVector phi = GetParameters(model);
-  ParameterVector rotation = ParameterVector::Zero(), translation = ParameterVector::Zero(),
-                  scale = ParameterVector::Zero();
+  const int n = model.num_parameters();
+  ParameterVector rotation = ParameterVector::Zero(n), translation = ParameterVector::Zero(n),
+                  scale = ParameterVector::Zero(n);
   rotation(ParameterIndex(1, DhParameter::kTheta)) = 1.0;
   translation(ParameterIndex(1, DhParameter::kD)) = 1.0;
-  for (int i = 0; i < kNumParams; ++i) {
+  for (int i = 0; i < n; ++i) {
     if (IsLengthParameter(i)) scale(i) = phi(i);
   }
   return {rotation, translation, scale};
@@ -99,9 +100,10 @@ LinearizedIdentificationResult IdentifyFromOpticalAxes(
 
   // Identifiable subspace from the nominal model (held fixed: the gauge of the solution).
   Linearization lin = Linearize(nominal, samples, options.profile_axis_directions);
-  res.observability = AnalyseObservability(lin.Phi, nominal.name, options.rank_tolerance,
+  res.observability = AnalyseObservability(lin.Phi, nominal, options.rank_tolerance,
                                            LineConstraintInvariants(nominal));
-  const ParameterVector& S = res.observability.column_scale;
+  const Eigen::VectorXd& S = res.observability.column_scale;
+  const int n = nominal.num_parameters();
   const Eigen::MatrixXd& V = res.observability.identifiable_basis;  // 35 x rank
   const Square P = V * V.transpose();  // projector onto the identifiable subspace
 
@@ -121,7 +123,7 @@ LinearizedIdentificationResult IdentifyFromOpticalAxes(
     const Eigen::MatrixXd A = lin.Phi * S.asDiagonal();
     const Square G = P * (A.transpose() * A) * P;
     const ParameterVector g = P * (A.transpose() * lin.E);
-    const ParameterVector x = (G + lambda * Square::Identity()).ldlt().solve(g);
+    const ParameterVector x = (G + lambda * Square::Identity(n, n)).ldlt().solve(g);
     const ParameterVector dphi = S.cwiseProduct(P * x);  // P x removes round-off leakage
     ++res.iterations;
     const KinematicModel candidate = WithParameters(model, GetParameters(model) + dphi);

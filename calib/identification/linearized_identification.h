@@ -44,7 +44,7 @@ struct LinearizedIdentificationResult {
   std::string reason;                ///< why it stopped, in words
   int iterations = 0;                ///< LM steps tried (accepted and rejected)
   KinematicModel model;              ///< the identified model (nominal + correction)
-  ParameterVector correction = ParameterVector::Zero();  ///< identified - nominal [m, rad]
+  ParameterVector correction;        ///< identified - nominal [m, rad]
   std::vector<double> eps_history;   ///< eps (eq. 47) after each accepted step, [0] = nominal [m]
   double mean_misaligned_error_before = 0.0;  ///< MeanMisalignedErrorNorm of the nominal [m]
   double mean_misaligned_error_after = 0.0;   ///< of the identified model [m]

@@ -16,41 +16,20 @@ using Vec3 = Eigen::Matrix<T, 3, 1>;
 template <typename T>
 using Mat3 = Eigen::Matrix<T, 3, 3>;
 
-// Eq. 2 (RotZ(theta) TransZ(d) TransX(a) RotX(alpha) RotY(beta)) on scalar T; same expansion as
-// LinkTransform in kinematic_model.cc. p[0..4] = theta_offset, d, a, alpha, beta.
-template <typename T>
-void LinkTransformT(const T* p, double q, Mat3<T>* R, Vec3<T>* t) {
-  using std::cos;
-  using std::sin;
-  const T th = p[0] + q;
-  const T ct = cos(th), st = sin(th);
-  const T ca = cos(p[3]), sa = sin(p[3]);
-  const T cb = cos(p[4]), sb = sin(p[4]);
-  *R << ct * cb - st * sa * sb, -st * ca, ct * sb + st * sa * cb,
-        st * cb + ct * sa * sb, ct * ca, st * sb - ct * sa * cb,
-        -ca * sb, sa, ca * cb;
-  *t << p[2] * ct, p[2] * st, p[1];
-}
+constexpr int kMaxParams = kParamsPerLink * (kMaxJoints + 1);
 
-// Eq. 1 on scalar T: p_BE for the 35 parameters phi (flat order of parameters.h).
+// Eq. 1 on scalar T: p_BE for the geometric parameters phi (ChainEndPoseT, the one FK).
 template <typename T>
 Vec3<T> EndPositionT(const KinematicModel& m, const T* phi, const JointVector& q) {
-  Mat3<T> R = m.X_BL0.linear().cast<T>();
-  Vec3<T> p = m.X_BL0.translation().cast<T>();
-  for (int i = 0; i < kNumLinks; ++i) {
-    Mat3<T> Ri;
-    Vec3<T> ti;
-    LinkTransformT(phi + kParamsPerLink * i, i < kNumJoints ? q(i) : 0.0, &Ri, &ti);
-    p = p + R * ti;
-    R = R * Ri;
-  }
-  return p + R * m.X_L7E.translation().cast<T>();
+  T q_link[kMaxJoints];
+  for (int i = 0; i < m.num_joints(); ++i) q_link[i] = T(q(i));
+  return ChainEndPoseT<T>(m, phi, q_link, T(1.0)).p;
 }
 
 // phi = phi0 + SV z: the 35 parameters from the identifiable coordinates z.
 template <typename T>
 void ExpandParameters(const ParameterVector& phi0, const Eigen::MatrixXd& SV, const T* z, T* phi) {
-  for (int i = 0; i < kNumParams; ++i) {
+  for (int i = 0; i < phi0.size(); ++i) {
     phi[i] = T(phi0(i));
     for (int j = 0; j < SV.cols(); ++j) phi[i] += SV(i, j) * z[j];
   }
@@ -81,7 +60,7 @@ struct AxisResidualFunctor {
     const T* z = blocks[0];
     const T* s = blocks[1];
     const T* mu = blocks[2];
-    T phi[kNumParams];
+    T phi[kMaxParams];
     ExpandParameters(phi0, SV, z, phi);
     const Vec3<T> p = EndPositionT(model, phi, q) - offset.cast<T>();
     const Vec3<T> c = c0.cast<T>() + N.col(0).cast<T>() * s[0] + N.col(1).cast<T>() * s[1];
@@ -110,7 +89,7 @@ struct DepthResidualFunctor {
     const T* s = blocks[1];
     const T* mu = blocks[2];
     const T* t = blocks[3];
-    T phi[kNumParams];
+    T phi[kMaxParams];
     ExpandParameters(phi0, SV, z, phi);
     const Vec3<T> p = EndPositionT(model, phi, q) - offset.cast<T>();
     const Vec3<T> c = c0.cast<T>() + N.col(0).cast<T>() * s[0] + N.col(1).cast<T>() * s[1];
@@ -131,7 +110,7 @@ bool AllHaveDepth(const std::vector<AxisSample>& samples) {
 // positions along the axis changes with the parameters (what the depths measure).
 Eigen::MatrixXd DepthRows(const KinematicModel& model, const std::vector<AxisSample>& samples,
                           const std::vector<Line3>& axes) {
-  std::vector<std::vector<Eigen::Matrix<double, 3, kNumParams>>> J(axes.size());
+  std::vector<std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>>> J(axes.size());
   for (const AxisSample& s : samples) {
     J[s.axis].push_back(IdentificationJacobian(model, s.q).topRows<3>());
   }
@@ -140,7 +119,7 @@ Eigen::MatrixXd DepthRows(const KinematicModel& model, const std::vector<AxisSam
     const Vector3 mu = axes[k].direction.normalized();
     for (size_t i = 1; i < J[k].size(); ++i) rows.push_back(mu.transpose() * (J[k][i] - J[k][i - 1]));
   }
-  Eigen::MatrixXd D(rows.size(), kNumParams);
+  Eigen::MatrixXd D(rows.size(), model.num_parameters());
   for (size_t r = 0; r < rows.size(); ++r) D.row(r) = rows[r];
   return D;
 }
@@ -206,6 +185,7 @@ NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
   NonlinearIdentificationResult res;
   res.model = nominal;
   const ParameterVector phi0 = GetParameters(nominal);
+  res.correction = ParameterVector::Zero(phi0.size());
 
   // Identifiable subspace exactly as the linearized method computes it (profiled Phi), plus
   // the depth rows when the scale is measured.
@@ -236,12 +216,12 @@ NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
   if (depth) {
     invariants.pop_back();  // the uniform scale: measured now
     const Eigen::MatrixXd D = DepthRows(nominal, samples, axes0);
-    Eigen::MatrixXd stacked(Phi.rows() + D.rows(), kNumParams);
+    Eigen::MatrixXd stacked(Phi.rows() + D.rows(), nominal.num_parameters());
     stacked << Phi, D;
     Phi = stacked;
   }
   res.observability =
-      AnalyseObservability(Phi, nominal.name, options.rank_tolerance, invariants);
+      AnalyseObservability(Phi, nominal, options.rank_tolerance, invariants);
   const int rank = res.observability.rank;
   res.axes = axes0;
   res.rms_distance_before = RmsDistance(nominal, samples, axes0);

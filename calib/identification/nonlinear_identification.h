@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/kinematic_model.h"
 #include "calib/identification/linearized_identification.h"
 #include "calib/identification/observability.h"
@@ -78,7 +79,7 @@ struct NonlinearIdentificationResult {
   std::string brief_report;           ///< ceres::Solver::Summary::BriefReport()
   int iterations = 0;                 ///< Ceres iterations (successful and not)
   KinematicModel model;               ///< nominal + correction
-  ParameterVector correction = ParameterVector::Zero();  ///< identified - nominal [m, rad]
+  ParameterVector correction;         ///< identified - nominal [m, rad]
   Eigen::VectorXd z;                  ///< coordinates in observability.identifiable_basis
   std::vector<Line3> axes;            ///< the fitted optical axes in B (unit directions)
   double rms_distance_before = 0.0;   ///< RMS point-to-line distance, nominal, FitLine axes [m]

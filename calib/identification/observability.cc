@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include <Eigen/SVD>
 
@@ -10,20 +11,21 @@
 namespace twin {
 namespace {
 
-using Square = Eigen::Matrix<double, kNumParams, kNumParams>;
+using Square = Eigen::MatrixXd;
 
-// R factor (kNumParams x kNumParams) of a tall matrix by Givens rotations, row by row; R^T R
-// = A^T A, so R has A's singular values and right singular vectors.
+// R factor (n x n) of a tall matrix by Givens rotations, row by row; R^T R = A^T A, so R has
+// A's singular values and right singular vectors. Memory n^2 whatever the row count.
 Square GivensR(const Eigen::MatrixXd& A) {
-  Square R = Square::Zero();
-  Eigen::Matrix<double, 1, kNumParams> row;
+  const int n = static_cast<int>(A.cols());
+  Square R = Square::Zero(n, n);
+  Eigen::RowVectorXd row(n);
   for (int r = 0; r < A.rows(); ++r) {
     row = A.row(r);
-    for (int j = 0; j < kNumParams; ++j) {
+    for (int j = 0; j < n; ++j) {
       if (row(j) == 0.0) continue;
       const double h = std::hypot(R(j, j), row(j));
       const double c = R(j, j) / h, s = row(j) / h;
-      for (int k = j; k < kNumParams; ++k) {
+      for (int k = j; k < n; ++k) {
         const double a = R(j, k), b = row(k);
         R(j, k) = c * a + s * b;
         row(k) = -s * a + c * b;
@@ -53,17 +55,18 @@ void ReducedRowEchelon(Eigen::MatrixXd& M, double tol) {
 
 }  // namespace
 
-std::string NameCombination(const ParameterVector& direction, const std::string& robot) {
+std::string NameCombination(const Eigen::VectorXd& direction,
+                            const std::vector<std::string>& names) {
   const double n = direction.norm();
   if (!(n > 0.0)) return "0";
-  const ParameterVector u = direction / n;
+  const Eigen::VectorXd u = direction / n;
   int terms = 0, only = -1;
-  for (int i = 0; i < kNumParams; ++i) {
+  for (int i = 0; i < u.size(); ++i) {
     if (std::abs(u(i)) >= 1e-6) ++terms, only = i;
   }
-  if (terms == 1) return ParameterName(robot, only);
+  if (terms == 1) return names[only];
   std::string out;
-  for (int i = 0; i < kNumParams; ++i) {
+  for (int i = 0; i < u.size(); ++i) {
     if (std::abs(u(i)) < 1e-6) continue;
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.3g ", std::abs(u(i)));
@@ -72,27 +75,50 @@ std::string NameCombination(const ParameterVector& direction, const std::string&
     } else {
       out += (u(i) < 0 ? " - " : " + ") + std::string(buf);
     }
-    out += ParameterName(robot, i);
+    out += names[i];
   }
   return out;
 }
 
-ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi, const std::string& robot,
+double ObservabilityReport::condition_number() const {
+  if (rank == 0) return std::numeric_limits<double>::infinity();
+  return singular_values[0] / singular_values[rank - 1];
+}
+
+Eigen::VectorXd GeometricColumnScale(const KinematicModel& model) {
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(model.num_parameters());
+  for (int i = 0; i < model.num_parameters(); ++i) {
+    if (IsLengthParameter(i)) scale(i) = kObservabilityCharacteristicLength;
+  }
+  return scale;
+}
+
+ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi, const KinematicModel& model,
                                          double relative_tolerance,
-                                         const std::vector<ParameterVector>& known_invariants) {
-  if (Phi.cols() != kNumParams) {
+                                         const std::vector<Eigen::VectorXd>& known_invariants) {
+  return AnalyseObservability(Phi, ParameterNames(model), GeometricColumnScale(model),
+                              relative_tolerance, known_invariants);
+}
+
+ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi,
+                                         const std::vector<std::string>& names,
+                                         const Eigen::VectorXd& column_scale,
+                                         double relative_tolerance,
+                                         const std::vector<Eigen::VectorXd>& known_invariants) {
+  const int n = static_cast<int>(Phi.cols());
+  if (static_cast<int>(names.size()) != n || column_scale.size() != n || n == 0) {
     throw InputError("AnalyseObservability", "Phi has " + std::to_string(Phi.cols()) +
-                                                 " columns, expected " +
-                                                 std::to_string(kNumParams));
+                                                 " columns, " + std::to_string(names.size()) +
+                                                 " names and " +
+                                                 std::to_string(column_scale.size()) +
+                                                 " column scales; they must agree (> 0)");
   }
   if (!(relative_tolerance > 0.0 && relative_tolerance < 1.0)) {
     throw InputError("AnalyseObservability.relative_tolerance",
                      "must be in (0, 1), got " + std::to_string(relative_tolerance));
   }
   ObservabilityReport rep;
-  for (int i = 0; i < kNumParams; ++i) {
-    if (IsLengthParameter(i)) rep.column_scale(i) = kObservabilityCharacteristicLength;
-  }
+  rep.column_scale = column_scale;
   Eigen::MatrixXd A = Phi * rep.column_scale.asDiagonal();
   const Square R = GivensR(A);
   Eigen::JacobiSVD<Square, Eigen::NoQRPreconditioner> svd(R, Eigen::ComputeFullV);
@@ -101,26 +127,32 @@ ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi, const std::
     // Null space W = span(numerical null space of A, invariants in scaled coordinates); then
     // analyse A (I - W W^T), whose null space is exactly W. (Projecting the invariants alone
     // would break null vectors of A that overlap them.)
-    std::vector<ParameterVector> w;
-    auto add = [&w](ParameterVector u) {
+    std::vector<Eigen::VectorXd> w;
+    auto add = [&w](Eigen::VectorXd u) {
       const double n0 = u.norm();
       for (const auto& b : w) u -= b * b.dot(u);
       for (const auto& b : w) u -= b * b.dot(u);  // second pass for orthogonality
       if (u.norm() > 1e-9 * n0) w.push_back(u.normalized());
     };
-    for (int i = 0; i < kNumParams; ++i) {
+    for (int i = 0; i < n; ++i) {
       if (!(svd.singularValues()(i) > cut)) add(svd.matrixV().col(i));
     }
-    for (const ParameterVector& v : known_invariants) add(v.cwiseQuotient(rep.column_scale));
-    Square Q = Square::Identity();
+    for (const Eigen::VectorXd& v : known_invariants) {
+      if (v.size() != n) {
+        throw InputError("AnalyseObservability", "an invariant has " + std::to_string(v.size()) +
+                                                     " entries, expected " + std::to_string(n));
+      }
+      add(v.cwiseQuotient(rep.column_scale));
+    }
+    Square Q = Square::Identity(n, n);
     for (const auto& b : w) Q -= b * b.transpose();
     svd.compute(R * Q, Eigen::ComputeFullV);
   }
   const auto& sv = svd.singularValues();
   rep.singular_values.assign(sv.data(), sv.data() + sv.size());
-  while (rep.rank < kNumParams && sv(rep.rank) > cut) ++rep.rank;
+  while (rep.rank < n && sv(rep.rank) > cut) ++rep.rank;
   rep.identifiable_basis = svd.matrixV().leftCols(rep.rank);
-  rep.null_basis = svd.matrixV().rightCols(kNumParams - rep.rank);
+  rep.null_basis = svd.matrixV().rightCols(n - rep.rank);
 
   // Readable rotation of the null space: RREF of its basis (SI coordinates), one row each.
   Eigen::MatrixXd M = (rep.column_scale.asDiagonal() * rep.null_basis).transpose();
@@ -128,7 +160,7 @@ ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi, const std::
   // ~1e-7 components that must not be taken as pivots (they would be amplified).
   ReducedRowEchelon(M, 1e-4);
   for (int r = 0; r < M.rows(); ++r) {
-    rep.unidentifiable.push_back(NameCombination(M.row(r).transpose(), robot));
+    rep.unidentifiable.push_back(NameCombination(M.row(r).transpose(), names));
   }
   return rep;
 }

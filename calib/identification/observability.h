@@ -18,7 +18,7 @@ namespace twin {
 constexpr double kObservabilityCharacteristicLength = 1.0;
 
 /// Result of AnalyseObservability. All bases are in scaled parameter coordinates x, where a
-/// physical correction is dphi = column_scale.asDiagonal() * x (SI units: m, rad).
+/// physical correction is dphi = column_scale.asDiagonal() * x (SI units: m, rad, ...).
 struct ObservabilityReport {
   int rank = 0;                              ///< number of identifiable directions
   std::vector<double> singular_values;       ///< of the column-scaled matrix, descending
@@ -26,22 +26,37 @@ struct ObservabilityReport {
   /// "0.707 r2.link2.d - 0.707 r2.link3.d" (SI coefficients of a unit vector; the basis is the
   /// reduced row echelon form of the null-space basis, coefficients below 1e-6 dropped).
   std::vector<std::string> unidentifiable;
-  Eigen::MatrixXd identifiable_basis;        ///< kNumParams x rank, orthonormal columns
-  Eigen::MatrixXd null_basis;                ///< kNumParams x (kNumParams - rank), orthonormal
-  ParameterVector column_scale = ParameterVector::Ones();  ///< scaled -> SI factor per column
+  Eigen::MatrixXd identifiable_basis;        ///< n x rank, orthonormal columns
+  Eigen::MatrixXd null_basis;                ///< n x (n - rank), orthonormal columns
+  Eigen::VectorXd column_scale;              ///< scaled -> SI factor per column (n)
+  /// sigma_max / sigma_min over the identifiable singular values (1 for rank 1, infinity for
+  /// rank 0) [-].
+  double condition_number() const;
 };
 
-/// SVD of Phi (rows x kNumParams, columns in parameters.h order) after scaling its length
-/// columns by kObservabilityCharacteristicLength; rank = number of singular values above
-/// relative_tolerance * sigma_max. `known_invariants` are parameter directions (SI) known from
-/// theory to be unobservable (for example a uniform scale of all lengths for line constraints):
-/// the null space is then the span of Phi's numerical null space and these directions, so they
-/// land in it even where noisy or inconsistent data give them a small non-zero singular value;
-/// singular_values are then those of Phi restricted to the complement. `robot` prefixes the
-/// names. Throws InputError for a wrong column count or tolerance outside (0, 1).
-ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi, const std::string& robot,
+/// SVD of Phi (rows x n) after multiplying column j by column_scale(j) (the SI size of one
+/// scaled unit of parameter j, so that the columns weigh alike); rank = number of singular
+/// values above relative_tolerance * sigma_max. `known_invariants` are parameter directions
+/// (SI) known from theory to be unobservable (for example a uniform scale of all lengths for
+/// line constraints): the null space is then the span of Phi's numerical null space and these
+/// directions, so they land in it even where noisy or inconsistent data give them a small
+/// non-zero singular value; singular_values are then those of Phi restricted to the complement.
+/// `names` (n) name the columns. Throws InputError for mismatched sizes or a tolerance outside
+/// (0, 1).
+ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi,
+                                         const std::vector<std::string>& names,
+                                         const Eigen::VectorXd& column_scale,
                                          double relative_tolerance,
-                                         const std::vector<ParameterVector>& known_invariants = {});
+                                         const std::vector<Eigen::VectorXd>& known_invariants = {});
+
+/// The same for the geometric parameters of `model` (columns in parameters.h order, length
+/// columns scaled by kObservabilityCharacteristicLength, angles by 1).
+ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi, const KinematicModel& model,
+                                         double relative_tolerance,
+                                         const std::vector<Eigen::VectorXd>& known_invariants = {});
+
+/// Column scales of the geometric parameters of `model` (see above).
+Eigen::VectorXd GeometricColumnScale(const KinematicModel& model);
 
 /// Observability index O1 of eq. 34: (sigma_1 ... sigma_m)^(1/m) / sqrt(m), m the number of
 /// values given. Pass the identifiable singular values only (the first `rank` of a report): an
@@ -52,6 +67,7 @@ double ObservabilityIndexO1(const std::vector<double>& identifiable_singular_val
 
 /// Readable name of an SI parameter direction (unit-normalized, |coefficients| < 1e-6
 /// dropped), e.g. "0.707 r2.link2.d - 0.707 r2.link3.d"; a single term is just its name.
-std::string NameCombination(const ParameterVector& direction, const std::string& robot);
+std::string NameCombination(const Eigen::VectorXd& direction,
+                            const std::vector<std::string>& names);
 
 }  // namespace twin

@@ -1,5 +1,7 @@
 #include "calib/kinematics/forward_kinematics.h"
 
+#include <cassert>
+
 #include <Eigen/SVD>
 
 namespace twin {
@@ -12,51 +14,74 @@ Eigen::Matrix<double, 6, 1> Twist(const Vector3& axis, const Vector3& point_on_a
   return col;
 }
 
+// The model's geometric parameters in a stack buffer (no allocation per FK call).
+struct FlatParameters {
+  std::array<double, kParamsPerLink * (kMaxJoints + 1)> phi;
+  explicit FlatParameters(const KinematicModel& m) {
+    assert(m.num_joints() >= 1 && m.num_joints() <= kMaxJoints);
+    for (int i = 0; i < m.num_links(); ++i) {
+      const DhParameters& dh = m.links[i].dh;
+      double* p = phi.data() + kParamsPerLink * i;
+      p[0] = dh.theta_offset;
+      p[1] = dh.d;
+      p[2] = dh.a;
+      p[3] = dh.alpha;
+      p[4] = dh.beta;
+    }
+  }
+};
+
 }  // namespace
 
 FrameSet ForwardKinematics(const KinematicModel& model, const JointVector& q) {
+  assert(q.size() == model.num_joints());
+  const FlatParameters flat(model);
+  std::array<RigidT<double>, kMaxJoints + 2> X;
+  ChainFramesT<double>(model, flat.phi.data(), q.data(), 1.0, X.data());
   FrameSet f;
-  f.X_BL[0] = model.X_BL0;
-  for (int i = 0; i < kNumLinks; ++i) {
-    const double qi = i < kNumJoints ? q(i) : 0.0;
-    f.X_BL[i + 1] = f.X_BL[i] * LinkTransform(model.links[i].dh, qi);
-  }
-  f.X_BE = f.X_BL[kNumLinks] * model.X_L7E;
+  f.num_joints = model.num_joints();
+  for (int i = 0; i <= model.num_links(); ++i) f.X_BL[i] = ToTransform(X[i]);
+  f.X_BE = f.X_BL[model.num_links()] * model.X_LtE;
   return f;
 }
 
 Transform EndPose(const KinematicModel& model, const JointVector& q) {
-  return ForwardKinematics(model, q).X_BE;
+  assert(q.size() == model.num_joints());
+  const FlatParameters flat(model);
+  return ToTransform(ChainEndPoseT<double>(model, flat.phi.data(), q.data(), 1.0));
 }
 
-Eigen::Matrix<double, 6, kNumJoints> ManipulatorJacobian(const KinematicModel& model,
-                                                         const JointVector& q) {
+JointJacobian ManipulatorJacobian(const KinematicModel& model, const JointVector& q) {
   const FrameSet f = ForwardKinematics(model, q);
   const Vector3 p = f.X_BE.translation();
-  Eigen::Matrix<double, 6, kNumJoints> J;
+  const int n = model.num_joints();
+  JointJacobian J(6, n);
   // Joint i turns link i about the z axis of frame L(i-1).
-  for (int i = 0; i < kNumJoints; ++i) {
+  for (int i = 0; i < n; ++i) {
     J.col(i) = Twist(f.X_BL[i].linear().col(2), f.X_BL[i].translation(), p);
   }
   return J;
 }
 
-Eigen::Matrix<double, kNumJoints, 1> JacobianSingularValues(const KinematicModel& model,
-                                                            const JointVector& q) {
-  Eigen::JacobiSVD<Eigen::Matrix<double, 6, kNumJoints>> svd(ManipulatorJacobian(model, q));
+Eigen::VectorXd JacobianSingularValues(const KinematicModel& model, const JointVector& q) {
+  const Eigen::JacobiSVD<JointJacobian> svd(ManipulatorJacobian(model, q));
   return svd.singularValues();
 }
 
-Eigen::Matrix<double, 6, kNumParams> IdentificationJacobian(const KinematicModel& model,
-                                                            const JointVector& q) {
+double SmallestJacobianSingularValue(const KinematicModel& model, const JointVector& q) {
+  const Eigen::VectorXd s = JacobianSingularValues(model, q);
+  return s(s.size() - 1);
+}
+
+ParameterJacobian IdentificationJacobian(const KinematicModel& model, const JointVector& q) {
   // Eq. 5 differentiates each factor of eq. 2. Each parameter moves everything after it by a
   // screw: theta_i rotates about z of L(i-1) through its origin; d_i translates along that z;
   // a_i translates along x' = R_BL(i-1) RotZ(theta_i) e_x; alpha_i rotates about x' through the
   // origin of Li; beta_i rotates about y of Li (RotY leaves e_y fixed) through the same origin.
   const FrameSet f = ForwardKinematics(model, q);
   const Vector3 p = f.X_BE.translation();
-  Eigen::Matrix<double, 6, kNumParams> J;
-  for (int i = 0; i < kNumLinks; ++i) {
+  ParameterJacobian J(6, model.num_parameters());
+  for (int i = 0; i < model.num_links(); ++i) {
     const Transform& X_prev = f.X_BL[i];
     const Transform& X_next = f.X_BL[i + 1];
     const Vector3 z_prev = X_prev.linear().col(2);

@@ -13,9 +13,10 @@ namespace twin {
 namespace {
 
 using Error6 = Eigen::Matrix<double, 6, 1>;
+using JointMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxJoints, kMaxJoints>;
 
 struct Attempt {
-  JointVector q = JointVector::Zero();
+  JointVector q;
   double position_error = 0.0;
   double orientation_error = 0.0;
   int iterations = 0;
@@ -33,16 +34,15 @@ Error6 PoseError(const KinematicModel& model, const Transform& X_target, const J
 }
 
 JointVector Clamp(const KinematicModel& model, JointVector q) {
-  for (int i = 0; i < kNumJoints; ++i) {
+  for (int i = 0; i < model.num_joints(); ++i) {
     q(i) = std::min(std::max(q(i), model.links[i].limits.lower), model.links[i].limits.upper);
   }
   return q;
 }
 
 // Levenberg-Marquardt step (JtJ + lambda (1 + diag JtJ)) dq = g.
-JointVector LmStep(const Eigen::Matrix<double, kNumJoints, kNumJoints>& JtJ,
-                   const JointVector& g, double lambda) {
-  Eigen::Matrix<double, kNumJoints, kNumJoints> A = JtJ;
+JointVector LmStep(const JointMatrix& JtJ, const JointVector& g, double lambda) {
+  JointMatrix A = JtJ;
   A.diagonal().array() += lambda * (1.0 + JtJ.diagonal().array());
   return A.ldlt().solve(g);
 }
@@ -50,12 +50,12 @@ JointVector LmStep(const Eigen::Matrix<double, kNumJoints, kNumJoints>& JtJ,
 // LM step that holds joints resting on a limit the step would push through, so the others
 // keep moving along the boundary instead of the whole step being clamped away.
 JointVector ActiveSetStep(const KinematicModel& model, const JointVector& q,
-                          Eigen::Matrix<double, kNumJoints, kNumJoints> JtJ, JointVector g,
-                          double lambda) {
+                          JointMatrix JtJ, JointVector g, double lambda) {
   JointVector dq = LmStep(JtJ, g, lambda);
-  for (int pass = 0; pass < kNumJoints; ++pass) {
+  const int n = model.num_joints();
+  for (int pass = 0; pass < n; ++pass) {
     bool changed = false;
-    for (int i = 0; i < kNumJoints; ++i) {
+    for (int i = 0; i < n; ++i) {
       const JointLimits& l = model.links[i].limits;
       const bool blocked = (q(i) <= l.lower && dq(i) < 0.0) || (q(i) >= l.upper && dq(i) > 0.0);
       if (blocked && g(i) != 0.0) {
@@ -88,11 +88,11 @@ Attempt Descend(const KinematicModel& model, const Transform& X_target, JointVec
       a.converged = true;
       break;
     }
-    Eigen::Matrix<double, 6, kNumJoints> J = ManipulatorJacobian(model, q);
+    JointJacobian J = ManipulatorJacobian(model, q);
     Error6 ew = e;
     J.bottomRows<3>() *= w;
     ew.tail<3>() *= w;
-    const Eigen::Matrix<double, kNumJoints, kNumJoints> JtJ = J.transpose() * J;
+    const JointMatrix JtJ = J.transpose() * J;
     const JointVector g = J.transpose() * ew;
     bool improved = false;
     for (int tries = 0; tries < 10 && !improved; ++tries) {
@@ -157,9 +157,16 @@ IkResult SolveIk(const KinematicModel& model, const Transform& X_BE_target,
                  const JointVector& q_seed, const IkOptions& options) {
   ValidateIkOptions(options);
   IkResult r;
+  r.q = ZeroJoints(model);
   if (!X_BE_target.matrix().allFinite() || !q_seed.allFinite()) {
     r.status = IkStatus::kInvalidInput;
     r.reason = "target pose or seed contains a non-finite number";
+    return r;
+  }
+  if (q_seed.size() != model.num_joints()) {
+    r.status = IkStatus::kInvalidInput;
+    r.reason = "seed has " + std::to_string(q_seed.size()) + " joint angles, the model " +
+               std::to_string(model.num_joints());
     return r;
   }
   if (!WithinLimits(model, q_seed)) {
@@ -176,7 +183,7 @@ IkResult SolveIk(const KinematicModel& model, const Transform& X_BE_target,
   for (int s = 0; s <= options.random_restarts; ++s) {
     JointVector q0 = q_seed;
     if (s > 0) {
-      for (int i = 0; i < kNumJoints; ++i) {
+      for (int i = 0; i < model.num_joints(); ++i) {
         std::uniform_real_distribution<double> u(model.links[i].limits.lower,
                                                   model.links[i].limits.upper);
         q0(i) = u(rng);
@@ -205,7 +212,7 @@ IkResult SolveIk(const KinematicModel& model, const Transform& X_BE_target,
   if (free.converged) {
     JointVector q = free.q;
     std::ostringstream os;
-    for (int i = 0; i < kNumJoints; ++i) {
+    for (int i = 0; i < model.num_joints(); ++i) {
       const JointLimits& l = model.links[i].limits;
       const double wrapped = q(i) - 2.0 * kPi * std::floor((q(i) - l.lower) / (2.0 * kPi));
       if (wrapped <= l.upper) {
@@ -233,7 +240,7 @@ IkResult SolveIk(const KinematicModel& model, const Transform& X_BE_target,
   os << "no solution within tolerance after " << r.starts << " starts; best position error "
      << best.position_error * 1e3 << " mm, orientation error "
      << RadToDeg(best.orientation_error) << " deg";
-  const double sigma_min = JacobianSingularValues(model, best.q)(kNumJoints - 1);
+  const double sigma_min = SmallestJacobianSingularValue(model, best.q);
   if (best.position_error < 1e-3 && sigma_min < 1e-2) {
     os << " (converging slowly next to a singular configuration, smallest Jacobian singular "
           "value "

@@ -37,7 +37,7 @@ enum class IkStatus {
 struct IkResult {
   IkStatus status = IkStatus::kNotConverged;
   std::string reason;                 ///< human-readable cause when status != kSuccess
-  JointVector q = JointVector::Zero();  ///< solution (or the best attempt) [rad]
+  JointVector q;                      ///< solution (or the best attempt) [rad]
   double position_error = 0.0;        ///< |p_target - p(q)| of the returned q [m]
   double orientation_error = 0.0;     ///< angle between target and achieved rotation [rad]
   int iterations = 0;                 ///< total iterations over all starts

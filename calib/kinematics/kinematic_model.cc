@@ -1,11 +1,13 @@
 #include "calib/kinematics/kinematic_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
 #include <Eigen/Eigenvalues>
 
 #include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
 
 namespace twin {
 namespace {
@@ -25,27 +27,30 @@ void RequireRigid(const Transform& X, const std::string& where, const std::strin
 
 }  // namespace
 
+KinematicModel::KinematicModel(int num_joints) : links(std::max(num_joints, 0) + 1) {
+  for (int i = 0; i < num_joints; ++i) links[i].name = "link" + std::to_string(i + 1);
+  links.back().name = "tool";
+}
+
 Transform LinkTransform(const DhParameters& dh, double q) {
-  const double th = dh.theta_offset + q;
-  const double ct = std::cos(th), st = std::sin(th);
-  const double ca = std::cos(dh.alpha), sa = std::sin(dh.alpha);
-  const double cb = std::cos(dh.beta), sb = std::sin(dh.beta);
-  // Eq. 2: RotZ(theta) TransZ(d) TransX(a) RotX(alpha) RotY(beta), written out.
-  Matrix3 R;
-  R << ct * cb - st * sa * sb, -st * ca, ct * sb + st * sa * cb,
-       st * cb + ct * sa * sb, ct * ca, st * sb - ct * sa * cb,
-       -ca * sb, sa, ca * cb;
-  Transform X = Transform::Identity();
-  X.linear() = R;
-  X.translation() << dh.a * ct, dh.a * st, dh.d;
-  return X;
+  const double p[kParamsPerLink] = {dh.theta_offset, dh.d, dh.a, dh.alpha, dh.beta};
+  return ToTransform(LinkTransformT<double>(p, q, 1.0));
+}
+
+JointVector ZeroJoints(const KinematicModel& model) {
+  return JointVector::Zero(model.num_joints());
 }
 
 void ValidateModel(const KinematicModel& model, const std::string& where) {
   if (model.name.empty()) throw InputError(where, "robot name must not be empty");
+  if (model.num_joints() < 1 || model.num_joints() > kMaxJoints) {
+    throw InputError(where, "a chain needs 1 to " + std::to_string(kMaxJoints) +
+                                " revolute joints, got " + std::to_string(model.num_joints()));
+  }
   RequireRigid(model.X_BL0, where, "base transform");
-  RequireRigid(model.X_L7E, where, "end transform");
-  for (int i = 0; i < kNumLinks; ++i) {
+  RequireRigid(model.X_LtE, where, "end transform");
+  const int n = model.num_joints();
+  for (int i = 0; i < model.num_links(); ++i) {
     const Link& l = model.links[i];
     const std::string f = "link " + std::to_string(i + 1) + " (" + l.name + ")";
     if (l.name.empty()) throw InputError(where, f + ": name must not be empty");
@@ -54,7 +59,7 @@ void ValidateModel(const KinematicModel& model, const std::string& where) {
     RequireFinite(l.dh.a, where, f + " a");
     RequireFinite(l.dh.alpha, where, f + " alpha");
     RequireFinite(l.dh.beta, where, f + " beta");
-    if (i < kNumJoints) {
+    if (i < n) {
       RequireFinite(l.limits.lower, where, f + " lower limit");
       RequireFinite(l.limits.upper, where, f + " upper limit");
       if (!(l.limits.lower < l.limits.upper)) {
@@ -87,15 +92,16 @@ void ValidateModel(const KinematicModel& model, const std::string& where) {
 }
 
 bool WithinLimits(const KinematicModel& model, const JointVector& q) {
-  for (int i = 0; i < kNumJoints; ++i) {
+  if (q.size() != model.num_joints()) return false;
+  for (int i = 0; i < model.num_joints(); ++i) {
     if (q(i) < model.links[i].limits.lower || q(i) > model.links[i].limits.upper) return false;
   }
   return true;
 }
 
 JointVector MidRange(const KinematicModel& model) {
-  JointVector q;
-  for (int i = 0; i < kNumJoints; ++i) {
+  JointVector q(model.num_joints());
+  for (int i = 0; i < model.num_joints(); ++i) {
     q(i) = 0.5 * (model.links[i].limits.lower + model.links[i].limits.upper);
   }
   return q;

@@ -81,12 +81,12 @@ Vector3 MisalignedError(const Vector3& mu, const Vector3& p_i, const Vector3& p_
   return mu.cross(p_j - p_i);  // eq. 18/46
 }
 
-Eigen::Matrix<double, 3, kNumParams> ErrorJacobian(const KinematicModel& model, const Vector3& mu,
+Eigen::Matrix<double, 3, Eigen::Dynamic> ErrorJacobian(const KinematicModel& model, const Vector3& mu,
                                                    const JointVector& q_i,
                                                    const JointVector& q_j) {
   // Eq. 19; IdentificationJacobian rows 0-2 are already 0R_N J_P (base frame, eq. 12).
-  const auto Ji = IdentificationJacobian(model, q_i).topRows<3>();
-  const auto Jj = IdentificationJacobian(model, q_j).topRows<3>();
+  const Eigen::Matrix<double, 3, Eigen::Dynamic> Ji = IdentificationJacobian(model, q_i).topRows<3>();
+  const Eigen::Matrix<double, 3, Eigen::Dynamic> Jj = IdentificationJacobian(model, q_j).topRows<3>();
   return Skew(mu) * (Ji - Jj);
 }
 
@@ -139,7 +139,7 @@ MisalignedErrorStack StackMisalignedErrors(const KinematicModel& model,
   const int num_axes = static_cast<int>(directions.size());
   // Per axis: positions and position Jacobians of its samples, in sample order.
   std::vector<std::vector<Vector3>> p(num_axes);
-  std::vector<std::vector<Eigen::Matrix<double, 3, kNumParams>>> J(num_axes);
+  std::vector<std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>>> J(num_axes);
   for (const AxisSample& s : samples) {
     if (s.axis < 0 || s.axis >= num_axes) {
       throw InputError("AxisSample.axis", "axis " + std::to_string(s.axis) +
@@ -161,7 +161,7 @@ MisalignedErrorStack StackMisalignedErrors(const KinematicModel& model,
   }
   const int rows = 3 * out.num_pairs;
   out.E.resize(rows);
-  out.Phi.resize(rows, kNumParams);
+  out.Phi.resize(rows, model.num_parameters());
   out.direction_jacobian = Eigen::MatrixXd::Zero(rows, 2 * num_axes);
   int r = 0;
   for (int k = 0; k < num_axes; ++k) {
@@ -174,7 +174,7 @@ MisalignedErrorStack StackMisalignedErrors(const KinematicModel& model,
       for (int j = i + 1; j < n; ++j, r += 3) {
         const Vector3 dp = p[k][j] - p[k][i];
         out.E.segment<3>(r) = MisalignedError(mu, p[k][i], p[k][j]);    // eq. 46
-        out.Phi.block<3, kNumParams>(r, 0) = S * (J[k][i] - J[k][j]);  // eq. 19
+        out.Phi.middleRows<3>(r) = S * (J[k][i] - J[k][j]);  // eq. 19
         // d(mu x dp)/d(mu) = -[dp x], restricted to the tangent plane of mu.
         out.direction_jacobian.block<3, 2>(r, 2 * k) = -Skew(dp) * T;
       }

@@ -22,7 +22,7 @@ namespace twin {
 /// camera axis `axis` (0-based index of the optical axis l_k).
 struct AxisSample {
   int axis = 0;                        ///< optical axis index k (0-based)
-  JointVector q = JointVector::Zero(); ///< recorded joint angles [rad]
+  JointVector q;                       ///< recorded joint angles [rad]
   /// Residual offset of the feature point from the axis when the servo stopped, in B [m]: the
   /// servo stops within a pixel tolerance (0.1 px is 0.06 mm at 0.5 m), and the camera
   /// measures what is left; the point on the axis is p_BE(q) - offset. Zero: exactly on it.
@@ -62,7 +62,7 @@ Vector3 MisalignedError(const Vector3& mu, const Vector3& p_i, const Vector3& p_
 /// base-frame position rows of IdentificationJacobian [m per unit parameter]. With this sign
 /// E(nominal) = J dphi (eq. 20) for dphi = true - nominal parameters, i.e. J is minus the
 /// derivative of MisalignedError(mu, p_i(phi), p_j(phi)) with mu held fixed.
-Eigen::Matrix<double, 3, kNumParams> ErrorJacobian(const KinematicModel& model, const Vector3& mu,
+Eigen::Matrix<double, 3, Eigen::Dynamic> ErrorJacobian(const KinematicModel& model, const Vector3& mu,
                                                    const JointVector& q_i,
                                                    const JointVector& q_j);
 
@@ -70,7 +70,7 @@ Eigen::Matrix<double, 3, kNumParams> ErrorJacobian(const KinematicModel& model, 
 /// in lexicographic order of their sample order within the axis).
 struct MisalignedErrorStack {
   Eigen::VectorXd E;    ///< eq. 22, 3 rows per pair [m]
-  Eigen::MatrixXd Phi;  ///< eq. 23, 3 rows per pair, kNumParams columns
+  Eigen::MatrixXd Phi;  ///< eq. 23, 3 rows per pair, one column per geometric parameter
   /// d E / d (axis direction) with each mu_k varied in its tangent plane (2 columns per axis,
   /// in the order of `directions`) [m per rad]. Used to profile the refitted directions out.
   Eigen::MatrixXd direction_jacobian;

@@ -26,29 +26,30 @@ double& Field(DhParameters& dh, int kind) {
 }  // namespace
 
 int ParameterIndex(int link, DhParameter which) {
-  assert(link >= 1 && link <= kNumLinks);
+  assert(link >= 1 && link <= kMaxJoints + 1);
   return kParamsPerLink * (link - 1) + static_cast<int>(which);
 }
 
 std::string ParameterName(const std::string& robot, int index) {
-  assert(index >= 0 && index < kNumParams);
+  assert(index >= 0);
   return robot + ".link" + std::to_string(index / kParamsPerLink + 1) + "." +
          kKindNames[index % kParamsPerLink];
 }
 
-std::vector<std::string> ParameterNames(const std::string& robot) {
+std::vector<std::string> ParameterNames(const KinematicModel& model) {
   std::vector<std::string> names;
-  names.reserve(kNumParams);
-  for (int i = 0; i < kNumParams; ++i) names.push_back(ParameterName(robot, i));
+  names.reserve(model.num_parameters());
+  for (int i = 0; i < model.num_parameters(); ++i) names.push_back(ParameterName(model.name, i));
   return names;
 }
 
-int FindParameter(const std::string& robot, const std::string& name) {
-  for (int i = 0; i < kNumParams; ++i) {
-    if (ParameterName(robot, i) == name) return i;
+int FindParameter(const KinematicModel& model, const std::string& name) {
+  for (int i = 0; i < model.num_parameters(); ++i) {
+    if (ParameterName(model.name, i) == name) return i;
   }
-  throw InputError(name, "unknown kinematic parameter; expected " + robot +
-                             ".link<1..7>.<theta|d|a|alpha|beta>");
+  throw InputError(name, "unknown kinematic parameter; expected " + model.name + ".link<1.." +
+                             std::to_string(model.num_links()) +
+                             ">.<theta|d|a|alpha|beta>");
 }
 
 bool IsLengthParameter(int index) {
@@ -57,8 +58,8 @@ bool IsLengthParameter(int index) {
 }
 
 ParameterVector GetParameters(const KinematicModel& model) {
-  ParameterVector p;
-  for (int i = 0; i < kNumParams; ++i) {
+  ParameterVector p(model.num_parameters());
+  for (int i = 0; i < model.num_parameters(); ++i) {
     DhParameters dh = model.links[i / kParamsPerLink].dh;
     p(i) = Field(dh, i % kParamsPerLink);
   }
@@ -66,8 +67,9 @@ ParameterVector GetParameters(const KinematicModel& model) {
 }
 
 KinematicModel WithParameters(const KinematicModel& model, const ParameterVector& params) {
+  assert(params.size() == model.num_parameters());
   KinematicModel out = model;
-  for (int i = 0; i < kNumParams; ++i) {
+  for (int i = 0; i < model.num_parameters(); ++i) {
     Field(out.links[i / kParamsPerLink].dh, i % kParamsPerLink) = params(i);
   }
   return out;

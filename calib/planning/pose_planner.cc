@@ -37,10 +37,10 @@ void Count(Cause c, RejectionCounts* r) {
   }
 }
 
-// The active model with an identity tool link, so that its end frame is the flange L6.
+// The active model with an identity tool link, so that its end frame is the flange L_N.
 KinematicModel FlangeModel(KinematicModel m) {
-  m.links[kNumJoints].dh = DhParameters{};
-  m.X_L7E = Transform::Identity();
+  m.tool().dh = DhParameters{};
+  m.X_LtE = Transform::Identity();
   return m;
 }
 
@@ -57,7 +57,7 @@ Eigen::AngleAxisd AlignRotation(const Vector3& a, const Vector3& b) {
 // Eq. 24: min_i D_theta_i [rad].
 double JointLimitDistance(const KinematicModel& m, const JointVector& q) {
   double d = kInf;
-  for (int i = 0; i < kNumJoints; ++i) {
+  for (int i = 0; i < m.num_joints(); ++i) {
     d = std::min({d, q(i) - m.links[i].limits.lower, m.links[i].limits.upper - q(i)});
   }
   return d;
@@ -67,7 +67,7 @@ double JointLimitDistance(const KinematicModel& m, const JointVector& q) {
 Cause CheckConfiguration(const KinematicModel& m, const JointVector& q,
                          const PosePlannerOptions& o) {
   if (JointLimitDistance(m, q) < o.min_joint_limit_distance) return Cause::kC1;
-  if (JacobianSingularValues(m, q)(kNumJoints - 1) < o.min_singular_value) return Cause::kC2;
+  if (SmallestJacobianSingularValue(m, q) < o.min_singular_value) return Cause::kC2;
   return Cause::kNone;
 }
 
@@ -106,7 +106,7 @@ struct Planner {
     out->camera_origin = X_BpC_fk.translation();
     out->direction = X_BpC_fk.linear().col(2);
     out->q_active = ik_a.q;
-    out->q_passive.assign(o.positions_per_axis, JointVector::Zero());
+    out->q_passive.assign(o.positions_per_axis, ZeroJoints(passive));
     out->distances.assign(o.positions_per_axis, 0.0);
     JointVector seed = MidRange(passive);
     for (int i = 0; i < o.positions_per_axis; ++i) {
@@ -238,7 +238,7 @@ double PoseSetFitness(const KinematicModel& passive,
   }
   const MisalignedErrorStack stack = StackMisalignedErrors(passive, samples, directions);
   const ObservabilityReport report = AnalyseObservability(
-      ProfiledPhi(stack), passive.name, rank_tolerance, LineConstraintInvariants(passive));
+      ProfiledPhi(stack), passive, rank_tolerance, LineConstraintInvariants(passive));
   const std::vector<double> sv(report.singular_values.begin(),
                                report.singular_values.begin() + report.rank);
   const double o1 = ObservabilityIndexO1(sv);  // eq. 34

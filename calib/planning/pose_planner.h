@@ -93,7 +93,7 @@ struct RejectionCounts {
 struct PlannedAxis {
   Vector3 camera_origin = Vector3::Zero();  ///< P_c in Bp [m]
   Vector3 direction = Vector3::UnitX();     ///< mu, unit, in Bp [-]
-  JointVector q_active = JointVector::Zero();  ///< active robot joint angles [rad]
+  JointVector q_active;                     ///< active robot joint angles [rad]
   std::vector<JointVector> q_passive;       ///< p passive joint angles [rad]
   std::vector<double> distances;            ///< planned D of each position [m]
 };

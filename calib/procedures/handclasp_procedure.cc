@@ -31,7 +31,7 @@ Transform MakePose(const Matrix3& R, const Vector3& p) {
 // A point on robot `model`'s joint-2 axis (origin of DH frame L1 at q = 0), in its base frame:
 // the "shoulder" the planner points robot 1's tip at.
 Vector3 Shoulder(const KinematicModel& model) {
-  return ForwardKinematics(model, JointVector::Zero()).X_BL[1].translation();
+  return ForwardKinematics(model, ZeroJoints(model)).X_BL[1].translation();
 }
 
 // A unit vector perpendicular to u, preferring the one in the horizontal plane of B1.
@@ -44,7 +44,7 @@ Vector3 Perpendicular(const Vector3& u) {
 struct Teach {
   bool ok = false;
   std::string reason;
-  JointVector q1 = JointVector::Zero();
+  JointVector q1;
 };
 
 // IK for a tip pose with position p and z axis z, trying `rolls` roll angles about z.
@@ -118,8 +118,8 @@ Teach TeachOne(const std::array<KinematicModel, 2>& m, const Transform& X_B1B2,
 
 KinematicModel WithTipTool(const KinematicModel& flange_model, const Transform& X_FTip) {
   KinematicModel m = flange_model;
-  m.links[kNumJoints].dh = DhParameters{};  // L7 = L6 = F
-  m.X_L7E = X_FTip;
+  m.tool().dh = DhParameters{};  // L7 = L6 = F
+  m.X_LtE = X_FTip;
   return m;
 }
 
@@ -338,14 +338,14 @@ HandclaspResult RunHandclaspProcedure(Cell& cell,
     // Flange poses from the pendant models (tip tool removed) and the tips on the flanges.
     std::vector<Transform> X_B1F1, X_B2F2;
     std::array<KinematicModel, 2> flange = pendant_tip_models;
-    for (KinematicModel& f : flange) f.X_L7E = Transform::Identity();
+    for (KinematicModel& f : flange) f.X_LtE = Transform::Identity();
     for (const HandclaspContact& c : result.contacts) {
       X_B1F1.push_back(EndPose(flange[0], c.q1));
       X_B2F2.push_back(EndPose(flange[1], c.q2));
     }
-    const Transform& X_FTip1 = pendant_tip_models[0].X_L7E;
+    const Transform& X_FTip1 = pendant_tip_models[0].X_LtE;
     result.tips = RefineBaseAndTips(X_B1F1, X_B2F2, X_FTip1.translation(),
-                                    pendant_tip_models[1].X_L7E.translation(),
+                                    pendant_tip_models[1].X_LtE.translation(),
                                     X_FTip1.linear().col(2), result.calibration.X_B1B2_general,
                                     options.tips);
     if (result.tips.ok) {

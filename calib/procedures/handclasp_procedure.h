@@ -25,7 +25,7 @@
 namespace twin {
 
 /// The arm model whose end frame E is the measuring tip: the flange model's tool link (link 7)
-/// is replaced by identity and X_L7E by X_FTip (flange F = DH frame L6).
+/// is replaced by identity and X_LtE by X_FTip (flange F = DH frame L6).
 KinematicModel WithTipTool(const KinematicModel& flange_model, const Transform& X_FTip);
 
 /// Rotation of a tip that faces a tip with rotation R_A_TipOther (both in frame A): z flipped,
@@ -114,8 +114,8 @@ struct HandclaspOptions {
 /// One registered contact.
 struct HandclaspContact {
   int point = 0;                          ///< index of the taught point
-  JointVector q1 = JointVector::Zero();   ///< robot 1 encoders [rad]
-  JointVector q2 = JointVector::Zero();   ///< robot 2 encoders [rad]
+  JointVector q1;   ///< robot 1 encoders [rad]
+  JointVector q2;   ///< robot 2 encoders [rad]
   Vector3 p_B1 = Vector3::Zero();         ///< robot 1's pendant tip position in B1 [m]
   Vector3 p_B2 = Vector3::Zero();         ///< robot 2's pendant tip position in B2 [m]
 };

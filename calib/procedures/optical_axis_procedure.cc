@@ -133,9 +133,9 @@ void ValidateOpticalAxisOptions(const OpticalAxisOptions& o) {
 KinematicModel BoardRobotModel(const KinematicModel& nominal, const Transform& X_FT) {
   KinematicModel m = nominal;
   // The mount's translation becomes link 7's eq. 2 parameters (theta = atan2(y, x), d = z,
-  // a = the distance from the flange axis) and its rotation stays in X_L7E, so that link 7's
+  // a = the distance from the flange axis) and its rotation stays in X_LtE, so that link 7's
   // a, theta and d move the feature point radially, tangentially and along z to first order
-  // wherever it sits. With the whole mount in X_L7E (identity link 7), a point on the flange
+  // wherever it sits. With the whole mount in X_LtE (identity link 7), a point on the flange
   // plane's y axis had no first-order parameter along y: exact synthetic data with depths
   // stopped at 0.05 mm (tests/bench/calibration_cli_test.cc).
   const Vector3 p = X_FT.translation();
@@ -144,9 +144,9 @@ KinematicModel BoardRobotModel(const KinematicModel& nominal, const Transform& X
   dh.theta_offset = radial > 1e-9 ? std::atan2(p.y(), p.x()) : 0.0;
   dh.d = p.z();
   dh.a = radial;
-  m.links[kNumJoints].dh = dh;
-  m.links[kNumJoints].inertia = LinkInertia{};
-  m.X_L7E = LinkTransform(dh, 0.0).inverse() * X_FT;  // L7 X_L7E = X_FT exactly
+  m.tool().dh = dh;
+  m.tool().inertia = LinkInertia{};
+  m.X_LtE = LinkTransform(dh, 0.0).inverse() * X_FT;  // L7 X_LtE = X_FT exactly
   return m;
 }
 

@@ -83,7 +83,7 @@ void ValidateOpticalAxisOptions(const OpticalAxisOptions& options);
 /// The passive robot's estimator model: the nominal model with link 7 the board mount (Zhu et
 /// al. 2019, VI.A: "the calibration target is considered as the link 7"): link 7 holds the
 /// mount's translation as eq. 2 parameters (theta = atan2(y, x), d = z, a = distance from the
-/// flange axis, alpha = beta = 0) and X_L7E its rotation, so that L7 X_L7E = X_FT: the end
+/// flange axis, alpha = beta = 0) and X_LtE its rotation, so that L7 X_LtE = X_FT: the end
 /// frame E is the board frame, origin the feature point, and link 7's parameters move that
 /// point in every direction to first order.
 KinematicModel BoardRobotModel(const KinematicModel& nominal, const Transform& X_FT);
@@ -92,8 +92,8 @@ KinematicModel BoardRobotModel(const KinematicModel& nominal, const Transform& X
 struct AlignedPose {
   int axis = 0;                       ///< optical axis index of the plan
   int index = 0;                      ///< position index on the axis (0 = nearest)
-  JointVector q_passive = JointVector::Zero();  ///< recorded passive joint angles [rad]
-  JointVector q_active = JointVector::Zero();   ///< active joint angles (encoders) [rad]
+  JointVector q_passive;  ///< recorded passive joint angles [rad]
+  JointVector q_active;   ///< active joint angles (encoders) [rad]
   cv::Point2d pixel_error{0, 0};      ///< final (du, dv) [px]
   Vector3 p_C = Vector3::Zero();      ///< feature point in the camera frame from the board
                                       ///< pose (solvePnP, known square) [m]

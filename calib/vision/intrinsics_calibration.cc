@@ -152,8 +152,9 @@ std::vector<JointVector> IntrinsicsViewPoses(const KinematicModel& board_model,
   }
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
-  const double kArm = 5.0 * kPi / 180.0;     // joints 1-3: shift the board a little [rad]
-  const double kWrist = 20.0 * kPi / 180.0;  // joints 4-6: tilt and turn the board [rad]
+  const double kArm = 5.0 * kPi / 180.0;     // arm joints: shift the board a little [rad]
+  const double kWrist = 20.0 * kPi / 180.0;  // the last three: tilt and turn the board [rad]
+  const int wrist = board_model.num_joints() - 3;
   std::vector<JointVector> poses{q_center};
   for (int attempt = 0; static_cast<int>(poses.size()) < n; ++attempt) {
     if (attempt > 1000 * n) {
@@ -162,7 +163,7 @@ std::vector<JointVector> IntrinsicsViewPoses(const KinematicModel& board_model,
                            " to perturb the wrist by +-20 deg");
     }
     JointVector q = q_center;
-    for (int j = 0; j < kNumJoints; ++j) q[j] += (j < 3 ? kArm : kWrist) * unit(rng);
+    for (int j = 0; j < q.size(); ++j) q[j] += (j < wrist ? kArm : kWrist) * unit(rng);
     if (WithinLimits(board_model, q)) poses.push_back(q);
   }
   return poses;

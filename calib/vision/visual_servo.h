@@ -33,7 +33,7 @@ struct ServoSetup {
   Matrix3 R_FC = Matrix3::Identity();       ///< rough hand-eye: camera C in the active flange F
   PinholeIntrinsics intrinsics;             ///< estimated intrinsics
   BoardGeometry board;                      ///< the printed board
-  JointVector q_active = JointVector::Zero();  ///< active robot's encoder reading [rad]
+  JointVector q_active;  ///< active robot's encoder reading [rad]
 };
 
 /// Options of AlignFeatureToOpticalAxis.
@@ -67,7 +67,7 @@ struct ServoResult {
   cv::Point2d pixel_error{0, 0};               ///< last measured (du, dv) = (u - cx, v - cy) [px]
   int frames = 0;                              ///< images grabbed
   int moves = 0;                               ///< corrective moves commanded
-  JointVector q_passive = JointVector::Zero();  ///< final passive encoder reading [rad]
+  JointVector q_passive;  ///< final passive encoder reading [rad]
   cv::Mat image_before;                        ///< first image grabbed (reports)
   cv::Mat image_after;                         ///< last image grabbed (reports)
 };

@@ -12,7 +12,6 @@
 
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
-#include "calib/procedures/handclasp_procedure.h"
 #include "calib/kinematics/inverse_kinematics.h"
 #include "sim/render/camera_image.h"
 #include "sim/world/mjcf_writer.h"
@@ -68,6 +67,21 @@ Transform FromMj(const mjtNum* pos, const mjtNum* mat) {
 
 std::string Prefix(int robot) { return "robot" + std::to_string(robot + 1) + "_"; }
 
+// The simulated operator's own geometry (written here, independently of the estimator's
+// handclasp procedure): the true arm whose end frame is the measuring tip on the flange.
+KinematicModel TrueTipModel(const KinematicModel& true_model, const Transform& X_FTip) {
+  KinematicModel m = true_model;
+  m.tool().dh = DhParameters{};  // the tool link frame is the flange
+  m.X_LtE = X_FTip;
+  return m;
+}
+
+// Orientation for the jogged tip facing the other tip (z axes opposed), rolled about its own z.
+Matrix3 FacingRotation(const Matrix3& R_W_other_tip, double roll) {
+  const Matrix3 flip = Eigen::AngleAxisd(kPi, Vector3::UnitX()).toRotationMatrix();
+  return R_W_other_tip * flip * Eigen::AngleAxisd(roll, Vector3::UnitZ()).toRotationMatrix();
+}
+
 }  // namespace
 
 struct TwinCell::Impl {
@@ -75,7 +89,7 @@ struct TwinCell::Impl {
   std::string where;
   std::vector<std::unique_ptr<Effect>> effects;
   std::array<KinematicModel, kNumRobots> models;
-  std::array<std::array<JointDrive, kNumJoints>, kNumRobots> drives;
+  std::array<std::vector<JointDrive>, kNumRobots> drives;
   std::string mjcf;
   MjModelPtr m;
   MjDataPtr d;
@@ -84,14 +98,23 @@ struct TwinCell::Impl {
   double last_gap = 0.0;         // jogged tip to aim point after the last contact [m]
   std::array<JointVector, kNumRobots> motor;      // commanded motor angles [rad]
   std::array<JointVector, kNumRobots> direction;  // sign of each joint's last motion
-  std::array<std::array<int, kNumJoints>, kNumRobots> qadr, dadr, act;
-  std::array<std::array<int, kNumLinks + 1>, kNumRobots> site_L;
+  std::array<std::vector<int>, kNumRobots> qadr, dadr, act;
+  std::array<std::vector<int>, kNumRobots> site_L;
   std::array<int, kNumRobots> site_tip;
   int camera = -1, board_body = -1;
   std::optional<DistortionMapper> distortion;     // only when the lens distorts
   Intrinsics canvas;
   std::unique_ptr<OffscreenRenderer> hand_renderer, overview_renderer;
   int last_steps = 0;
+
+  int Joints(int robot) const { return models[robot].num_joints(); }
+
+  // Link-side joint angles of robot k now (MuJoCo's qpos).
+  JointVector LinkAngles(int k) const {
+    JointVector q(Joints(k));
+    for (int i = 0; i < Joints(k); ++i) q(i) = d->qpos[qadr[k][i]];
+    return q;
+  }
 
   int Id(mjtObj type, const std::string& name) const {
     const int id = mj_name2id(m.get(), type, name.c_str());
@@ -140,7 +163,7 @@ struct TwinCell::Impl {
 
   // Link-side minus motor-side angle of robot k's joints now.
   JointVector TransmissionOffset(int k) const {
-    JointVector offset = JointVector::Zero();
+    JointVector offset = JointVector::Zero(Joints(k));
     for (const auto& e : effects) e->ApplyToTransmission(k, motor[k], direction[k], &offset);
     return offset;
   }
@@ -150,7 +173,7 @@ struct TwinCell::Impl {
   void WriteControls() {
     for (int k = 0; k < kNumRobots; ++k) {
       const JointVector link = motor[k] + TransmissionOffset(k);
-      for (int i = 0; i < kNumJoints; ++i) {
+      for (int i = 0; i < Joints(k); ++i) {
         d->ctrl[act[k][i]] = link(i);
         const int dof = dadr[k][i];
         d->qfrc_applied[dof] = drives[k][i].gravity_feedforward ? d->qfrc_bias[dof] : 0.0;
@@ -163,7 +186,7 @@ struct TwinCell::Impl {
     double speed = 0.0;
     for (int k = 0; k < kNumRobots; ++k) {
       if (robot >= 0 && k != robot) continue;
-      for (int i = 0; i < kNumJoints; ++i) speed = std::max(speed, std::abs(d->qvel[dadr[k][i]]));
+      for (int i = 0; i < Joints(k); ++i) speed = std::max(speed, std::abs(d->qvel[dadr[k][i]]));
     }
     return speed;
   }
@@ -171,10 +194,8 @@ struct TwinCell::Impl {
   // Protective stop: robot `robot`'s joints stop where they are and its motor command holds
   // there, so that a later move can back out of the contact.
   void Halt(int robot) {
-    for (int i = 0; i < kNumJoints; ++i) d->qvel[dadr[robot][i]] = 0.0;
-    JointVector link;
-    for (int i = 0; i < kNumJoints; ++i) link(i) = d->qpos[qadr[robot][i]];
-    motor[robot] = link - TransmissionOffset(robot);
+    for (int i = 0; i < Joints(robot); ++i) d->qvel[dadr[robot][i]] = 0.0;
+    motor[robot] = LinkAngles(robot) - TransmissionOffset(robot);
   }
 
   // Steps the world: robot `robot`'s motor command ramps to `target` (all joints arriving
@@ -183,12 +204,12 @@ struct TwinCell::Impl {
   MoveResult Run(int robot, const JointVector& target) {
     const PhysicsSpec& ph = spec.physics;
     const double dt = m->opt.timestep;
-    JointVector start = JointVector::Zero(), delta = JointVector::Zero();
+    JointVector start, delta;
     double ramp_time = 0.0;
     if (robot >= 0) {
       start = motor[robot];
       delta = target - start;
-      for (int i = 0; i < kNumJoints; ++i) {
+      for (int i = 0; i < Joints(robot); ++i) {
         if (delta(i) != 0.0) direction[robot](i) = delta(i) > 0.0 ? 1.0 : -1.0;
       }
       ramp_time = delta.cwiseAbs().maxCoeff() / ph.max_joint_speed;
@@ -250,7 +271,7 @@ struct TwinCell::Impl {
   void CheckServoStability(const std::string& where) const {
     const double dt = m->opt.timestep;
     for (int k = 0; k < kNumRobots; ++k) {
-      for (int i = 0; i < kNumJoints; ++i) {
+      for (int i = 0; i < Joints(k); ++i) {
         const int dof = dadr[k][i];
         const double inertia = d->qM[m->dof_Madr[dof]];
         const double omega_dt = dt * std::sqrt(drives[k][i].stiffness / inertia);
@@ -279,13 +300,18 @@ struct TwinCell::Impl {
     if (!d) throw std::runtime_error("MuJoCo could not allocate mjData");
     for (int k = 0; k < kNumRobots; ++k) {
       const std::string p = Prefix(k);
-      for (int i = 0; i < kNumJoints; ++i) {
+      const int n = Joints(k);
+      qadr[k].assign(n, -1);
+      dadr[k].assign(n, -1);
+      act[k].assign(n, -1);
+      site_L[k].assign(n + 2, -1);
+      for (int i = 0; i < n; ++i) {
         const int j = Id(mjOBJ_JOINT, p + "j" + std::to_string(i + 1));
         qadr[k][i] = m->jnt_qposadr[j];
         dadr[k][i] = m->jnt_dofadr[j];
         act[k][i] = Id(mjOBJ_ACTUATOR, p + "a" + std::to_string(i + 1));
       }
-      for (int i = 0; i <= kNumLinks; ++i) site_L[k][i] = Id(mjOBJ_SITE, p + "L" + std::to_string(i));
+      for (int i = 0; i <= n + 1; ++i) site_L[k][i] = Id(mjOBJ_SITE, p + "L" + std::to_string(i));
       site_tip[k] = Id(mjOBJ_SITE, p + "tip");
     }
     camera = Id(mjOBJ_CAMERA, kHandCameraName);
@@ -315,7 +341,7 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
   for (int k = 0; k < kNumRobots; ++k) {
     s.models[k] = spec.robots[k].model;
     for (const auto& e : s.effects) e->ApplyToGeometry(k, &s.models[k], &geometry_rng);
-    s.drives[k].fill({spec.physics.stiffness, true});
+    s.drives[k].assign(s.models[k].num_joints(), {spec.physics.stiffness, true});
     for (const auto& e : s.effects) e->ApplyToDrive(k, &s.drives[k]);
   }
   if (spec.camera.distortion.Any()) {
@@ -328,9 +354,9 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
   // Start at rest at the link-side angles of the initial motor angles.
   for (int k = 0; k < kNumRobots; ++k) {
     s.motor[k] = spec.robots[k].q_initial;
-    s.direction[k] = JointVector::Zero();
+    s.direction[k] = ZeroJoints(s.models[k]);
     const JointVector link = s.motor[k] + s.TransmissionOffset(k);
-    for (int i = 0; i < kNumJoints; ++i) s.d->qpos[s.qadr[k][i]] = link(i);
+    for (int i = 0; i < s.Joints(k); ++i) s.d->qpos[s.qadr[k][i]] = link(i);
   }
   mj_forward(s.m.get(), s.d.get());
   s.CheckServoStability(where);
@@ -338,7 +364,7 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
     throw InputError(where, "robots[*].q_initial: the initial pose is in collision: " +
                                 s.ContactText(*c));
   }
-  const MoveResult settle = s.Run(-1, JointVector::Zero());
+  const MoveResult settle = s.Run(-1, JointVector());
   if (settle.status != MoveStatus::kSettled) {
     throw InputError(where, std::string("robots[*].q_initial: the cell does not settle at its "
                                         "initial pose (") + ToString(settle.status) + "): " +
@@ -362,7 +388,14 @@ MoveResult TwinCell::MoveTo(int robot, const JointVector& q_target) {
     return result;
   }
   const KinematicModel& model = s.spec.robots[robot].model;
-  for (int i = 0; i < kNumJoints; ++i) {
+  if (q_target.size() != model.num_joints()) {
+    result.status = MoveStatus::kInvalidInput;
+    result.reason = "robot " + std::to_string(robot) + " has " +
+                    std::to_string(model.num_joints()) + " joints, got " +
+                    std::to_string(q_target.size()) + " targets";
+    return result;
+  }
+  for (int i = 0; i < model.num_joints(); ++i) {
     const JointLimits& lim = model.links[i].limits;
     if (q_target(i) < lim.lower || q_target(i) > lim.upper) {
       result.status = MoveStatus::kOutOfLimits;
@@ -380,9 +413,7 @@ MoveResult TwinCell::ExchangeTools() {
   // The operator re-mounts both tools on the same brackets while the robots hold still: the
   // state (link angles, motor commands) carries over to the rebuilt world.
   std::array<JointVector, kNumRobots> link;
-  for (int k = 0; k < kNumRobots; ++k) {
-    for (int i = 0; i < kNumJoints; ++i) link[k](i) = s.d->qpos[s.qadr[k][i]];
-  }
+  for (int k = 0; k < kNumRobots; ++k) link[k] = s.LinkAngles(k);
   const double time = s.d->time;
   // Swap the tools and rebuild the world with the robots where they stand.
   const auto swap_tools = [&]() {
@@ -390,7 +421,7 @@ MoveResult TwinCell::ExchangeTools() {
     s.Build();
     s.d->time = time;
     for (int k = 0; k < kNumRobots; ++k) {
-      for (int i = 0; i < kNumJoints; ++i) s.d->qpos[s.qadr[k][i]] = link[k](i);
+      for (int i = 0; i < s.Joints(k); ++i) s.d->qpos[s.qadr[k][i]] = link[k](i);
     }
     mj_forward(s.m.get(), s.d.get());
   };
@@ -405,7 +436,7 @@ MoveResult TwinCell::ExchangeTools() {
                     "; tools left where they were (move the robots apart first)";
     return result;
   }
-  result = s.Run(-1, JointVector::Zero());
+  result = s.Run(-1, JointVector());
   return result;
 }
 
@@ -433,7 +464,7 @@ MoveResult TwinCell::JogTipToContact(int j) {
   const std::string who = "handclasp of robot " + std::to_string(j) + " onto robot " +
                           std::to_string(o) + "'s tip: ";
   // The operator sees the true geometry (truth side): the true arm with the tip as its tool.
-  const KinematicModel model = WithTipTool(s.models[j], s.spec.tips[j].X_FTip);
+  const KinematicModel model = TrueTipModel(s.models[j], s.spec.tips[j].X_FTip);
   const Transform X_BW = s.spec.robots[j].X_WB.inverse();
   const Transform X_WTipO = FromMj(s.d->site_xpos + 3 * s.site_tip[o],
                                    s.d->site_xmat + 9 * s.site_tip[o]);
@@ -445,8 +476,7 @@ MoveResult TwinCell::JogTipToContact(int j) {
   const Vector3 p_W_aim = X_WTipO.translation() + s.operator_sigma * error;
   const Vector3 z_o = X_WTipO.linear().col(2);
 
-  JointVector q_link;
-  for (int i = 0; i < kNumJoints; ++i) q_link(i) = s.d->qpos[s.qadr[j][i]];
+  const JointVector q_link = s.LinkAngles(j);
   const auto pose_B = [&](const Matrix3& R_W, const Vector3& p_W) {
     Transform X = Transform::Identity();
     X.linear() = R_W;
@@ -467,7 +497,7 @@ MoveResult TwinCell::JogTipToContact(int j) {
   std::vector<Candidate> candidates;
   std::string ik_reason;
   for (int r = 0; r < kHandclaspRolls; ++r) {
-    const Matrix3 R_W = FacingTipRotation(X_WTipO.linear(), 2.0 * kPi * r / kHandclaspRolls);
+    const Matrix3 R_W = FacingRotation(X_WTipO.linear(), 2.0 * kPi * r / kHandclaspRolls);
     const IkResult st =
         SolveIk(model, pose_B(R_W, p_W_aim + kHandclaspStandoff * z_o), q_link, ik);
     if (st.status != IkStatus::kSuccess) {
@@ -556,8 +586,7 @@ MoveResult TwinCell::JogTipToContact(int j) {
       result.reason = os.str();
       return result;
     }
-    JointVector q_now;
-    for (int i = 0; i < kNumJoints; ++i) q_now(i) = s.d->qpos[s.qadr[j][i]];
+    const JointVector q_now = s.LinkAngles(j);
     const Matrix3 R_W_now = FromMj(s.d->site_xpos + 3 * s.site_tip[j],
                                    s.d->site_xmat + 9 * s.site_tip[j]).linear();
     Eigen::Matrix<double, 6, 1> twist;
@@ -598,7 +627,7 @@ TwinTruth TwinCell::Truth() const {
   t.board = s.spec.board;
   for (int k = 0; k < kNumRobots; ++k) {
     t.X_WB[k] = s.spec.robots[k].X_WB;
-    for (int i = 0; i < kNumJoints; ++i) t.q_link[k](i) = s.d->qpos[s.qadr[k][i]];
+    t.q_link[k] = s.LinkAngles(k);
     t.q_motor[k] = s.motor[k];
     t.p_WTip[k] = Vector3(s.d->site_xpos + 3 * s.site_tip[k]);
   }
@@ -639,13 +668,13 @@ cv::Mat TwinCell::RenderOverview(int width, int height, double azimuth_deg,
   return s.overview_renderer->RenderFree(s.m.get(), s.d.get(), cam);
 }
 
-std::array<Transform, kNumLinks + 1> TwinCell::SiteFrames(int robot) const {
+std::vector<Transform> TwinCell::SiteFrames(int robot) const {
   const Impl& s = *impl_;
   if (robot < 0 || robot >= kNumRobots) {
     throw InputError("SiteFrames", "robot index " + std::to_string(robot) + " is not 0 or 1");
   }
-  std::array<Transform, kNumLinks + 1> frames;
-  for (int i = 0; i <= kNumLinks; ++i) {
+  std::vector<Transform> frames(s.site_L[robot].size());
+  for (size_t i = 0; i < frames.size(); ++i) {
     const int site = s.site_L[robot][i];
     frames[i] = FromMj(s.d->site_xpos + 3 * site, s.d->site_xmat + 9 * site);
   }

@@ -65,8 +65,8 @@ class TwinCell : public Cell {
   const std::string& mjcf() const;
   /// A third-person view of the whole cell, width x height, from `azimuth`/`elevation` [deg].
   cv::Mat RenderOverview(int width, int height, double azimuth_deg, double elevation_deg);
-  /// Poses in the world of MuJoCo's sites for DH frames L0..L7 of robot `robot` (tests).
-  std::array<Transform, kNumLinks + 1> SiteFrames(int robot) const;
+  /// Poses in the world of MuJoCo's sites for DH frames L0..Lt of robot `robot` (tests).
+  std::vector<Transform> SiteFrames(int robot) const;
   /// Steps taken by the last MoveTo (benchmarks).
   int last_move_steps() const;
   /// The benchmark baseline: bare mjr_render + mjr_readPixels of the hand camera.

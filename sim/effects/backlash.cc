@@ -14,7 +14,7 @@ class Backlash : public Effect {
 
   void ApplyToTransmission(int robot, const JointVector&, const JointVector& direction,
                            JointVector* link_offset) const override {
-    for (int j = 0; j < kNumJoints; ++j) {
+    for (int j = 0; j < direction.size(); ++j) {
       if (!Applies(robot, j)) continue;
       const double sign = (direction(j) > 0.0) - (direction(j) < 0.0);
       (*link_offset)(j) += -0.5 * width_ * sign;

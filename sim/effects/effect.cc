@@ -6,7 +6,7 @@ namespace twin {
 
 // The do-nothing defaults: an effect overrides only the hooks it acts through.
 void Effect::ApplyToGeometry(int, KinematicModel*, std::mt19937_64*) const {}
-void Effect::ApplyToDrive(int, std::array<JointDrive, kNumJoints>*) const {}
+void Effect::ApplyToDrive(int, std::vector<JointDrive>*) const {}
 void Effect::ApplyToTransmission(int, const JointVector&, const JointVector&,
                                  JointVector*) const {}
 void Effect::ApplyToEncoder(int, JointVector*, std::mt19937_64*) const {}
@@ -18,7 +18,7 @@ bool Effect::Applies(int robot) const {
 }
 
 bool Effect::Applies(int robot, int joint) const {
-  assert(joint >= 0 && joint < kNumJoints);
+  assert(joint >= 0 && joint < kMaxJoints);
   return Applies(robot) && (spec().joint == -1 || spec().joint == joint);
 }
 

@@ -30,7 +30,7 @@ class Effect {
   /// Static change of robot `robot`'s true geometry, before the world is built.
   virtual void ApplyToGeometry(int robot, KinematicModel* model, std::mt19937_64* rng) const;
   /// Drive settings of robot `robot`'s joints.
-  virtual void ApplyToDrive(int robot, std::array<JointDrive, kNumJoints>* drives) const;
+  virtual void ApplyToDrive(int robot, std::vector<JointDrive>* drives) const;
   /// Adds to `link_offset` the link-side minus motor-side angle of each joint for motor angles
   /// `motor`, approached moving in `direction` (+1, -1 per joint; 0 if never moved) [rad].
   virtual void ApplyToTransmission(int robot, const JointVector& motor,

@@ -15,7 +15,7 @@ class EncoderNoise : public Effect {
 
   void ApplyToEncoder(int robot, JointVector* reading, std::mt19937_64* rng) const override {
     std::normal_distribution<double> noise(0.0, sigma_);
-    for (int j = 0; j < kNumJoints; ++j) {
+    for (int j = 0; j < reading->size(); ++j) {
       if (Applies(robot, j)) (*reading)(j) += noise(*rng);
     }
   }

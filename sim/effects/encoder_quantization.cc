@@ -16,7 +16,7 @@ class EncoderQuantization : public Effect {
   const EffectSpec& spec() const override { return spec_; }
 
   void ApplyToEncoder(int robot, JointVector* reading, std::mt19937_64*) const override {
-    for (int j = 0; j < kNumJoints; ++j) {
+    for (int j = 0; j < reading->size(); ++j) {
       if (Applies(robot, j)) (*reading)(j) = std::round((*reading)(j) / step_) * step_;
     }
   }

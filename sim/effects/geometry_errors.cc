@@ -16,7 +16,9 @@ std::string DeltaKey(int index) {
 }
 
 // Kinematic errors of the true geometry: p_i += N(0, sigma_length [m] or sigma_angle [rad])
-// for each of the 35 parameters, then p_i += delta_i [m or rad] for the explicit deltas.
+// for each of the 5 (N + 1) parameters, then p_i += delta_i [m or rad] for the explicit deltas
+// (keys exist for chains up to kMaxJoints; a delta beyond the robot's last link is refused).
+constexpr int kMaxDeltas = kParamsPerLink * (kMaxJoints + 1);
 class GeometryErrors : public Effect {
  public:
   GeometryErrors(const EffectSpec& spec, double sigma_length, double sigma_angle,
@@ -28,12 +30,20 @@ class GeometryErrors : public Effect {
   void ApplyToGeometry(int robot, KinematicModel* model, std::mt19937_64* rng) const override {
     if (!Applies(robot)) return;
     ParameterVector p = GetParameters(*model);
+    const int n = static_cast<int>(p.size());
+    for (int i = n; i < kMaxDeltas; ++i) {
+      if (delta_(i) != 0.0) {
+        throw InputError(spec_.where, EffectLabel(spec_) + DeltaKey(i) + ": robot " +
+                                          model->name + " has only " +
+                                          std::to_string(model->num_links()) + " links");
+      }
+    }
     std::normal_distribution<double> unit_normal(0.0, 1.0);
-    for (int i = 0; i < kNumParams; ++i) {
+    for (int i = 0; i < n; ++i) {
       const double sigma = IsLengthParameter(i) ? sigma_length_ : sigma_angle_;
       if (sigma > 0.0) p(i) += sigma * unit_normal(*rng);
     }
-    *model = WithParameters(*model, p + delta_);
+    *model = WithParameters(*model, p + delta_.head(n));
   }
 
  private:
@@ -49,20 +59,20 @@ std::unique_ptr<Effect> MakeGeometryErrors(const EffectSpec& spec) {
   RequireAllJoints(spec, "geometry errors act on every link of a robot");
   std::vector<ParamDef> defs = {Optional("sigma_length_mm", kMillimetre, 0.0, NonNegative()),
                                 Optional("sigma_angle_deg", kDegree, 0.0, NonNegative())};
-  for (int i = 0; i < kNumParams; ++i) {
+  for (int i = 0; i < kMaxDeltas; ++i) {
     defs.push_back(Optional(DeltaKey(i), IsLengthParameter(i) ? kMillimetre : kDegree, 0.0,
                             AnyFinite()));
   }
   const Params params(spec, defs,
-                      "sigma_length_mm, sigma_angle_deg, link<1..7>.<theta|alpha|beta>_deg, "
-                      "link<1..7>.<d|a>_mm");
+                      "sigma_length_mm, sigma_angle_deg, link<i>.<theta|alpha|beta>_deg, "
+                      "link<i>.<d|a>_mm (i = 1..N+1, N+1 the tool link)");
   if (spec.params.empty()) {
     throw InputError(spec.where, EffectLabel(spec) +
                                      "no parameters; expected sigma_length_mm, sigma_angle_deg "
                                      "and/or deltas such as link3.alpha_deg");
   }
-  ParameterVector delta;
-  for (int i = 0; i < kNumParams; ++i) delta(i) = params.Get(DeltaKey(i));
+  ParameterVector delta(kMaxDeltas);
+  for (int i = 0; i < kMaxDeltas; ++i) delta(i) = params.Get(DeltaKey(i));
   return std::make_unique<GeometryErrors>(spec, params.Get("sigma_length_mm"),
                                           params.Get("sigma_angle_deg"), delta);
 }

@@ -13,8 +13,8 @@ class JointCompliance : public Effect {
 
   const EffectSpec& spec() const override { return spec_; }
 
-  void ApplyToDrive(int robot, std::array<JointDrive, kNumJoints>* drives) const override {
-    for (int j = 0; j < kNumJoints; ++j) {
+  void ApplyToDrive(int robot, std::vector<JointDrive>* drives) const override {
+    for (int j = 0; j < static_cast<int>(drives->size()); ++j) {
       if (!Applies(robot, j)) continue;
       (*drives)[j].stiffness = stiffness_;
       (*drives)[j].gravity_feedforward = false;

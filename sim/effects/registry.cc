@@ -26,18 +26,19 @@ constexpr Registration kRegistry[] = {
     {"image_noise", effects::MakeImageNoise},
 };
 
-// Checks the fields every effect shares: robot -1, 0..kNumRobots-1; joint -1, 0..kNumJoints-1.
+// Checks the fields every effect shares: robot -1, 0..kNumRobots-1; joint -1, 0..kMaxJoints-1
+// (ValidateTwinSpec checks the joint against the robots' own joint counts).
 void ValidateTargets(const EffectSpec& spec) {
   if (spec.robot < -1 || spec.robot >= kNumRobots) {
     throw InputError(spec.where, effects::EffectLabel(spec) + "robot = " +
                                      std::to_string(spec.robot) + ", expected -1 (both) or 0.." +
                                      std::to_string(kNumRobots - 1));
   }
-  if (spec.joint < -1 || spec.joint >= kNumJoints) {
+  if (spec.joint < -1 || spec.joint >= kMaxJoints) {
     throw InputError(spec.where, effects::EffectLabel(spec) + "joint = " +
                                      std::to_string(spec.joint) +
                                      ", expected -1 (every joint) or 0.." +
-                                     std::to_string(kNumJoints - 1));
+                                     std::to_string(kMaxJoints - 1));
   }
 }
 

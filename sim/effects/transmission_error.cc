@@ -17,7 +17,7 @@ class TransmissionError : public Effect {
 
   void ApplyToTransmission(int robot, const JointVector& motor, const JointVector&,
                            JointVector* link_offset) const override {
-    for (int j = 0; j < kNumJoints; ++j) {
+    for (int j = 0; j < motor.size(); ++j) {
       if (!Applies(robot, j)) continue;
       (*link_offset)(j) += amplitude_ * std::sin(harmonic_ * motor(j) + phase_);
     }

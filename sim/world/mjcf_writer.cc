@@ -28,10 +28,13 @@ constexpr int kOverviewWidth = 1600;            // largest overview render [px]
 constexpr int kOverviewHeight = 1200;
 constexpr double kOverviewFar = 10.0;           // far plane of overview renders [m]
 
-// Capsule radius of link i (0-based joint index) [m]: heavier proximal links are thicker.
-double LinkRadius(int joint_index) {
-  constexpr double kRadii[kNumJoints] = {0.055, 0.05, 0.045, 0.04, 0.04, 0.035};
-  return kRadii[std::clamp(joint_index, 0, kNumJoints - 1)];
+// Capsule radius of link i (0-based joint index) of an n-joint arm [m]: heavier proximal links
+// are thicker (a six-axis arm's table; other chains taper linearly over the same range).
+double LinkRadius(int joint_index, int n) {
+  constexpr double kRadii6[6] = {0.055, 0.05, 0.045, 0.04, 0.04, 0.035};
+  const int i = std::clamp(joint_index, 0, n - 1);
+  if (n == 6) return kRadii6[i];
+  return n == 1 ? kRadii6[0] : kRadii6[0] + (kRadii6[5] - kRadii6[0]) * i / (n - 1);
 }
 
 std::string Num(double v) { return ShortestNumber(v); }
@@ -110,12 +113,13 @@ std::string Site(const std::string& name, const Transform& X) {
 bool NecessarilyTouch(const KinematicModel& m, int joint_index) {
   const DhParameters& mid = m.links[joint_index + 1].dh;
   const double length = std::hypot(mid.d, mid.a);
-  return length < LinkRadius(joint_index) + LinkRadius(joint_index + 2) + kExcludeClearance;
+  const int n = m.num_joints();
+  return length < LinkRadius(joint_index, n) + LinkRadius(joint_index + 2, n) + kExcludeClearance;
 }
 
 // A rigid part of the arm for the damping estimate, in the base frame B.
 struct Part {
-  int link;        // 0..5: moves with joints 0..link
+  int link;        // 0..N-1: moves with joints 0..link
   double mass;     // [kg]
   Vector3 com;     // [m] in B
   Matrix3 I;       // about com, axes of B [kg m^2]
@@ -123,8 +127,8 @@ struct Part {
 
 // Diagonal of the joint-space inertia at the initial pose (the composite inertia outboard of
 // each joint about its axis; camera and board as point masses) plus armature [kg m^2].
-std::array<double, kNumJoints> EffectiveInertia(const TwinSpec& spec, int robot,
-                                                const KinematicModel& m) {
+std::vector<double> EffectiveInertia(const TwinSpec& spec, int robot, const KinematicModel& m) {
+  const int n = m.num_joints();
   const JointVector& q = spec.robots[robot].q_initial;
   const FrameSet f = ForwardKinematics(m, q);
   std::vector<Part> parts;
@@ -132,19 +136,19 @@ std::array<double, kNumJoints> EffectiveInertia(const TwinSpec& spec, int robot,
     parts.push_back({link, in.mass, X_BA * in.p_LiCom,
                      X_BA.linear() * in.I_Com * X_BA.linear().transpose()});
   };
-  for (int i = 0; i < kNumJoints; ++i) add(i, UsedInertia(m.links[i]), f.X_BL[i + 1]);
-  add(kNumJoints - 1, m.tool().inertia, f.X_BL[kNumLinks]);
+  for (int i = 0; i < n; ++i) add(i, UsedInertia(m.links[i]), f.X_BL[i + 1]);
+  add(n - 1, m.tool().inertia, f.tool());
   const Transform& X_BF = f.flange();
   if (spec.camera.robot == robot) {
-    parts.push_back({kNumJoints - 1, kCameraMassKg, X_BF * spec.camera.X_FC.translation(),
+    parts.push_back({n - 1, kCameraMassKg, X_BF * spec.camera.X_FC.translation(),
                      Matrix3::Zero()});
   }
   if (spec.board.robot == robot) {
-    parts.push_back({kNumJoints - 1, spec.board.mass_kg, X_BF * spec.board.X_FT.translation(),
+    parts.push_back({n - 1, spec.board.mass_kg, X_BF * spec.board.X_FT.translation(),
                      Matrix3::Zero()});
   }
-  std::array<double, kNumJoints> inertia;
-  for (int j = 0; j < kNumJoints; ++j) {
+  std::vector<double> inertia(n);
+  for (int j = 0; j < n; ++j) {
     const Vector3 n = f.X_BL[j].linear().col(2);
     const Vector3 o = f.X_BL[j].translation();
     double sum = spec.physics.armature;
@@ -177,11 +181,11 @@ std::string Assets() {
 std::string LinkGeoms(const KinematicModel& m, int robot, int i) {
   const std::string p = Prefix(robot);
   const DhParameters& dh = m.links[i].dh;
-  const double r = LinkRadius(i);
+  const double r = LinkRadius(i, m.num_joints());
   const std::string material = p + ((i == 0 || i == 1 || i == 3) ? "orange" : "grey");
   const std::string contact = RobotContact(robot);
   const std::string name = p + "link" + std::to_string(i + 1);
-  const bool flange = i == kNumJoints - 1;
+  const bool flange = i == m.num_joints() - 1;
   // On the flange link an `a` shorter than the radius (a geometry error, not a real offset) is
   // covered by the flange disc, which sits at the true face; a capsule along it would end in a
   // rounded cap in front of the face.
@@ -258,10 +262,11 @@ std::string FlangeBodies(const TwinSpec& spec, const Intrinsics& canvas,
 }
 
 std::string Robot(const TwinSpec& spec, const Intrinsics& canvas, const KinematicModel& m,
-                  const std::array<JointDrive, kNumJoints>& drives, int robot) {
+                  const std::vector<JointDrive>& drives, int robot) {
   const std::string p = Prefix(robot);
   const PhysicsSpec& phys = spec.physics;
-  const std::array<double, kNumJoints> inertia = EffectiveInertia(spec, robot, m);
+  const std::vector<double> inertia = EffectiveInertia(spec, robot, m);
+  const int n = m.num_joints();
   std::ostringstream x;
   x << "<body name=\"" << p << "base\" " << PoseAttrs(spec.robots[robot].X_WB) << ">\n"
     << "<geom name=\"" << p << "base\" type=\"cylinder\" pos=\"0 0 " << Num(kBaseHeight / 2)
@@ -269,7 +274,7 @@ std::string Robot(const TwinSpec& spec, const Intrinsics& canvas, const Kinemati
     << RobotContact(robot) << "/>\n"
     << Site(p + "L0", m.X_BL0);
   Transform X_parent_child = m.X_BL0 * RotZ(m.links[0].dh.theta_offset);
-  for (int i = 0; i < kNumJoints; ++i) {
+  for (int i = 0; i < n; ++i) {
     const Link& link = m.links[i];
     const Transform M = LinkM(link.dh);
     x << "<body name=\"" << p << "link" << i + 1 << "\" " << PoseAttrs(X_parent_child) << ">\n"
@@ -279,14 +284,14 @@ std::string Robot(const TwinSpec& spec, const Intrinsics& canvas, const Kinemati
       << Num(CriticalDamping(drives[i].stiffness, inertia[i])) << "\"/>\n"
       << Inertial(UsedInertia(link), M) << LinkGeoms(m, robot, i)
       << Site(p + "L" + std::to_string(i + 1), M);
-    if (i + 1 < kNumJoints) {
+    if (i + 1 < n) {
       X_parent_child = M * RotZ(m.links[i + 1].dh.theta_offset);
     } else {
-      x << Site(p + "L7", M * LinkTransform(m.tool().dh, 0.0))
+      x << Site(p + "L" + std::to_string(n + 1), M * LinkTransform(m.tool().dh, 0.0))
         << FlangeBodies(spec, canvas, m, robot, M);
     }
   }
-  for (int i = 0; i < kNumJoints; ++i) x << "</body>\n";
+  for (int i = 0; i < n; ++i) x << "</body>\n";
   x << "</body>\n";
   return x.str();
 }
@@ -296,7 +301,7 @@ std::string Robot(const TwinSpec& spec, const Intrinsics& canvas, const Kinemati
 double CriticalDamping(double kp, double inertia) { return 2.0 * std::sqrt(kp * inertia); }
 
 std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel, 2>& true_models,
-                          const std::array<std::array<JointDrive, 6>, 2>& drives) {
+                          const std::array<std::vector<JointDrive>, 2>& drives) {
   const Intrinsics canvas =
       DistortionMapper(spec.camera.intrinsics, spec.camera.distortion).canvas();
   const Vector3 mid =
@@ -340,7 +345,7 @@ std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel,
   for (int k = 0; k < kNumRobots; ++k) {
     // MuJoCo's parent filter skips pairs with a static body: the base needs an explicit one.
     x << "<exclude body1=\"" << Prefix(k) << "base\" body2=\"" << Prefix(k) << "link1\"/>\n";
-    for (int i = 0; i + 2 < kNumJoints; ++i) {
+    for (int i = 0; i + 2 < true_models[k].num_joints(); ++i) {
       if (!NecessarilyTouch(true_models[k], i)) continue;
       x << "<exclude body1=\"" << Prefix(k) << "link" << i + 1 << "\" body2=\"" << Prefix(k)
         << "link" << i + 3 << "\"/>\n";
@@ -348,7 +353,7 @@ std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel,
   }
   x << "</contact>\n<actuator>\n";
   for (int k = 0; k < kNumRobots; ++k) {
-    for (int i = 0; i < kNumJoints; ++i) {
+    for (int i = 0; i < true_models[k].num_joints(); ++i) {
       x << "<position name=\"" << Prefix(k) << "a" << i + 1 << "\" joint=\"" << Prefix(k) << "j"
         << i + 1 << "\" kp=\"" << Num(drives[k][i].stiffness) << "\" ctrllimited=\"false\"/>\n";
     }

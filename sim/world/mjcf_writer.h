@@ -37,6 +37,6 @@ double CriticalDamping(double kp, double inertia);
 /// The whole cell as MJCF text. `true_models` replace spec.robots[k].model (they carry the
 /// geometry effects); `drives` give each joint's position-actuator gain kp [N m/rad].
 std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel, 2>& true_models,
-                          const std::array<std::array<JointDrive, 6>, 2>& drives);
+                          const std::array<std::vector<JointDrive>, 2>& drives);
 
 }  // namespace twin

@@ -115,7 +115,13 @@ void CheckRobot(const Checker& c, const RobotSpec& robot, int i, const std::stri
     c.Fail(RobotField(i, "model"), "(" + robot.model.name + "): " + e.message());
   }
   c.Rigid(robot.X_WB, RobotField(i, "X_WB"));
-  for (int j = 0; j < kNumJoints; ++j) {
+  if (robot.q_initial.size() != robot.model.num_joints()) {
+    c.Fail(RobotField(i, "q_initial"), "must hold " + std::to_string(robot.model.num_joints()) +
+                                           " joint angles (one per joint of " +
+                                           robot.model.name + "), got " +
+                                           std::to_string(robot.q_initial.size()));
+  }
+  for (int j = 0; j < robot.model.num_joints(); ++j) {
     const std::string field = RobotField(i, "q_initial[" + std::to_string(j) + "]");
     const double q = robot.q_initial(j);
     c.Finite(q, field);
@@ -192,11 +198,16 @@ void CheckPhysics(const Checker& c, const PhysicsSpec& p) {
   }
 }
 
-void CheckEffect(const Checker& c, const EffectSpec& e, int k) {
+void CheckEffect(const Checker& c, const EffectSpec& e, int k, const TwinSpec& spec) {
   const std::string field = "effects[" + std::to_string(k) + "]";
   if (e.type.empty()) c.Fail(field + ".type", "must name an effect type, got ''");
   c.IntRange(e.robot, field + ".robot", -1, kNumRobots - 1);
-  c.IntRange(e.joint, field + ".joint", -1, kNumJoints - 1);
+  // The joint must exist on every robot the effect acts on.
+  int joints = kMaxJoints;
+  for (int r = 0; r < kNumRobots; ++r) {
+    if (e.robot == -1 || e.robot == r) joints = std::min(joints, spec.robots[r].model.num_joints());
+  }
+  c.IntRange(e.joint, field + ".joint", -1, joints - 1);
   for (const auto& [name, value] : e.params) c.Finite(value, field + ".params." + name);
 }
 
@@ -232,7 +243,7 @@ void ValidateTwinSpec(const TwinSpec& spec, const std::string& where) {
   }
   CheckPhysics(c, spec.physics);
   for (std::size_t k = 0; k < spec.effects.size(); ++k) {
-    CheckEffect(c, spec.effects[k], static_cast<int>(k));
+    CheckEffect(c, spec.effects[k], static_cast<int>(k), spec);
   }
 }
 

@@ -27,7 +27,7 @@ struct RobotSpec {
   KinematicModel model;                     ///< true geometry before geometry effects
   Installation installation = Installation::kFloor;
   Transform X_WB = Transform::Identity();   ///< base pose in the world
-  JointVector q_initial = JointVector::Zero();  ///< motor-side joint angles at start [rad]
+  JointVector q_initial = JointVector::Zero(kDefaultJoints);  ///< motor-side start angles [rad]
 };
 
 /// Pinhole intrinsics in OpenCV's convention (pixel centres at integer coordinates).

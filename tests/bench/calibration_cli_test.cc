@@ -77,7 +77,7 @@ std::string SyntheticCsv(const testing::OpticalAxisScenario& s, bool depths = tr
     const Line3& axis = s.axes[smp.axis];
     const double depth = (EndPose(s.truth, smp.q).translation() - axis.point).dot(axis.direction);
     csv << "r2,r1," << smp.axis << ',' << index << ',' << (smp.axis < 3 ? "calibration" : "validation");
-    for (int i = 0; i < kNumJoints; ++i) csv << ',' << RadToDeg(smp.q(i));
+    for (int i = 0; i < 6; ++i) csv << ',' << RadToDeg(smp.q(i));
     csv << ",0,0,";
     if (depths) csv << 1000 * depth;
     // else: an empty field, no depth measured
@@ -87,7 +87,7 @@ std::string SyntheticCsv(const testing::OpticalAxisScenario& s, bool depths = tr
 }
 
 // With depths, the synthetic model's tool link (theta -90 deg, a 60 mm) given as the board
-// mount: the scale is measured and the identification is exact. (With the whole mount in X_L7E
+// mount: the scale is measured and the identification is exact. (With the whole mount in X_LtE
 // and an identity link 7, this point on the flange plane's y axis had no first-order parameter
 // along y and the solve stopped at 0.05 mm; BoardRobotModel now puts the mount's translation
 // into link 7's parameters.)

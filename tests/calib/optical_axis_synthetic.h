@@ -17,7 +17,7 @@ namespace twin::testing {
 
 struct OpticalAxisScenario {
   KinematicModel nominal;          ///< what the estimator starts from
-  KinematicModel truth;            ///< nominal with perturbed parameters (X_BL0, X_L7E identity)
+  KinematicModel truth;            ///< nominal with perturbed parameters (X_BL0, X_LtE identity)
   std::vector<AxisSample> samples; ///< recorded joint angles, axis-major
   std::vector<Line3> axes;         ///< the true camera axes in B
 };
@@ -34,7 +34,7 @@ inline OpticalAxisScenario MakeOpticalAxisScenario(std::uint64_t seed, double jo
   s.nominal.name = "r2";
   s.truth = Perturbed(s.nominal, rng, len_error, ang_error);
   s.truth.X_BL0 = Transform::Identity();  // nominal and truth differ only in the 35 parameters
-  s.truth.X_L7E = Transform::Identity();
+  s.truth.X_LtE = Transform::Identity();
 
   const Vector3 camera(0.35, -0.45, 0.75);  // fixed camera point in B [m]
   const Vector3 centre(0.45, 0.0, 0.30);    // middle of the passive robot's working region
@@ -75,7 +75,7 @@ inline OpticalAxisScenario MakeOpticalAxisScenario(std::uint64_t seed, double jo
       }
       seed_q = best.q;
       AxisSample sample{k, best.q};
-      for (int j = 0; j < kNumJoints; ++j) sample.q(j) += joint_noise * noise(rng);
+      for (int j = 0; j < 6; ++j) sample.q(j) += joint_noise * noise(rng);
       s.samples.push_back(sample);
     }
   }

@@ -18,7 +18,7 @@ inline KinematicModel ReinovoLikeModel(int robot = 0) {
   const double d6 = robot == 0 ? 0.1215 : 0.131;
   const double c6 = robot == 0 ? -0.0607 : -0.0655;
   const double i6 = robot == 0 ? 0.00065 : 0.00073;
-  const Row rows[kNumLinks] = {
+  const Row rows[7] = {
       {0, 0.1365, 0.100, 90, -170, 170, 7.0, -0.05, -0.0683, 0, 0.02598, 0.02432, 0.0279,
        -0.00262, 0, 0},
       {90, 0, 0.290, 0, -120, 120, 7.5, -0.145, 0, 0, 0.01838, 0.06175, 0.06175, 0, 0, 0},
@@ -27,12 +27,12 @@ inline KinematicModel ReinovoLikeModel(int robot = 0) {
       {-90, 0, 0, 90, -120, 120, 1.5, 0, 0, 0, 0.00177, 0.00177, 0.00152, 0, 0, 0},
       {0, d6, 0, 0, -270, 270, 0.4, 0, 0, c6, i6, i6, 0.00032, 0, 0, 0},
       {-90, 0, 0.060, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0}};
-  for (int i = 0; i < kNumLinks; ++i) {
+  for (int i = 0; i < 7; ++i) {
     const Row& r = rows[i];
     Link& l = m.links[i];
-    l.name = i < kNumJoints ? "link" + std::to_string(i + 1) : "tool";
+    l.name = i < 6 ? "link" + std::to_string(i + 1) : "tool";
     l.dh = {DegToRad(r.th), r.d, r.a, DegToRad(r.al), 0.0};
-    if (i < kNumJoints) l.limits = {DegToRad(r.lo), DegToRad(r.hi)};
+    if (i < 6) l.limits = {DegToRad(r.lo), DegToRad(r.hi)};
     l.inertia.mass = r.mass;
     l.inertia.p_LiCom = Vector3(r.cx, r.cy, r.cz);
     l.inertia.I_Com << r.ixx, r.ixy, r.ixz, r.ixy, r.iyy, r.iyz, r.ixz, r.iyz, r.izz;
@@ -42,8 +42,8 @@ inline KinematicModel ReinovoLikeModel(int robot = 0) {
 
 /// Uniform random joint vector inside the limits.
 inline JointVector RandomJoints(const KinematicModel& m, std::mt19937_64& rng) {
-  JointVector q;
-  for (int i = 0; i < kNumJoints; ++i) {
+  JointVector q(m.num_joints());
+  for (int i = 0; i < m.num_joints(); ++i) {
     q(i) = std::uniform_real_distribution<double>(m.links[i].limits.lower,
                                                    m.links[i].limits.upper)(rng);
   }
@@ -71,7 +71,7 @@ inline KinematicModel Perturbed(KinematicModel m, std::mt19937_64& rng, double l
     l.dh.beta += ang * u(rng);
   }
   m.X_BL0 = RandomTransform(rng, 0.2);
-  m.X_L7E = RandomTransform(rng, 0.1);
+  m.X_LtE = RandomTransform(rng, 0.1);
   return m;
 }
 

@@ -18,7 +18,7 @@ inline KinematicModel ReinovoArm(int robot) { return ReinovoLikeModel(robot); }
 /// robot 0 looks at the board on robot 1 from about 0.4 m (checked with calib's FK in tests);
 /// joint 6 at 90 deg puts the world's down at the image's bottom.
 inline JointVector DemoPose() {
-  JointVector q;
+  JointVector q(6);
   q << 0.0, 0.6, -0.6, 0.0, kPi / 2, kPi / 2;
   return q;
 }

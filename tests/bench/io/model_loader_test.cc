@@ -32,8 +32,8 @@ TEST(ModelFiles, CommittedUrdfEqualsYamlModel) {
     const KinematicModel urdf = LoadRobotModel(kModels + robot + ".urdf");
     std::mt19937_64 rng(5);
     for (int k = 0; k < 200; ++k) {
-      JointVector q;
-      for (int i = 0; i < kNumJoints; ++i) {
+      JointVector q(6);
+      for (int i = 0; i < 6; ++i) {
         q(i) = std::uniform_real_distribution<double>(yaml.links[i].limits.lower,
                                                       yaml.links[i].limits.upper)(rng);
       }
@@ -43,7 +43,7 @@ TEST(ModelFiles, CommittedUrdfEqualsYamlModel) {
       EXPECT_LT((a.translation() - b.translation()).norm(), 1e-9) << robot;
       EXPECT_LT(Eigen::AngleAxisd(a.linear() * b.linear().transpose()).angle(), 1e-9) << robot;
     }
-    for (int i = 0; i < kNumJoints; ++i) {
+    for (int i = 0; i < 6; ++i) {
       EXPECT_NEAR(yaml.links[i].limits.lower, urdf.links[i].limits.lower, 1e-12);
       EXPECT_NEAR(yaml.links[i].limits.upper, urdf.links[i].limits.upper, 1e-12);
     }

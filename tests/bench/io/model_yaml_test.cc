@@ -56,8 +56,8 @@ void ExpectTransformNear(const Transform& a, const Transform& b, double tol) {
 void ExpectModelsNear(const KinematicModel& a, const KinematicModel& b, double tol) {
   EXPECT_EQ(a.name, b.name);
   ExpectTransformNear(a.X_BL0, b.X_BL0, tol);
-  ExpectTransformNear(a.X_L7E, b.X_L7E, tol);
-  for (int i = 0; i < kNumLinks; ++i) {
+  ExpectTransformNear(a.X_LtE, b.X_LtE, tol);
+  for (int i = 0; i < 7; ++i) {
     SCOPED_TRACE("link " + std::to_string(i + 1));
     const Link& la = a.links[i];
     const Link& lb = b.links[i];
@@ -67,7 +67,7 @@ void ExpectModelsNear(const KinematicModel& a, const KinematicModel& b, double t
     EXPECT_NEAR(la.dh.a, lb.dh.a, tol);
     EXPECT_NEAR(la.dh.alpha, lb.dh.alpha, tol);
     EXPECT_NEAR(la.dh.beta, lb.dh.beta, tol);
-    if (i < kNumJoints) {
+    if (i < 6) {
       EXPECT_NEAR(la.limits.lower, lb.limits.lower, tol);
       EXPECT_NEAR(la.limits.upper, lb.limits.upper, tol);
     }
@@ -93,7 +93,7 @@ Matrix3 Rpy(double r, double p, double y) {
 TEST(ModelYamlTest, LoadsReinovoR1) {
   const KinematicModel m = LoadModelYaml(kR1Path);
   EXPECT_EQ(m.name, "r1");
-  ASSERT_EQ(m.links.size(), static_cast<std::size_t>(kNumLinks));  // 6 jointed + tool
+  ASSERT_EQ(m.links.size(), static_cast<std::size_t>(7));  // 6 jointed + tool
   EXPECT_EQ(m.links[0].name, "link1");
   EXPECT_EQ(m.links[5].name, "link6");
   EXPECT_NEAR(m.links[1].dh.theta_offset, kPi / 2, kExact);
@@ -111,7 +111,7 @@ TEST(ModelYamlTest, LoadsReinovoR1) {
   EXPECT_NEAR(m.tool().dh.a, 0.060, kExact);
   EXPECT_EQ(m.tool().inertia.mass, 0.0);  // optional for the tool, default exactly 0
   EXPECT_TRUE(m.X_BL0.matrix().isIdentity(0.0));  // absent base: exactly identity
-  EXPECT_TRUE(m.X_L7E.matrix().isIdentity(0.0));
+  EXPECT_TRUE(m.X_LtE.matrix().isIdentity(0.0));
 }
 
 TEST(ModelYamlTest, LoadsReinovoR2) {
@@ -138,8 +138,8 @@ TEST(ModelYamlTest, BaseAndEndUseUrdfRollPitchYaw) {
   // Yaw 90 deg about z maps x to y, then the offset is added.
   EXPECT_LE((m.X_BL0 * Vector3::UnitX() - Vector3(0.1, 1.0, 0.2)).norm(), kExact);
   // R = Rz(0) Ry(90) Rx(90): y -> z by Rx, then z -> x by Ry. The other order gives z.
-  EXPECT_LE((m.X_L7E.linear() * Vector3::UnitY() - Vector3::UnitX()).norm(), kExact);
-  EXPECT_LE(m.X_L7E.translation().norm(), 0.0);  // absent xyz: exactly zero
+  EXPECT_LE((m.X_LtE.linear() * Vector3::UnitY() - Vector3::UnitX()).norm(), kExact);
+  EXPECT_LE(m.X_LtE.translation().norm(), 0.0);  // absent xyz: exactly zero
 }
 
 // ---- Round trip ----
@@ -152,15 +152,15 @@ KinematicModel PerturbedModel() {
   m.links[3].dh.theta_offset = -0.1 / 3.0;
   m.links[4].dh.d = 1e-7 / 3.0;
   m.links[0].limits.lower = -2.9670597283903604;
-  Link& tool = m.links[kNumJoints];
+  Link& tool = m.links[6];
   tool.dh.beta = -0.02;
   tool.inertia.mass = 0.35;
   tool.inertia.p_LiCom = Vector3(0.01, -0.02, 0.045);
   tool.inertia.I_Com << 1.1e-3, 1e-5, -2e-5, 1e-5, 1.3e-3, 3e-6, -2e-5, 3e-6, 1.7e-3;
   m.X_BL0.translation() = Vector3(0.5, -0.25, 0.1);
   m.X_BL0.linear() = Rpy(0.1, -0.2, 2.5);
-  m.X_L7E.translation() = Vector3(0.0, 0.0, 0.05);
-  m.X_L7E.linear() = Rpy(-3.0, 1.2, -0.4);
+  m.X_LtE.translation() = Vector3(0.0, 0.0, 0.05);
+  m.X_LtE.linear() = Rpy(-3.0, 1.2, -0.4);
   return m;
 }
 
@@ -197,14 +197,14 @@ TEST(ModelYamlTest, RoundTripRotationsIncludingGimbalLock) {
   KinematicModel m = LoadModelYaml(kR1Path);
   for (const Matrix3& R : rotations) {
     m.X_BL0.linear() = R;
-    m.X_L7E.linear() = R.transpose();
+    m.X_LtE.linear() = R.transpose();
     const KinematicModel back = ParseModelYaml(ModelToYaml(m), "roundtrip");
     // The writer takes yaw first and reads roll and pitch from Rz(-yaw) R, so the three angles
     // reproduce R even where yaw alone is ill-conditioned (pitch = +-90 deg); what remains is
     // the degree conversion and trigonometry, a few ulp (about 1.3e-15 measured over 2000
     // such rotations), so 1e-12 leaves a wide margin.
     ExpectTransformNear(m.X_BL0, back.X_BL0, kExact);
-    ExpectTransformNear(m.X_L7E, back.X_L7E, kExact);
+    ExpectTransformNear(m.X_LtE, back.X_LtE, kExact);
   }
 }
 
@@ -248,16 +248,33 @@ TEST(ModelYamlErrorTest, MissingKeyIsNamed) {
   EXPECT_TRUE(Contains(msg, "missing required key 'mass'"));
 }
 
-TEST(ModelYamlErrorTest, FiveLinksAreRejected) {
+TEST(ModelYamlTest, FiveLinksMakeAFiveJointChain) {
   std::string text = R1Text();
   const std::size_t begin = text.find("    - name: link6");
   const std::size_t end = text.find("  tool:");
   ASSERT_NE(begin, std::string::npos);
   ASSERT_NE(end, std::string::npos);
   text.erase(begin, end - begin);
-  const std::string msg = ParseError(text);
-  EXPECT_TRUE(Contains(msg, "robot.links"));
-  EXPECT_TRUE(Contains(msg, "expected 6 links, got 5"));
+  const KinematicModel m = ParseModelYaml(text, "five.yaml");
+  EXPECT_EQ(m.num_joints(), 5);
+  EXPECT_EQ(m.num_parameters(), 30);
+  EXPECT_EQ(m.tool().name, "tool");
+}
+
+TEST(ModelYamlErrorTest, EmptyOrTooLongLinkListsAreRejected) {
+  std::string text = R1Text();
+  const std::string key = "  links:\n";
+  const std::size_t begin = text.find(key) + key.size();
+  const std::size_t end = text.find("  tool:");
+  ASSERT_NE(end, std::string::npos);
+  const std::string links = text.substr(begin, end - begin);
+  std::string empty = text;
+  empty.replace(begin - key.size(), end - begin + key.size(), "  links: []\n");
+  EXPECT_TRUE(Contains(ParseError(empty), "expected a list of 1 to 12 links (one per joint), "
+                                          "got 0 entries"));
+  std::string thirteen = text;
+  thirteen.insert(end, links + links.substr(0, links.find("    - name: link2")));  // 6 + 6 + 1
+  EXPECT_TRUE(Contains(ParseError(thirteen), "got 13 entries"));
 }
 
 TEST(ModelYamlErrorTest, NonNumericValueNamesPathAndText) {

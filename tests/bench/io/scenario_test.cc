@@ -66,7 +66,7 @@ double MaxDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
 }
 
 JointVector Deg(double a, double b, double c, double d, double e, double f) {
-  JointVector q;
+  JointVector q(6);
   q << DegToRad(a), DegToRad(b), DegToRad(c), DegToRad(d), DegToRad(e), DegToRad(f);
   return q;
 }
@@ -441,7 +441,7 @@ TEST(ScenarioErrorTest, UnknownRobotInEffect) {
                             "unknown robot 'left' (robots: r1, r2)"));
 }
 
-TEST(ScenarioErrorTest, JointSevenIsRefused) {
+TEST(ScenarioErrorTest, JointSevenOfASixAxisArmIsRefused) {
   const std::string text = Replaced(DemoText(), "    - type: geometry_errors\n",
                                     "    - type: geometry_errors\n      joint: 7\n");
   const std::string msg = ParseError(text);

@@ -112,7 +112,7 @@ MassTotal ReferenceMass(const urdf::ModelInterface& urdf, const std::string& tip
 MassTotal ModelMass(const KinematicModel& m, const JointVector& q) {
   const FrameSet f = ForwardKinematics(m, q);
   MassTotal total;
-  for (int i = 0; i < kNumLinks; ++i) {
+  for (int i = 0; i < 7; ++i) {
     const LinkInertia& in = m.links[i].inertia;
     const Matrix3 R = f.X_BL[i + 1].linear();
     total.Add(in.mass, f.X_BL[i + 1] * in.p_LiCom, R * in.I_Com * R.transpose());
@@ -132,8 +132,8 @@ PoseError Compare(const Transform& a, const Transform& b) {
 }
 
 JointVector RandomJoints(const KinematicModel& m, std::mt19937& rng) {
-  JointVector q;
-  for (int i = 0; i < kNumJoints; ++i) {
+  JointVector q(m.num_joints());
+  for (int i = 0; i < m.num_joints(); ++i) {
     q(i) = std::uniform_real_distribution<double>(m.links[i].limits.lower,
                                                    m.links[i].limits.upper)(rng);
   }
@@ -344,17 +344,17 @@ KinematicModel IndustrialArm() {
   KinematicModel m;
   m.name = "arm";
   struct Row { double th, d, a, al, lo, hi, mass; };
-  const Row rows[kNumLinks] = {{0, 0.1365, 0.100, 90, -170, 170, 4.0},
+  const Row rows[7] = {{0, 0.1365, 0.100, 90, -170, 170, 4.0},
                                {90, 0, 0.290, 0, -120, 120, 3.0},
                                {0, 0, 0.121, 90, -140, 140, 2.0},
                                {0, 0.310, 0, -90, -180, 180, 1.5},
                                {-90, 0, 0, 90, -120, 120, 1.0},
                                {0, 0.1215, 0, 0, -270, 270, 0.5},
                                {-90, 0.02, 0.060, 10, 0, 0, 0.3}};
-  for (int i = 0; i < kNumLinks; ++i) {
+  for (int i = 0; i < 7; ++i) {
     Link& l = m.links[i];
     const Row& r = rows[i];
-    l.name = i < kNumJoints ? "link" + std::to_string(i + 1) : "tool";
+    l.name = i < 6 ? "link" + std::to_string(i + 1) : "tool";
     l.dh = {DegToRad(r.th), r.d, r.a, DegToRad(r.al), 0.0};
     l.limits = {DegToRad(r.lo), DegToRad(r.hi)};
     const Matrix3 R = Eigen::AngleAxisd(0.3 * i, Vector3(1, 2, 3).normalized()).matrix();
@@ -364,7 +364,7 @@ KinematicModel IndustrialArm() {
   m.links[1].dh.beta = 0.001;  // Hayati angle: axes 2 and 3 nearly parallel
   m.X_BL0 = Eigen::Translation3d(0.5, -0.2, 0.1) *
             Eigen::AngleAxisd(0.3, Vector3(1, -1, 2).normalized());
-  m.X_L7E = Eigen::Translation3d(0.01, 0.02, 0.08) *
+  m.X_LtE = Eigen::Translation3d(0.01, 0.02, 0.08) *
             Eigen::AngleAxisd(-2.0, Vector3(0, 1, 1).normalized());
   return m;
 }
@@ -431,7 +431,7 @@ TEST(UrdfModel, Ur5LikeArmNamesLimitsAndMasses) {
   const KinematicModel m = ParseUrdf(kUr5Like, "ur5_like.urdf", opt);
   EXPECT_EQ(m.name, "r2");
   EXPECT_EQ(ParseUrdf(kUr5Like, "ur5_like.urdf").name, "ur5_like");
-  for (int i = 0; i < kNumJoints; ++i) EXPECT_EQ(m.links[i].name, "link" + std::to_string(i + 1));
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(m.links[i].name, "link" + std::to_string(i + 1));
   EXPECT_EQ(m.tool().name, "tool");
   // Continuous shoulder pan gets +-2 pi; the elbow keeps its URDF limits (exact decimals).
   EXPECT_DOUBLE_EQ(m.links[0].limits.upper, 2.0 * kPi);
@@ -448,12 +448,12 @@ TEST(UrdfModel, RoundTripPreservesPoseAndMassProperties) {
   const std::string text = ModelToUrdf(m);
   const KinematicModel back = ParseUrdf(text, "roundtrip.urdf");
   EXPECT_EQ(back.name, "arm");
-  for (int i = 0; i < kNumJoints; ++i) {
+  for (int i = 0; i < 6; ++i) {
     EXPECT_NEAR(back.links[i].limits.lower, m.links[i].limits.lower, 1e-15);  // 17 digits: exact
     EXPECT_NEAR(back.links[i].limits.upper, m.links[i].limits.upper, 1e-15);
   }
   // Links 1..5 keep their mass; the tool body rides on joint 6 and merges into link 6.
-  for (int i = 0; i < kNumJoints - 1; ++i) {
+  for (int i = 0; i < 6 - 1; ++i) {
     EXPECT_NEAR(back.links[i].inertia.mass, m.links[i].inertia.mass, 1e-12) << i;
   }
   EXPECT_NEAR(back.links[5].inertia.mass, m.links[5].inertia.mass + m.tool().inertia.mass, 1e-12);
@@ -494,7 +494,7 @@ TEST(UrdfModel, ExportKeepsRotationsAtGimbalLock) {
                        Eigen::AngleAxisd(pitch, Vector3::UnitY()) *
                        Eigen::AngleAxisd(-1.2, Vector3::UnitX())).matrix();
     m.X_BL0.linear() = R;
-    m.X_L7E.linear() = R.transpose();
+    m.X_LtE.linear() = R.transpose();
     const Deviation dev = CompareWithReference(ModelToUrdf(m), "end", m, 50, rng);
     EXPECT_LT(dev.position, kPosTol) << pitch;
     EXPECT_LT(dev.rotation, kRotTol) << pitch;
@@ -550,20 +550,27 @@ TEST(UrdfModel, LoadUrdfReadsAFile) {
   const std::string path = ::testing::TempDir() + "urdf_model_test_ur5.urdf";
   std::ofstream(path) << kUr5Like;
   const KinematicModel m = LoadUrdf(path);
-  const JointVector q = JointVector::Constant(0.3);
+  const JointVector q = JointVector::Constant(6, 0.3);
   const PoseError e = Compare(EndPose(m, q), EndPose(ParseUrdf(kUr5Like, "x"), q));
   EXPECT_EQ(e.position, 0.0);  // same text, same deterministic computation
   EXPECT_EQ(e.rotation, 0.0);
 }
 
+TEST(UrdfModel, FiveRevoluteJointsMakeAFiveJointChain) {
+  const KinematicModel m =
+      ParseUrdf(SimpleChain(std::vector<std::string>(5, "revolute")), "five.urdf");
+  EXPECT_EQ(m.num_joints(), 5);
+}
+
 TEST(UrdfModelErrors, WrongJointCountIsNamed) {
   const std::string msg = ErrorOf([] {
-    ParseUrdf(SimpleChain(std::vector<std::string>(5, "revolute")), "five.urdf");
+    ParseUrdf(SimpleChain(std::vector<std::string>(13, "revolute")), "thirteen.urdf");
   });
-  EXPECT_NE(msg.find("five.urdf"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("expected 6 revolute joints between 'base_link' and 'l5', found 5"),
+  EXPECT_NE(msg.find("thirteen.urdf"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("expected 1 to 12 revolute joints between 'base_link' and 'l13', found 13"),
             std::string::npos) << msg;
-  EXPECT_NE(msg.find("[j1, j2, j3, j4, j5]"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("[j1, j2, j3, j4, j5, j6, j7, j8, j9, j10, j11, j12, j13]"),
+            std::string::npos) << msg;
 }
 
 TEST(UrdfModelErrors, PrismaticJointIsNamed) {

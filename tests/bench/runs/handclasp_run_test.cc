@@ -109,7 +109,7 @@ TEST_F(HandclaspRunTest, ScoresAgainstTheFramesTheKinematicModelsUse) {
     return dh;
   }();
   // The offset of eq. 2's link-1 part alone: FK_true = X_BB' * FK_pendant for any q.
-  const JointVector q = (JointVector() << 0.3, -0.4, 0.5, 0.2, -0.6, 0.7).finished();
+  const JointVector q = (JointVector(6) << 0.3, -0.4, 0.5, 0.2, -0.6, 0.7).finished();
   for (int k = 0; k < 2; ++k) {
     const Transform lhs = EndPose(cell.Truth().models[k], q);
     const Transform rhs = KinematicBaseOffset(cell.Truth().models[k], pendant[k]) *

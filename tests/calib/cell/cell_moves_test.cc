@@ -34,30 +34,30 @@ class SweepCell : public Cell {
   bool target_blocked = false;
 
  private:
-  JointVector q_[2] = {JointVector::Zero(), JointVector::Zero()};
+  JointVector q_[2] = {JointVector::Zero(6), JointVector::Zero(6)};
 };
 
 TEST(CellMoves, ASweptPathIsSplitIntoWristAndArmMoves) {
   SweepCell cell;
-  const JointVector target = (JointVector() << 0.1, 0.2, 0.3, 0.4, 0.5, 0.6).finished();
+  const JointVector target = (JointVector(6) << 0.1, 0.2, 0.3, 0.4, 0.5, 0.6).finished();
   const MoveResult m = MoveAvoidingSweep(cell, 1, target);
   EXPECT_EQ(m.status, MoveStatus::kSettled) << m.reason;
   EXPECT_EQ(cell.ReadEncoders(1), target);
   // direct (collides), back to the start, wrist only, then the arm
   ASSERT_EQ(cell.calls.size(), 4u);
-  EXPECT_EQ(cell.calls[1], JointVector::Zero());
-  EXPECT_EQ(cell.calls[2].head<3>(), JointVector::Zero().head<3>());
+  EXPECT_EQ(cell.calls[1], JointVector::Zero(6));
+  EXPECT_EQ(cell.calls[2].head<3>(), JointVector::Zero(6).head<3>());
   EXPECT_EQ(cell.calls[2].tail<3>(), target.tail<3>());
 }
 
 TEST(CellMoves, AFreeMoveIsOneMoveAndABlockedTargetStaysAFailure) {
   SweepCell cell;
-  JointVector wrist_only = JointVector::Zero();
+  JointVector wrist_only = JointVector::Zero(6);
   wrist_only(4) = 0.3;
   EXPECT_EQ(MoveAvoidingSweep(cell, 0, wrist_only).status, MoveStatus::kSettled);
   EXPECT_EQ(cell.calls.size(), 1u);
   cell.target_blocked = true;
-  const MoveResult m = MoveAvoidingSweep(cell, 0, JointVector::Constant(0.2));
+  const MoveResult m = MoveAvoidingSweep(cell, 0, JointVector::Constant(6, 0.2));
   EXPECT_EQ(m.status, MoveStatus::kCollision);
   EXPECT_EQ(cell.ReadEncoders(0), wrist_only);  // stayed where it was
 }

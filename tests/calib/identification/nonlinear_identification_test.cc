@@ -123,9 +123,9 @@ TEST(NonlinearIdentification, TemplatedResidualMatchesForwardKinematics) {
     // Central differences of the templated FK against the analytic identification Jacobian
     // (eq. 5-9) projected perpendicular to the line. Step 1e-6: truncation ~1e-12, round-off
     // ~1e-10 per column; bound 1e-8 m per unit parameter.
-    const Eigen::Matrix<double, 3, kNumParams> J =
+    const Eigen::Matrix<double, 3, 35> J =
         P * IdentificationJacobian(s.truth, q).topRows<3>();
-    for (int i = 0; i < kNumParams; ++i) {
+    for (int i = 0; i < 35; ++i) {
       ParameterVector hi = phi, lo = phi;
       hi(i) += 1e-6;
       lo(i) -= 1e-6;

@@ -14,6 +14,13 @@
 namespace twin {
 namespace {
 
+// A six-axis chain named r2 (the names prefix the parameters).
+KinematicModel R2() {
+  KinematicModel m;
+  m.name = "r2";
+  return m;
+}
+
 using testing::MakeOpticalAxisScenario;
 
 bool Contains(const std::vector<std::string>& v, const std::string& s) {
@@ -32,7 +39,7 @@ TEST(Observability, TheoryInvariantsAreInTheNullSpaceOfConsistentData) {
   const auto s = MakeOpticalAxisScenario(42);
   const MisalignedErrorStack st = StackAt(s.truth, s.samples);
   const Eigen::MatrixXd Phi = ProfiledPhi(st);
-  const ObservabilityReport rep = AnalyseObservability(Phi, "r2", 1e-6);
+  const ObservabilityReport rep = AnalyseObservability(Phi, R2(), 1e-6);
   std::cout << "rank " << rep.rank << "; unidentifiable combinations (truth):\n";
   for (const auto& n : rep.unidentifiable) std::cout << "  " << n << "\n";
   // Rotation about base z and translation along it lie in the null space: their projection onto
@@ -63,7 +70,7 @@ TEST(Observability, NominalModelWithKnownInvariants) {
   const KinematicModel& m = s.nominal;
   const Eigen::MatrixXd Phi = ProfiledPhi(StackAt(m, s.samples));
   const auto inv = LineConstraintInvariants(m);
-  const ObservabilityReport rep = AnalyseObservability(Phi, "r2", 1e-6, inv);
+  const ObservabilityReport rep = AnalyseObservability(Phi, R2(), 1e-6, inv);
   std::cout << "rank " << rep.rank << "; unidentifiable combinations (nominal):\n";
   for (const auto& n : rep.unidentifiable) std::cout << "  " << n << "\n";
   EXPECT_EQ(rep.rank, 20);
@@ -94,24 +101,24 @@ TEST(Observability, IndexO1) {
 }
 
 TEST(Observability, NamesCombinations) {
-  ParameterVector v = ParameterVector::Zero();
+  ParameterVector v = ParameterVector::Zero(35);
   v(ParameterIndex(2, DhParameter::kD)) = 2.0;
   v(ParameterIndex(3, DhParameter::kD)) = -2.0;
-  EXPECT_EQ(NameCombination(v, "r2"), "0.707 r2.link2.d - 0.707 r2.link3.d");
+  EXPECT_EQ(NameCombination(v, ParameterNames(R2())), "0.707 r2.link2.d - 0.707 r2.link3.d");
   v.setZero();
   v(ParameterIndex(1, DhParameter::kTheta)) = -3.0;
-  EXPECT_EQ(NameCombination(v, "r2"), "r2.link1.theta");
+  EXPECT_EQ(NameCombination(v, ParameterNames(R2())), "r2.link1.theta");
 }
 
 TEST(Observability, RejectsBadInput) {
   try {
-    AnalyseObservability(Eigen::MatrixXd::Zero(6, 34), "r2", 1e-6);
+    AnalyseObservability(Eigen::MatrixXd::Zero(6, 34), R2(), 1e-6);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("34 columns"), std::string::npos);
   }
   try {
-    AnalyseObservability(Eigen::MatrixXd::Ones(6, kNumParams), "r2", 1.5);
+    AnalyseObservability(Eigen::MatrixXd::Ones(6, 35), R2(), 1.5);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("relative_tolerance"), std::string::npos);

@@ -36,12 +36,12 @@ TEST(ForwardKinematics, EqualsIndependentCompositionOfLinkTransforms) {
     const JointVector q = RandomJoints(m, rng);
     const FrameSet f = ForwardKinematics(m, q);
     Eigen::Matrix4d X = m.X_BL0.matrix();
-    for (int i = 0; i < kNumLinks; ++i) {
-      X = X * Elementary(m.links[i].dh, i < kNumJoints ? q(i) : 0.0);
+    for (int i = 0; i < 7; ++i) {
+      X = X * Elementary(m.links[i].dh, i < 6 ? q(i) : 0.0);
       // 1e-12: a product of at most nine 4x4 matrices with entries below 1.5 in magnitude.
       EXPECT_LT((f.X_BL[i + 1].matrix() - X).norm(), 1e-12) << "frame L" << i + 1;
     }
-    X = X * m.X_L7E.matrix();
+    X = X * m.X_LtE.matrix();
     EXPECT_LT((f.X_BE.matrix() - X).norm(), 1e-12);
     EXPECT_LT((EndPose(m, q).matrix() - X).norm(), 1e-12);
   }
@@ -50,7 +50,7 @@ TEST(ForwardKinematics, EqualsIndependentCompositionOfLinkTransforms) {
 TEST(ForwardKinematics, NominalGeometryHasTheTablesInvariants) {
   // Checks read off the table of models/reinovo_r1.yaml, independent of the FK code path.
   const KinematicModel m = ReinovoLikeModel();
-  const FrameSet f = ForwardKinematics(m, JointVector::Zero());
+  const FrameSet f = ForwardKinematics(m, ZeroJoints(m));
   EXPECT_NEAR(f.X_BL[1].translation().z(), 0.1365, 1e-15);  // d1
   EXPECT_NEAR(f.X_BL[1].translation().x(), 0.100, 1e-15);   // a1 along x0 at q1 = 0
   // Joints 2 and 3 are parallel (alpha2 = 0).
@@ -69,7 +69,7 @@ TEST(IdentificationJacobian, MatchesCentralFiniteDifferences) {
     const JointVector q = RandomJoints(m, rng);
     const auto J = IdentificationJacobian(m, q);
     const ParameterVector p0 = GetParameters(m);
-    for (int k = 0; k < kNumParams; ++k) {
+    for (int k = 0; k < 35; ++k) {
       ParameterVector pp = p0, pm = p0;
       pp(k) += h;
       pm(k) -= h;
@@ -93,7 +93,7 @@ TEST(ManipulatorJacobian, MatchesCentralFiniteDifferences) {
     const KinematicModel m = Perturbed(ReinovoLikeModel(), rng, 0.01, 0.05);
     const JointVector q = RandomJoints(m, rng);
     const auto J = ManipulatorJacobian(m, q);
-    for (int i = 0; i < kNumJoints; ++i) {
+    for (int i = 0; i < 6; ++i) {
       JointVector qp = q, qm = q;
       qp(i) += h;
       qm(i) -= h;
@@ -114,7 +114,7 @@ TEST(ManipulatorJacobian, JointColumnsEqualTheThetaColumnsOfTheIdentificationJac
   const JointVector q = RandomJoints(m, rng);
   const auto J = ManipulatorJacobian(m, q);
   const auto Jid = IdentificationJacobian(m, q);
-  for (int i = 0; i < kNumJoints; ++i) {
+  for (int i = 0; i < 6; ++i) {
     EXPECT_LT((J.col(i) - Jid.col(ParameterIndex(i + 1, DhParameter::kTheta))).norm(), 1e-14);
   }
 }
@@ -124,7 +124,7 @@ TEST(JacobianSingularValues, VanishAtTheWristSingularity) {
   // 90 deg for q5, find the one where that happens (geometry, not the code under test) and
   // check the smallest singular value vanishes there and not away from it.
   const KinematicModel m = ReinovoLikeModel();
-  JointVector q;
+  JointVector q(6);
   q << 0.3, -0.4, 0.5, 0.2, 0.0, 0.1;
   double singular_q5 = 0.0, best_cross = 1.0;
   for (int k = -1; k <= 1; ++k) {
@@ -136,10 +136,10 @@ TEST(JacobianSingularValues, VanishAtTheWristSingularity) {
   ASSERT_LT(best_cross, 1e-12) << "no wrist singularity at a multiple of 90 deg";
   q(4) = singular_q5;
   const auto sv = JacobianSingularValues(m, q);
-  EXPECT_LT(sv(kNumJoints - 1), 1e-12);  // exactly rank deficient up to rounding
-  EXPECT_GE(sv(0), sv(kNumJoints - 1));
+  EXPECT_LT(sv(6 - 1), 1e-12);  // exactly rank deficient up to rounding
+  EXPECT_GE(sv(0), sv(6 - 1));
   q(4) = singular_q5 + 0.5;
-  EXPECT_GT(JacobianSingularValues(m, q)(kNumJoints - 1), 1e-3);  // regular again
+  EXPECT_GT(JacobianSingularValues(m, q)(6 - 1), 1e-3);  // regular again
 }
 
 }  // namespace

@@ -55,8 +55,8 @@ TEST(SolveIk, NearbySeedConvergesFromTheFirstStart) {
   std::mt19937_64 rng(22);
   for (int trial = 0; trial < 50; ++trial) {
     const JointVector q_true = RandomJoints(m, rng);
-    JointVector seed = q_true + 0.05 * JointVector::Ones();
-    for (int i = 0; i < kNumJoints; ++i) {  // keep the seed inside the limits
+    JointVector seed = q_true + 0.05 * JointVector::Ones(6);
+    for (int i = 0; i < 6; ++i) {  // keep the seed inside the limits
       seed(i) = std::min(seed(i), m.links[i].limits.upper);
     }
     const IkResult r = SolveIk(m, EndPose(m, q_true), seed);
@@ -92,7 +92,7 @@ TEST(SolveIk, OutOfReachTargetFailsWithAReason) {
 
 TEST(SolveIk, TargetOutsideJointLimitsNamesTheJoint) {
   KinematicModel m = ReinovoLikeModel();
-  JointVector q_true;
+  JointVector q_true(6);
   q_true << 1.5, 0.2, 0.3, 0.1, 0.6, 0.2;
   const Transform target = EndPose(m, q_true);
   m.links[0].limits = {-0.2, 0.2};  // joint 1 can no longer turn to 1.5 rad

@@ -24,7 +24,7 @@ TEST(OpticalAxisModel, ErrorJacobianMatchesCentralDifferences) {
     const JointVector qi = RandomJoints(model, rng), qj = RandomJoints(model, rng);
     const auto J = ErrorJacobian(model, mu, qi, qj);
     const double h = 1e-6;
-    for (int c = 0; c < kNumParams; ++c) {
+    for (int c = 0; c < 35; ++c) {
       ParameterVector plus = phi, minus = phi;
       plus(c) += h;
       minus(c) -= h;
@@ -92,15 +92,15 @@ TEST(OpticalAxisModel, StackIsConsistentWithPairwiseFunctions) {
   const Vector3 pi = EndPose(s.nominal, s.samples[10].q).translation();
   const Vector3 pj = EndPose(s.nominal, s.samples[11].q).translation();
   EXPECT_LT((st.E.segment<3>(r) - MisalignedError(dirs[1], pi, pj)).norm(), 1e-15);
-  EXPECT_LT((st.Phi.block<3, kNumParams>(r, 0) -
+  EXPECT_LT((st.Phi.block<3, 35>(r, 0) -
              ErrorJacobian(s.nominal, dirs[1], s.samples[10].q, s.samples[11].q))
                 .norm(),
             1e-13);
   // Positions are homogeneous of degree 1 in the lengths, so Phi s = [mu x](p_i - p_j) = -E
   // exactly for s = the current lengths (why scale is a gauge of line data). Round-off only.
-  ParameterVector scale = ParameterVector::Zero();
+  ParameterVector scale = ParameterVector::Zero(35);
   const ParameterVector phi = GetParameters(s.nominal);
-  for (int i = 0; i < kNumParams; ++i) scale(i) = IsLengthParameter(i) ? phi(i) : 0.0;
+  for (int i = 0; i < 35; ++i) scale(i) = IsLengthParameter(i) ? phi(i) : 0.0;
   EXPECT_LT((st.Phi * scale + st.E).norm(), 1e-12);
 }
 

@@ -12,13 +12,15 @@ namespace twin {
 namespace {
 
 TEST(Parameters, NamesAreUniqueAndFollowTheFlatOrder) {
-  const std::vector<std::string> names = ParameterNames("r1");
-  ASSERT_EQ(names.size(), static_cast<size_t>(kNumParams));
+  KinematicModel r1;
+  r1.name = "r1";
+  const std::vector<std::string> names = ParameterNames(r1);
+  ASSERT_EQ(names.size(), static_cast<size_t>(35));
   EXPECT_EQ(std::set<std::string>(names.begin(), names.end()).size(), names.size());
   EXPECT_EQ(names[0], "r1.link1.theta");
   EXPECT_EQ(names[ParameterIndex(3, DhParameter::kAlpha)], "r1.link3.alpha");
-  EXPECT_EQ(names[kNumParams - 1], "r1.link7.beta");
-  for (int i = 0; i < kNumParams; ++i) EXPECT_EQ(FindParameter("r1", names[i]), i);
+  EXPECT_EQ(names[35 - 1], "r1.link7.beta");
+  for (int i = 0; i < 35; ++i) EXPECT_EQ(FindParameter(r1, names[i]), i);
 }
 
 TEST(Parameters, LengthParametersAreDAndA) {
@@ -29,8 +31,10 @@ TEST(Parameters, LengthParametersAreDAndA) {
 }
 
 TEST(Parameters, UnknownNameIsAnInputErrorWithTheExpectedForm) {
+  KinematicModel r1;
+  r1.name = "r1";
   try {
-    FindParameter("r1", "r1.link9.alpha");
+    FindParameter(r1, "r1.link9.alpha");
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("r1.link9.alpha"), std::string::npos);

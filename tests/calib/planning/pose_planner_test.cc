@@ -47,7 +47,7 @@ Transform CameraInPassiveBase(const KinematicModel& active, const JointVector& q
 
 double JointLimitDistance(const KinematicModel& m, const JointVector& q) {
   double d = 1e9;
-  for (int i = 0; i < kNumJoints; ++i) {
+  for (int i = 0; i < 6; ++i) {
     d = std::min({d, q(i) - m.links[i].limits.lower, m.links[i].limits.upper - q(i)});
   }
   return d;
@@ -99,7 +99,7 @@ TEST_F(PosePlannerTest, ReturnsPosesThatSatisfyAllConstraintsWhenRecheckedWithFk
       const JointVector& q = axis.q_passive[i];
       EXPECT_TRUE(WithinLimits(passive, q));
       EXPECT_GE(JointLimitDistance(passive, q), o.min_joint_limit_distance);
-      EXPECT_GE(JacobianSingularValues(passive, q)(kNumJoints - 1), o.min_singular_value);
+      EXPECT_GE(JacobianSingularValues(passive, q)(6 - 1), o.min_singular_value);
       const Transform X_BpE = EndPose(passive, q);
       const Vector3 v = X_BpE.translation() - p_c;
       // Board origin on the optical axis: both IKs hold 1e-7 m, so 1e-6 m has margin.
@@ -114,9 +114,9 @@ TEST_F(PosePlannerTest, ReturnsPosesThatSatisfyAllConstraintsWhenRecheckedWithFk
     }
     // Flange model singular values (the camera's frame) are what C2 checks for the active arm.
     KinematicModel flange = active;
-    flange.links[kNumJoints].dh = DhParameters{};
-    flange.X_L7E = Transform::Identity();
-    EXPECT_GE(JacobianSingularValues(flange, axis.q_active)(kNumJoints - 1),
+    flange.tool().dh = DhParameters{};
+    flange.X_LtE = Transform::Identity();
+    EXPECT_GE(JacobianSingularValues(flange, axis.q_active)(6 - 1),
               o.min_singular_value);
   }
   // The returned fitness is the fitness of the returned poses.

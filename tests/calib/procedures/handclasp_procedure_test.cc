@@ -38,8 +38,8 @@ class FakeCell : public Cell {
  public:
   FakeCell(std::array<KinematicModel, 2> models, Transform X_B1B2)
       : models_(std::move(models)), X_B1B2_(X_B1B2) {
-    q_[0] = JointVector::Zero();
-    q_[1] = JointVector::Zero();
+    q_[0] = JointVector::Zero(6);
+    q_[1] = JointVector::Zero(6);
   }
   MoveResult MoveTo(int robot, const JointVector& q) override {
     q_[robot] = q;
@@ -89,7 +89,7 @@ class FakeCell : public Cell {
 
 TaughtPoints Plan() {
   return PlanTaughtPoints(TipModels(), FloorFloorLayout(),
-                          {JointVector::Zero(), JointVector::Zero()});
+                          {JointVector::Zero(6), JointVector::Zero(6)});
 }
 
 TEST(HandclaspPlanner, PlansAWellSpreadCubeReachableByBoth) {
@@ -127,12 +127,12 @@ TEST(HandclaspProcedure, IdentifiesBothTipsAndTheBaseFrameFromVariedOrientations
   // share is the gauge of tip_refinement.h), robot 2's in all three directions.
   const Vector3 dt1(0.0010, -0.0015, 0.0), dt2(0.0008, 0.0005, -0.0010);
   std::array<KinematicModel, 2> physical = TipModels();
-  physical[0].X_L7E.translation() += dt1;
-  physical[1].X_L7E.translation() += dt2;
+  physical[0].X_LtE.translation() += dt1;
+  physical[1].X_LtE.translation() += dt2;
   TeachOptions teach;
   teach.orientations_per_point = 4;
   const TaughtPoints t = PlanTaughtPoints(TipModels(), FloorFloorLayout(),
-                                          {JointVector::Zero(), JointVector::Zero()}, teach);
+                                          {JointVector::Zero(6), JointVector::Zero(6)}, teach);
   ASSERT_TRUE(t.ok) << t.reason;
   EXPECT_GT(static_cast<int>(t.q1.size()), t.points);  // extra orientations were teachable
   FakeCell cell(physical, FloorFloorLayout());
@@ -223,7 +223,7 @@ TEST(HandclaspProcedure, RefusesCollinearContactsWithAClearMessage) {
 
 TEST(HandclaspProcedure, BadInputIsAnInputError) {
   FakeCell cell(TipModels(), FloorFloorLayout());
-  JointVector bad = JointVector::Zero();
+  JointVector bad = JointVector::Zero(6);
   bad(2) = std::nan("");
   EXPECT_THROW(RunHandclaspProcedure(cell, TipModels(), {bad}, {}, nullptr), InputError);
   HandclaspOptions o;
@@ -239,7 +239,7 @@ TEST(HandclaspProcedure, BadInputIsAnInputError) {
 TEST(HandclaspProcedure, ACellWithoutTipsRefusesTheHandclasp) {
   struct Plain : Cell {
     MoveResult MoveTo(int, const JointVector&) override { return {}; }
-    JointVector ReadEncoders(int) override { return JointVector::Zero(); }
+    JointVector ReadEncoders(int) override { return JointVector::Zero(6); }
     cv::Mat GrabImage() override { return {}; }
     MoveResult ExchangeTools() override { return {}; }
     int CameraRobot() override { return 0; }
@@ -254,7 +254,7 @@ TEST(HandclaspTools, TipToolPutsTheEndFrameAtTheTip) {
   Transform X_FTip = Transform::Identity();
   X_FTip.translation() = Vector3(0.01, -0.02, 0.3);
   const KinematicModel tip = WithTipTool(flange, X_FTip);
-  const JointVector q = (JointVector() << 0.1, 0.2, -0.3, 0.4, 0.5, 0.6).finished();
+  const JointVector q = (JointVector(6) << 0.1, 0.2, -0.3, 0.4, 0.5, 0.6).finished();
   const Transform expected = ForwardKinematics(flange, q).flange() * X_FTip;
   EXPECT_LT((EndPose(tip, q).matrix() - expected.matrix()).norm(), 1e-12);  // rounding only
   const Matrix3 R = FacingTipRotation(Matrix3::Identity(), 0.3);

@@ -43,7 +43,7 @@ EffectSpec EffectOf(const std::string& type, std::map<std::string, double> param
 // A free-space target for robot 0 from the demo pose (no contact on the way).
 JointVector FreeTarget() {
   JointVector q = DemoPose();
-  q += (JointVector() << 0.2, -0.1, 0.15, 0.3, -0.2, 0.5).finished();
+  q += (JointVector(6) << 0.2, -0.1, 0.15, 0.3, -0.2, 0.5).finished();
   return q;
 }
 
@@ -109,7 +109,7 @@ TEST_F(TwinCellTest, GeometryEffectsMakeTheTrueModel) {
     // The twin's frames follow the perturbed model exactly (see mjcf_writer_test for 1e-9).
     const FrameSet f = ForwardKinematics(truth.models[k], truth.q_link[k]);
     const auto sites = cell.SiteFrames(k);
-    for (int i = 0; i <= kNumLinks; ++i) {
+    for (int i = 0; i <= 7; ++i) {
       const Transform expected = spec.robots[k].X_WB * f.X_BL[i];
       EXPECT_LT((sites[i].translation() - expected.translation()).norm(), 1e-9);
       EXPECT_LT((sites[i].linear() - expected.linear()).norm(), 1e-9);
@@ -129,7 +129,7 @@ TEST_F(TwinCellTest, StartsAtRestAtTheInitialPoseWithTheTrueGeometry) {
     EXPECT_EQ(truth.q_motor[k], DemoPose());
     const FrameSet f = ForwardKinematics(spec.robots[k].model, truth.q_link[k]);
     const auto sites = cell.SiteFrames(k);
-    for (int i = 0; i <= kNumLinks; ++i) {
+    for (int i = 0; i <= 7; ++i) {
       const Transform expected = spec.robots[k].X_WB * f.X_BL[i];
       EXPECT_LT((sites[i].translation() - expected.translation()).norm(), 1e-9);
     }
@@ -175,7 +175,7 @@ TEST_F(TwinCellTest, CompliantJointSagsByGravityTorqueOverStiffness) {
       EffectOf("joint_compliance", {{"stiffness_Nm_per_rad", kStiffness}}, 0, 1));
   TwinCell cell(spec);
   // Upper arm leant forward, forearm down: joint 2 carries a large gravity torque.
-  const JointVector target = (JointVector() << 0.1, -0.3, 0.0, 0.2, 1.3, 0.4).finished();
+  const JointVector target = (JointVector(6) << 0.1, -0.3, 0.0, 0.2, 1.3, 0.4).finished();
   const MoveResult r = cell.MoveTo(0, target);
   ASSERT_EQ(r.status, MoveStatus::kSettled) << r.reason;
   const TwinTruth t = cell.Truth();
@@ -184,7 +184,7 @@ TEST_F(TwinCellTest, CompliantJointSagsByGravityTorqueOverStiffness) {
   const MjModelPtr m = LoadMjcfFromString(cell.mjcf());
   MjDataPtr d(mj_makeData(m.get()));
   for (int k = 0; k < kNumRobots; ++k) {
-    for (int i = 0; i < kNumJoints; ++i) {
+    for (int i = 0; i < 6; ++i) {
       const std::string name = "robot" + std::to_string(k + 1) + "_j" + std::to_string(i + 1);
       d->qpos[m->jnt_qposadr[mj_name2id(m.get(), mjOBJ_JOINT, name.c_str())]] = t.q_link[k](i);
     }
@@ -301,7 +301,7 @@ TEST_F(TwinCellTest, QuantizedEncodersReadWholeCounts) {
   const double count = 2 * kPi / kCounts;
   for (int k = 0; k < kNumRobots; ++k) {
     const JointVector reading = cell.ReadEncoders(k);
-    for (int i = 0; i < kNumJoints; ++i) {
+    for (int i = 0; i < 6; ++i) {
       const double n = reading(i) / count;
       EXPECT_NEAR(n, std::round(n), 1e-9) << "robot " << k << " joint " << i;
       EXPECT_LE(std::abs(reading(i) - cell.Truth().q_motor[k](i)), 0.5 * count + 1e-12);

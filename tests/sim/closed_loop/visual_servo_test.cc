@@ -61,7 +61,7 @@ ServoSetup SetupFor(const TwinSpec& spec, Cell& cell) {
 
 // A start a few degrees off the demo pose, putting P 10-30 px off the principal point.
 JointVector OffsetStart() {
-  return DemoPose() + (JointVector() << 0.03, 0.02, 0.0, 0.0, 0.0, 0.05).finished();
+  return DemoPose() + (JointVector(6) << 0.03, 0.02, 0.0, 0.0, 0.0, 0.05).finished();
 }
 
 TEST_F(VisualServoTest, AlignsTheFeaturePointWithinTenIterations) {

@@ -105,8 +105,10 @@ TEST(EffectRegistry, UnknownParameterIsNamedWithTheAllowedKeys) {
   ExpectInputError(Spec("transmission_error",
                         {{"amplitude_deg", 0.01}, {"harmonic", 1}, {"phase_rad", 0.1}}),
                    {"\"phase_rad\"", "amplitude_deg, harmonic, phase_deg"});
-  ExpectInputError(Spec("geometry_errors", {{"link8.alpha_deg", 0.1}}),
-                   {"\"link8.alpha_deg\"", "link<1..7>.<theta|alpha|beta>_deg"});
+  // Keys exist for chains up to kMaxJoints = 12 joints (13 links); a six-axis robot refuses
+  // link8 when the geometry is built (GeometryDeltaBeyondTheToolLinkIsRefused).
+  ExpectInputError(Spec("geometry_errors", {{"link14.alpha_deg", 0.1}}),
+                   {"\"link14.alpha_deg\"", "link<i>.<theta|alpha|beta>_deg"});
   ExpectInputError(Spec("geometry_errors", {{"link3.d_deg", 0.1}}), {"\"link3.d_deg\""});
 }
 
@@ -131,7 +133,7 @@ TEST(EffectRegistry, OutOfRangeValuesAreNamed) {
   ExpectInputError(Spec("thermal_growth", {{"delta_T_K", 293.15}}),
                    {"delta_T_K = 293.15", "[-100, 100]"});
   ExpectInputError(Spec("image_noise", {{"sigma_levels", 0.0}}), {"sigma_levels = 0", "> 0"});
-  ExpectInputError(Spec("backlash", {{"width_deg", 0.1}}, 0, 7), {"joint = 7", "0..5"});
+  ExpectInputError(Spec("backlash", {{"width_deg", 0.1}}, 0, 12), {"joint = 12", "0..11"});
   ExpectInputError(Spec("backlash", {{"width_deg", 0.1}}, 0, -2), {"joint = -2"});
   ExpectInputError(Spec("encoder_noise", {{"sigma_deg", 0.1}}, 2), {"robot = 2", "0..1"});
   ExpectInputError(Spec("geometry_errors", {{"sigma_angle_deg", 0.1}}, 0, 2),
@@ -144,24 +146,24 @@ TEST(TransmissionError, MatchesItsFormulaAtSeveralAngles) {
       "transmission_error", {{"amplitude_deg", 0.02}, {"harmonic", 2}, {"phase_deg", 30}}, 0, 1));
   const double amplitude = DegToRad(0.02), phase = DegToRad(30.0);
   for (double q : {-3.0, -1.2, 0.0, 0.4, 1.7, 3.1}) {
-    const JointVector motor = JointVector::Constant(q);
-    JointVector offset = JointVector::Constant(1e-3);  // the hook adds to what is there
-    effect->ApplyToTransmission(0, motor, JointVector::Ones(), &offset);
+    const JointVector motor = JointVector::Constant(6, q);
+    JointVector offset = JointVector::Constant(6, 1e-3);  // the hook adds to what is there
+    effect->ApplyToTransmission(0, motor, JointVector::Ones(6), &offset);
     // Same formula, same operations: only a few roundings of a ~1e-3 rad value can differ.
     EXPECT_NEAR(offset(1), 1e-3 + amplitude * std::sin(2.0 * q + phase), 1e-15) << q;
     for (int j : {0, 2, 3, 4, 5}) EXPECT_EQ(offset(j), 1e-3) << "joint " << j << " untouched";
-    JointVector other = JointVector::Zero();
-    effect->ApplyToTransmission(1, motor, JointVector::Ones(), &other);
+    JointVector other = JointVector::Zero(6);
+    effect->ApplyToTransmission(1, motor, JointVector::Ones(6), &other);
     EXPECT_TRUE(other.isZero(0.0)) << "robot 1 untouched";
   }
 }
 
 TEST(Backlash, LagsAgainstTheApproachDirectionAndIsZeroBeforeAnyMotion) {
   const auto effect = MakeEffect(Spec("backlash", {{"width_deg", 0.2}}));
-  JointVector direction;
+  JointVector direction(6);
   direction << 1, -1, 0, 1, -1, 0;
-  JointVector offset = JointVector::Zero();
-  effect->ApplyToTransmission(1, JointVector::Constant(0.5), direction, &offset);
+  JointVector offset = JointVector::Zero(6);
+  effect->ApplyToTransmission(1, JointVector::Constant(6, 0.5), direction, &offset);
   const double half = DegToRad(0.1);
   // -0.5 * width * direction is one or two roundings away from DegToRad(0.1).
   for (int j : {0, 3}) EXPECT_NEAR(offset(j), -half, 1e-17) << "moved positive: link lags below";
@@ -175,31 +177,31 @@ TEST(EncoderQuantization, RoundsToTheNearestCount) {
   const auto effect = MakeEffect(Spec("encoder_quantization", {{"counts_per_rev", counts}}));
   for (int k : {-2047, -3, -1, 0, 5, 2047}) {
     for (double fraction : {0.0, 0.3, 0.49, 0.51, 0.7}) {
-      JointVector reading = JointVector::Constant((k + fraction) * step);
+      JointVector reading = JointVector::Constant(6, (k + fraction) * step);
       effect->ApplyToEncoder(0, &reading, nullptr);
       const double expected = (fraction < 0.5 ? k : k + 1) * step;
       // expected is computed as the effect does (n * step); 1e-14 rad allows a few ulps at pi.
-      for (int j = 0; j < kNumJoints; ++j) EXPECT_NEAR(reading(j), expected, 1e-14);
+      for (int j = 0; j < 6; ++j) EXPECT_NEAR(reading(j), expected, 1e-14);
     }
   }
   // With a joint given, only that joint is quantized.
   const auto joint3 =
       MakeEffect(Spec("encoder_quantization", {{"counts_per_rev", counts}}, -1, 3));
-  JointVector reading = JointVector::Constant(0.3 * step);
+  JointVector reading = JointVector::Constant(6, 0.3 * step);
   joint3->ApplyToEncoder(1, &reading, nullptr);
-  for (int j = 0; j < kNumJoints; ++j) EXPECT_EQ(reading(j), j == 3 ? 0.0 : 0.3 * step);
+  for (int j = 0; j < 6; ++j) EXPECT_EQ(reading(j), j == 3 ? 0.0 : 0.3 * step);
 }
 
 TEST(EncoderNoise, SampleStdMatchesSigma) {
   const double sigma = DegToRad(0.01);
   const auto effect = MakeEffect(Spec("encoder_noise", {{"sigma_deg", 0.01}}));
   std::mt19937_64 rng(7);
-  const JointVector truth = JointVector::LinSpaced(-1.0, 1.0);
+  const JointVector truth = JointVector::LinSpaced(6, -1.0, 1.0);
   std::vector<double> errors;
   for (int n = 0; n < 20000; ++n) {
     JointVector reading = truth;
     effect->ApplyToEncoder(n % 2, &reading, &rng);
-    for (int j = 0; j < kNumJoints; ++j) errors.push_back(reading(j) - truth(j));
+    for (int j = 0; j < 6; ++j) errors.push_back(reading(j) - truth(j));
   }
   double mean = 0.0;
   const double sample_std = SampleStd(errors, &mean);
@@ -207,6 +209,20 @@ TEST(EncoderNoise, SampleStdMatchesSigma) {
   // is 10 standard errors; the mean's standard error is sigma/sqrt(N), 5 of them allowed.
   EXPECT_NEAR(sample_std / sigma, 1.0, 0.02);
   EXPECT_LT(std::abs(mean), 5.0 * sigma / std::sqrt(static_cast<double>(errors.size())));
+}
+
+TEST(GeometryErrors, GeometryDeltaBeyondTheToolLinkIsRefused) {
+  // A six-axis arm has links 1..7 (7 = the tool link): a delta of link 8 names the robot.
+  const auto effect = MakeEffect(Spec("geometry_errors", {{"link8.alpha_deg", 0.1}}));
+  KinematicModel model = testing::ReinovoLikeModel();
+  std::mt19937_64 rng(1);
+  try {
+    effect->ApplyToGeometry(0, &model, &rng);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("link8.alpha_deg"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("only 7 links"), std::string::npos) << e.what();
+  }
 }
 
 TEST(GeometryErrors, ExplicitDeltaChangesExactlyTheNamedParameter) {
@@ -224,7 +240,7 @@ TEST(GeometryErrors, ExplicitDeltaChangesExactlyTheNamedParameter) {
   // One addition each: the difference equals the converted delta up to one rounding of the sum.
   EXPECT_NEAR(after(alpha3) - before(alpha3), DegToRad(0.05), 1e-15);
   EXPECT_NEAR(after(d2) - before(d2), -0.3e-3, 1e-15);
-  for (int i = 0; i < kNumParams; ++i) {
+  for (int i = 0; i < 35; ++i) {
     // Adding an exact 0.0 leaves every other parameter bit-identical.
     if (i == alpha3 || i == d2) continue;
     EXPECT_EQ(after(i), before(i)) << ParameterName("r1", i);
@@ -243,7 +259,7 @@ TEST(GeometryErrors, RandomSigmaGivesMatchingSampleStd) {
     KinematicModel model = nominal;
     effect->ApplyToGeometry(n % 2, &model, &rng);
     const ParameterVector dp = GetParameters(model) - p0;
-    for (int i = 0; i < kNumParams; ++i) {
+    for (int i = 0; i < 35; ++i) {
       (IsLengthParameter(i) ? lengths : angles).push_back(dp(i));
     }
   }
@@ -266,7 +282,7 @@ TEST(ThermalGrowth, ScalesLengthsAndNotAngles) {
   KinematicModel model = nominal;
   effect->ApplyToGeometry(1, &model, nullptr);
   const double scale = 1.0 + 2.3e-5 * 15.0;
-  for (int i = 0; i < kNumLinks; ++i) {
+  for (int i = 0; i < 7; ++i) {
     const DhParameters &a = nominal.links[i].dh, &b = model.links[i].dh;
     // Same single multiplication as the effect; 1e-15 m is ~10 ulps of a length < 0.5 m.
     EXPECT_NEAR(b.d, a.d * scale, 1e-15) << "link " << i + 1;
@@ -284,10 +300,10 @@ TEST(ThermalGrowth, ScalesLengthsAndNotAngles) {
 TEST(JointCompliance, SetsTheDriveOfOnlyTheNamedJoint) {
   const auto effect =
       MakeEffect(Spec("joint_compliance", {{"stiffness_Nm_per_rad", 5e4}}, -1, 2));
-  std::array<JointDrive, kNumJoints> drives;
+  std::vector<JointDrive> drives(6);
   for (JointDrive& d : drives) d.stiffness = 1e5;
   effect->ApplyToDrive(0, &drives);
-  for (int j = 0; j < kNumJoints; ++j) {
+  for (int j = 0; j < 6; ++j) {
     EXPECT_EQ(drives[j].stiffness, j == 2 ? 5e4 : 1e5) << j;  // copied values: exact
     EXPECT_EQ(drives[j].gravity_feedforward, j != 2) << j;
   }
@@ -306,18 +322,18 @@ TEST(EffectFilter, RobotOneOnlyLeavesRobotZeroUntouched) {
   EXPECT_FALSE(GetParameters(model1) == GetParameters(nominal));
 
   const auto noise = MakeEffect(Spec("encoder_noise", {{"sigma_deg", 0.1}}, 1));
-  JointVector reading0 = JointVector::Constant(0.25), reading1 = reading0;
+  JointVector reading0 = JointVector::Constant(6, 0.25), reading1 = reading0;
   noise->ApplyToEncoder(0, &reading0, &rng);
   noise->ApplyToEncoder(1, &reading1, &rng);
-  EXPECT_TRUE(reading0 == JointVector::Constant(0.25));
-  EXPECT_FALSE(reading1 == JointVector::Constant(0.25));
+  EXPECT_TRUE(reading0 == JointVector::Constant(6, 0.25));
+  EXPECT_FALSE(reading1 == JointVector::Constant(6, 0.25));
 
   const auto compliance =
       MakeEffect(Spec("joint_compliance", {{"stiffness_Nm_per_rad", 3e4}}, 1));
-  std::array<JointDrive, kNumJoints> drives0, drives1;
+  std::vector<JointDrive> drives0(6), drives1(6);
   compliance->ApplyToDrive(0, &drives0);
   compliance->ApplyToDrive(1, &drives1);
-  for (int j = 0; j < kNumJoints; ++j) {
+  for (int j = 0; j < 6; ++j) {
     EXPECT_EQ(drives0[j].stiffness, 0.0);
     EXPECT_TRUE(drives0[j].gravity_feedforward);
     EXPECT_EQ(drives1[j].stiffness, 3e4);
@@ -332,10 +348,10 @@ TEST(Effect, HooksAnEffectDoesNotUseChangeNothing) {
   KinematicModel model = nominal;
   backlash->ApplyToGeometry(0, &model, &rng);
   EXPECT_TRUE(GetParameters(model) == GetParameters(nominal));
-  JointVector reading = JointVector::Constant(0.5);
+  JointVector reading = JointVector::Constant(6, 0.5);
   backlash->ApplyToEncoder(0, &reading, &rng);
-  EXPECT_TRUE(reading == JointVector::Constant(0.5));
-  std::array<JointDrive, kNumJoints> drives;
+  EXPECT_TRUE(reading == JointVector::Constant(6, 0.5));
+  std::vector<JointDrive> drives(6);
   backlash->ApplyToDrive(0, &drives);
   EXPECT_EQ(drives[0].stiffness, 0.0);
   const cv::Mat original(4, 4, CV_8UC3, cv::Scalar(10, 20, 30));

@@ -26,9 +26,11 @@ class MjcfWriterTest : public ::testing::Test {
   void SetUp() override { InstallMujocoErrorHandlers(); }
 };
 
-std::array<std::array<JointDrive, kNumJoints>, kNumRobots> Drives(const TwinSpec& spec) {
-  std::array<std::array<JointDrive, kNumJoints>, kNumRobots> drives;
-  for (auto& robot : drives) robot.fill({spec.physics.stiffness, true});
+std::array<std::vector<JointDrive>, kNumRobots> Drives(const TwinSpec& spec) {
+  std::array<std::vector<JointDrive>, kNumRobots> drives;
+  for (int k = 0; k < kNumRobots; ++k) {
+    drives[k].assign(spec.robots[k].model.num_joints(), {spec.physics.stiffness, true});
+  }
   return drives;
 }
 
@@ -50,7 +52,7 @@ struct World {
   }
   // Sets robot `k`'s hinge angles (link side) to q.
   void SetJoints(int k, const JointVector& q) {
-    for (int i = 0; i < kNumJoints; ++i) {
+    for (int i = 0; i < 6; ++i) {
       const int j = Id(mjOBJ_JOINT, "robot" + std::to_string(k + 1) + "_j" + std::to_string(i + 1));
       d->qpos[m->jnt_qposadr[j]] = q(i);
     }
@@ -79,8 +81,8 @@ double AngleBetween(const Transform& A, const Transform& B) {
 }
 
 JointVector RandomJoints(const KinematicModel& m, std::mt19937_64& rng) {
-  JointVector q;
-  for (int i = 0; i < kNumJoints; ++i) {
+  JointVector q(m.num_joints());
+  for (int i = 0; i < m.num_joints(); ++i) {
     q(i) = std::uniform_real_distribution<double>(m.links[i].limits.lower,
                                                    m.links[i].limits.upper)(rng);
   }
@@ -121,7 +123,7 @@ TEST_F(MjcfWriterTest, SitesMatchCalibForwardKinematicsForEveryInstallation) {
       for (int k = 0; k < kNumRobots; ++k) {
         const FrameSet f = ForwardKinematics(spec.robots[k].model, q[k]);
         const Transform& X_WB = spec.robots[k].X_WB;
-        for (int i = 0; i <= kNumLinks; ++i) {
+        for (int i = 0; i <= 7; ++i) {
           const std::string site = "robot" + std::to_string(k + 1) + "_L" + std::to_string(i);
           const Transform expected = X_WB * f.X_BL[i];
           const Transform got = w.SitePose(site);
@@ -170,7 +172,7 @@ TEST_F(MjcfWriterTest, InertialsAreTheModelsExpressedInTheBodyFrames) {
   for (int k = 0; k < kNumRobots; ++k) {
     const KinematicModel& model = spec.robots[k].model;
     const FrameSet f = ForwardKinematics(model, q);
-    for (int i = 0; i < kNumJoints; ++i) {
+    for (int i = 0; i < 6; ++i) {
       const LinkInertia& in = model.links[i].inertia;
       const int b = w.Id(mjOBJ_BODY, "robot" + std::to_string(k + 1) + "_link" + std::to_string(i + 1));
       EXPECT_DOUBLE_EQ(w.m->body_mass[b], in.mass);
@@ -196,7 +198,7 @@ TEST_F(MjcfWriterTest, DrivesJointsAndOptionsFollowTheSpec) {
   TwinSpec spec = DemoTwinSpec();
   spec.physics.timestep_s = 0.001;
   spec.camera.msaa_samples = 2;
-  std::array<std::array<JointDrive, kNumJoints>, kNumRobots> drives = Drives(spec);
+  std::array<std::vector<JointDrive>, kNumRobots> drives = Drives(spec);
   drives[1][2].stiffness = 2e4;
   World w(spec);  // default drives, for the damping check below
   const MjModelPtr m = LoadMjcfFromString(WriteTwinMjcf(spec, Models(spec), drives));
@@ -206,9 +208,9 @@ TEST_F(MjcfWriterTest, DrivesJointsAndOptionsFollowTheSpec) {
   EXPECT_EQ(m->vis.quality.offsamples, 2);
   EXPECT_GE(m->vis.global.offwidth, 1600);
   EXPECT_GE(m->vis.global.offheight, 1200);
-  ASSERT_EQ(m->nu, 2 * kNumJoints);
+  ASSERT_EQ(m->nu, 2 * 6);
   for (int k = 0; k < kNumRobots; ++k) {
-    for (int i = 0; i < kNumJoints; ++i) {
+    for (int i = 0; i < 6; ++i) {
       const std::string s = "robot" + std::to_string(k + 1) + "_";
       const int a = mj_name2id(m.get(), mjOBJ_ACTUATOR, (s + "a" + std::to_string(i + 1)).c_str());
       const int j = mj_name2id(m.get(), mjOBJ_JOINT, (s + "j" + std::to_string(i + 1)).c_str());
@@ -280,8 +282,8 @@ TEST_F(MjcfWriterTest, CellAtRestHasNoContactsAndWristNeighboursAreExcluded) {
               std::string::npos);
   }
   // q = 0 (arm up, forearm level, flange down) is contact-free as well.
-  w.SetJoints(0, JointVector::Zero());
-  w.SetJoints(1, JointVector::Zero());
+  w.SetJoints(0, JointVector::Zero(6));
+  w.SetJoints(1, JointVector::Zero(6));
   mj_forward(w.m.get(), w.d.get());
   EXPECT_EQ(w.d->ncon, 0);
 }
@@ -321,7 +323,7 @@ TEST_F(MjcfWriterTest, RobotRobotToolAndSelfContactsAreDetected) {
   JointVector folded = spec.robots[0].q_initial;
   folded(2) = DegToRad(-139);
   w.SetJoints(0, folded);
-  w.SetJoints(1, JointVector::Zero());
+  w.SetJoints(1, JointVector::Zero(6));
   mj_forward(w.m.get(), w.d.get());
   EXPECT_TRUE(HasPair(ContactBodies(w), "robot1_link2", "robot1_link4")) << w.d->ncon << " contacts";
   // Wrist folded back: the camera (its own body, so the link 4 / link 6 exclusion does not
