@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages the project builds with, only those missing (idempotent and
-# quiet when everything is there). Needs root or sudo when something is missing.
+# Installs the Debian 12 packages the project builds and tests with (Slurm and munge for the
+# Slurm harness test), only those missing (idempotent and quiet when everything is there). Needs
+# root or sudo when something is missing.
 set -euo pipefail
 
 PACKAGES=(
@@ -10,6 +11,7 @@ PACKAGES=(
   liburdfdom-dev liburdfdom-headers-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev
+  slurmctld slurmd slurm-client munge
 )
 
 missing=()
