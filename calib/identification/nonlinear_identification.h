@@ -1,28 +1,20 @@
 // Full nonlinear least-squares identification from optical-axis samples (Zhu et al. 2019,
-// section III.B, eq. 13-15), solved with Ceres: the alternative to the paper's linearized,
-// recursive method (linearized_identification.h), against which it is tested.
+// section III.B, eq. 13-15), solved by the identification engine (engine.h) with one
+// OpticalAxisSet: the alternative to the paper's linearized, recursive method
+// (linearized_identification.h), against which it is tested.
 //
-// Unknowns: the kinematic correction dphi = S * V * z (S = column_scale, V =
-// identifiable_basis of AnalyseObservability with LineConstraintInvariants, z in R^rank), so the
+// Unknowns: the kinematic correction in the identifiable subspace (the engine's SVD of the
+// profiled, weighted Jacobian; LineConstraintInvariants are named unidentifiable), so the
 // unidentifiable combinations keep exactly zero correction; and one nuisance line per optical
-// axis k. Line parameterisation: direction mu_k on ceres::SphereManifold<3>; point
-// c_k = c0_k + N_k s_k with s_k in R^2 and N_k a fixed orthonormal basis of the plane through
-// the initial centroid c0_k perpendicular to the initial direction mu0_k. That plane meets the
-// line in exactly one point while mu_k stays away from perpendicular to mu0_k, so the slide of
-// the point along the line (a gauge the residual cannot see) is removed. Both are initialised
-// by FitLine on the nominal positions.
-// Residual per sample i on axis k (3 rows, metres): (I - mu_k mu_k^T)(p_BE(phi, q_i) - o_i - c_k),
-// the component of the feature point's offset from the line perpendicular to the line, with
-// o_i the offset the camera measured when the servo stopped (AxisSample::offset).
+// axis (optical_axis_residual.h, initialised by FitLine on the nominal positions).
 //
 // Beyond the paper: the scale measurement. The collinearity constraint cannot see a uniform
 // scale of the arm (lines stay lines). When the samples carry depths z_i (distance of P from
 // the camera along the axis, from the board pose and the known square length), each adds one
-// residual w (mu_k . (p_i - c_k) - t_k - z_i): the position of P along the line must follow the
-// measured depth up to one unknown offset t_k per axis (where the camera centre lies on it).
-// mu_k's sign is fixed at the start so that depth grows along it. The scale of the arm then
-// enters the data, and the uniform-scale direction leaves the unidentifiable set; rotation
-// about and translation along base z (link1.theta, link1.d) stay unidentifiable.
+// residual: the position of P along the line must follow the measured depth up to one unknown
+// offset t_k per axis. The scale of the arm then enters the data, and the uniform-scale
+// direction leaves the unidentifiable set; rotation about and translation along base z
+// (link1.theta, link1.d) stay unidentifiable.
 #pragma once
 
 #include <string>
@@ -30,6 +22,7 @@
 
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/kinematic_model.h"
+#include "calib/identification/engine.h"
 #include "calib/identification/linearized_identification.h"
 #include "calib/identification/observability.h"
 #include "calib/measurements/optical_axis_model.h"
@@ -93,6 +86,8 @@ struct NonlinearIdentificationResult {
   /// Identifiability of the nominal model (as in the linearized method); its null space gets
   /// exactly zero correction.
   ObservabilityReport observability;
+  /// The engine's result: 1-sigma of every parameter, correlations, residual variance.
+  IdentificationResult engine;
 };
 
 /// Identifies the passive robot's 35 link parameters by minimizing the sum of squared
@@ -103,8 +98,8 @@ NonlinearIdentificationResult IdentifyNonlinear(
     const NonlinearIdentificationOptions& options = {});
 
 /// Perpendicular residual (3 rows [m]) of one sample, evaluated in double through the same
-/// templated forward kinematics the solver differentiates; `phi` the 35 parameters, `point`
-/// and unit `direction` the line. Exposed for tests.
+/// residual functor the solver differentiates (OpticalAxisResidual); `phi` the geometric
+/// parameters, `point` and unit `direction` the line. Exposed for tests.
 Vector3 AxisResidual(const KinematicModel& model_without_params, const ParameterVector& phi,
                      const JointVector& q, const Vector3& point, const Vector3& direction);
 

@@ -12,10 +12,6 @@
 
 namespace twin {
 
-/// Characteristic length [m] dividing the length columns' units: Phi's length columns are
-/// multiplied by it so that a metre and a radian weigh about alike for a ~1 m arm (a 1 mrad
-/// error moves the tool about 1 mm). Without it the SVD would mix m and rad arbitrarily.
-constexpr double kObservabilityCharacteristicLength = 1.0;
 
 /// Result of AnalyseObservability. All bases are in scaled parameter coordinates x, where a
 /// physical correction is dphi = column_scale.asDiagonal() * x (SI units: m, rad, ...).

@@ -15,6 +15,7 @@
 
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/kinematic_model.h"
+#include "calib/model/measurement_context.h"
 
 namespace twin {
 
@@ -31,6 +32,22 @@ struct AxisSample {
   /// board's pose (known square length); NaN when not measured. Only differences between
   /// samples of one axis are used (the scale measurement of IdentifyNonlinear).
   double depth = std::numeric_limits<double>::quiet_NaN();
+  /// Sign of each joint's last motion before the reading (empty: unknown); see
+  /// MeasurementContext.
+  JointVector approach;
+  double time_s = std::numeric_limits<double>::quiet_NaN();  ///< time stamp [s]; NaN unknown
+  /// Temperature change from the nominal model's reference [K]; NaN unknown.
+  double temperature_delta_K = std::numeric_limits<double>::quiet_NaN();
+
+  /// The sample's measurement context (readings, approach, time, temperature).
+  MeasurementContext context() const {
+    MeasurementContext c;
+    c.q = q;
+    c.approach = approach;
+    c.time_s = time_s;
+    c.temperature_delta_K = temperature_delta_K;
+    return c;
+  }
 };
 
 /// The point on the axis for a sample: p_BE(q) - offset [m, in B].

@@ -19,6 +19,11 @@ namespace twin {
 
 using ParameterVector = Eigen::VectorXd;  ///< SI units (m, rad)
 
+/// Characteristic length [m] dividing the length columns' units: Phi's length columns are
+/// multiplied by it so that a metre and a radian weigh about alike for a ~1 m arm (a 1 mrad
+/// error moves the tool about 1 mm). Without it the SVD would mix m and rad arbitrarily.
+constexpr double kObservabilityCharacteristicLength = 1.0;
+
 /// Flat index of parameter `which` of link `link` (1-based, 1..N+1).
 int ParameterIndex(int link, DhParameter which);
 

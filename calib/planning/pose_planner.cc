@@ -234,7 +234,12 @@ double PoseSetFitness(const KinematicModel& passive,
                       const std::vector<Vector3>& directions, double rank_tolerance) {
   std::vector<AxisSample> samples;
   for (size_t k = 0; k < q_passive.size(); ++k) {
-    for (const JointVector& q : q_passive[k]) samples.push_back({static_cast<int>(k), q});
+    for (const JointVector& q : q_passive[k]) {
+      AxisSample s;
+      s.axis = static_cast<int>(k);
+      s.q = q;
+      samples.push_back(s);
+    }
   }
   const MisalignedErrorStack stack = StackMisalignedErrors(passive, samples, directions);
   const ObservabilityReport report = AnalyseObservability(

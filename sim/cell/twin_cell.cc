@@ -90,6 +90,8 @@ struct TwinCell::Impl {
   std::vector<std::unique_ptr<Effect>> effects;
   std::array<KinematicModel, kNumRobots> models;
   std::array<std::vector<JointDrive>, kNumRobots> drives;
+  std::array<MountCompliance, kNumRobots> mounts;  // target brackets (mount deflection)
+  std::vector<int> mount_dofs;                     // their slide joints' dof addresses
   std::string mjcf;
   MjModelPtr m;
   MjDataPtr d;
@@ -188,6 +190,9 @@ struct TwinCell::Impl {
       if (robot >= 0 && k != robot) continue;
       for (int i = 0; i < Joints(k); ++i) speed = std::max(speed, std::abs(d->qvel[dadr[k][i]]));
     }
+    // A compliant target bracket must come to rest too (it moves with either robot's motion
+    // only through its own robot, but it is cheap to always include).
+    for (int dof : mount_dofs) speed = std::max(speed, std::abs(d->qvel[dof]));
     return speed;
   }
 
@@ -293,7 +298,7 @@ struct TwinCell::Impl {
   void Build() {
     hand_renderer.reset();
     overview_renderer.reset();
-    mjcf = WriteTwinMjcf(spec, models, drives);
+    mjcf = WriteTwinMjcf(spec, models, drives, mounts);
     d.reset();
     m = LoadMjcfFromString(mjcf);
     d.reset(mj_makeData(m.get()));
@@ -313,6 +318,13 @@ struct TwinCell::Impl {
       }
       for (int i = 0; i <= n + 1; ++i) site_L[k][i] = Id(mjOBJ_SITE, p + "L" + std::to_string(i));
       site_tip[k] = Id(mjOBJ_SITE, p + "tip");
+    }
+    mount_dofs.clear();
+    for (int k = 0; k < kNumRobots; ++k) {
+      for (const char* axis : {"x", "y", "z"}) {
+        const int j = mj_name2id(m.get(), mjOBJ_JOINT, (Prefix(k) + "mount_" + axis).c_str());
+        if (j >= 0) mount_dofs.push_back(m->jnt_dofadr[j]);
+      }
     }
     camera = Id(mjOBJ_CAMERA, kHandCameraName);
     board_body = Id(mjOBJ_BODY, Prefix(spec.board.robot) + "board");
@@ -343,6 +355,7 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
     for (const auto& e : s.effects) e->ApplyToGeometry(k, &s.models[k], &geometry_rng);
     s.drives[k].assign(s.models[k].num_joints(), {spec.physics.stiffness, true});
     for (const auto& e : s.effects) e->ApplyToDrive(k, &s.drives[k]);
+    for (const auto& e : s.effects) e->ApplyToMount(k, &s.mounts[k]);
   }
   if (spec.camera.distortion.Any()) {
     s.distortion.emplace(spec.camera.intrinsics, spec.camera.distortion);

@@ -7,6 +7,7 @@ namespace twin {
 // The do-nothing defaults: an effect overrides only the hooks it acts through.
 void Effect::ApplyToGeometry(int, KinematicModel*, std::mt19937_64*) const {}
 void Effect::ApplyToDrive(int, std::vector<JointDrive>*) const {}
+void Effect::ApplyToMount(int, MountCompliance*) const {}
 void Effect::ApplyToTransmission(int, const JointVector&, const JointVector&,
                                  JointVector*) const {}
 void Effect::ApplyToEncoder(int, JointVector*, std::mt19937_64*) const {}

@@ -22,6 +22,13 @@ struct JointDrive {
   bool gravity_feedforward = true; ///< false: the link sags by gravity torque / stiffness
 };
 
+/// Compliance of the bracket that holds a robot's mounted target (the chessboard) on its
+/// flange: the static deflection of the target under 1 g along each flange axis [m]. Zero: rigid.
+struct MountCompliance {
+  Vector3 deflection_F = Vector3::Zero();  ///< along x_F, y_F, z_F [m]
+  bool any() const { return deflection_F.cwiseAbs().maxCoeff() > 0.0; }
+};
+
 class Effect {
  public:
   virtual ~Effect() = default;
@@ -29,6 +36,8 @@ class Effect {
   virtual const EffectSpec& spec() const = 0;
   /// Static change of robot `robot`'s true geometry, before the world is built.
   virtual void ApplyToGeometry(int robot, KinematicModel* model, std::mt19937_64* rng) const;
+  /// Compliance of the target mount on robot `robot`'s flange.
+  virtual void ApplyToMount(int robot, MountCompliance* mount) const;
   /// Drive settings of robot `robot`'s joints.
   virtual void ApplyToDrive(int robot, std::vector<JointDrive>* drives) const;
   /// Adds to `link_offset` the link-side minus motor-side angle of each joint for motor angles

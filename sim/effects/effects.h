@@ -25,6 +25,8 @@ std::unique_ptr<Effect> MakeBacklash(const EffectSpec& spec);
 std::unique_ptr<Effect> MakeEncoderQuantization(const EffectSpec& spec);
 /// "encoder_noise": Gaussian noise on joint readings.
 std::unique_ptr<Effect> MakeEncoderNoise(const EffectSpec& spec);
+/// "mount_deflection": the target's bracket deflects under gravity (spring-mounted target).
+std::unique_ptr<Effect> MakeMountDeflection(const EffectSpec& spec);
 /// "image_noise": Gaussian grey-level noise on camera images.
 std::unique_ptr<Effect> MakeImageNoise(const EffectSpec& spec);
 

@@ -24,6 +24,7 @@ constexpr Registration kRegistry[] = {
     {"encoder_quantization", effects::MakeEncoderQuantization},
     {"encoder_noise", effects::MakeEncoderNoise},
     {"image_noise", effects::MakeImageNoise},
+    {"mount_deflection", effects::MakeMountDeflection},
 };
 
 // Checks the fields every effect shares: robot -1, 0..kNumRobots-1; joint -1, 0..kMaxJoints-1

@@ -210,8 +210,32 @@ std::string LinkGeoms(const KinematicModel& m, int robot, int i) {
 }
 
 // Tool, camera, board and tip bodies on the flange (body 6 frame U6; X_U6F = M_6).
+// Three spring-loaded slide joints along the flange axes, for a target body of mass `mass` whose
+// frame is X_FT in the flange: static deflection `d` (per flange axis) under 1 g.
+std::string MountJoints(const std::string& p, const MountCompliance& mount, double mass,
+                        const Matrix3& R_FT, double dt) {
+  if (!mount.any()) return "";
+  std::string x;
+  const char* axes[3] = {"x", "y", "z"};
+  for (int i = 0; i < 3; ++i) {
+    const double d = mount.deflection_F(i);
+    if (!(d > 0.0)) continue;
+    const double k = mass * 9.81 / d;  // MJCF gravity is 9.81 m/s^2 (WriteTwinMjcf)
+    const double armature =
+        std::max(0.0, k * dt * dt / (kMaxMountOmegaDt * kMaxMountOmegaDt) - mass);
+    const double damping = 2.0 * std::sqrt(k * (mass + armature));
+    const Vector3 axis = R_FT.transpose().col(i);  // flange axis i in the board frame
+    x += "<joint name=\"" + p + "mount_" + axes[i] + "\" type=\"slide\" pos=\"0 0 0\" axis=\"" +
+         Vec(axis) + "\" limited=\"false\" stiffness=\"" + Num(k) +
+         "\" springref=\"0\" damping=\"" + Num(damping) + "\" armature=\"" + Num(armature) +
+         "\"/>\n";
+  }
+  return x;
+}
+
 std::string FlangeBodies(const TwinSpec& spec, const Intrinsics& canvas,
-                         const KinematicModel& m, int robot, const Transform& X_UF) {
+                         const KinematicModel& m, int robot, const Transform& X_UF,
+                         const MountCompliance& mount) {
   const std::string p = Prefix(robot);
   std::ostringstream x;
   if (m.tool().inertia.mass > 0.0) {
@@ -242,6 +266,8 @@ std::string FlangeBodies(const TwinSpec& spec, const Intrinsics& canvas,
     // The board's collidable plate takes the robot's collision bits from the child class.
     x << "<body name=\"" << p << "board\" childclass=\"" << p << "contact\" "
       << PoseAttrs(X_UF * spec.board.X_FT) << ">\n"
+      << MountJoints(p, mount, spec.board.mass_kg, spec.board.X_FT.linear(),
+                     spec.physics.timestep_s)
       << BoardGeomsMjcf(spec.board, p + "board_") << "</body>\n";
   }
   const TipSpec& tip = spec.tips[robot];
@@ -262,7 +288,8 @@ std::string FlangeBodies(const TwinSpec& spec, const Intrinsics& canvas,
 }
 
 std::string Robot(const TwinSpec& spec, const Intrinsics& canvas, const KinematicModel& m,
-                  const std::vector<JointDrive>& drives, int robot) {
+                  const std::vector<JointDrive>& drives, const MountCompliance& mount,
+                  int robot) {
   const std::string p = Prefix(robot);
   const PhysicsSpec& phys = spec.physics;
   const std::vector<double> inertia = EffectiveInertia(spec, robot, m);
@@ -288,7 +315,7 @@ std::string Robot(const TwinSpec& spec, const Intrinsics& canvas, const Kinemati
       X_parent_child = M * RotZ(m.links[i + 1].dh.theta_offset);
     } else {
       x << Site(p + "L" + std::to_string(n + 1), M * LinkTransform(m.tool().dh, 0.0))
-        << FlangeBodies(spec, canvas, m, robot, M);
+        << FlangeBodies(spec, canvas, m, robot, M, mount);
     }
   }
   for (int i = 0; i < n; ++i) x << "</body>\n";
@@ -301,7 +328,8 @@ std::string Robot(const TwinSpec& spec, const Intrinsics& canvas, const Kinemati
 double CriticalDamping(double kp, double inertia) { return 2.0 * std::sqrt(kp * inertia); }
 
 std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel, 2>& true_models,
-                          const std::array<std::vector<JointDrive>, 2>& drives) {
+                          const std::array<std::vector<JointDrive>, 2>& drives,
+                          const std::array<MountCompliance, 2>& mounts) {
   const Intrinsics canvas =
       DistortionMapper(spec.camera.intrinsics, spec.camera.distortion).canvas();
   const Vector3 mid =
@@ -340,7 +368,9 @@ std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel,
     << "<light name=\"fill\" directional=\"true\" castshadow=\"false\" pos=\"" << Num(mid.x())
     << " " << Num(mid.y()) << " 4\" dir=\"-0.4 -0.5 -0.6\" diffuse=\"0.25 0.25 0.25\""
     << " specular=\"0 0 0\"/>\n";
-  for (int k = 0; k < kNumRobots; ++k) x << Robot(spec, canvas, true_models[k], drives[k], k);
+  for (int k = 0; k < kNumRobots; ++k) {
+    x << Robot(spec, canvas, true_models[k], drives[k], mounts[k], k);
+  }
   x << "</worldbody>\n<contact>\n";
   for (int k = 0; k < kNumRobots; ++k) {
     // MuJoCo's parent filter skips pairs with a static body: the base needs an explicit one.

@@ -35,8 +35,15 @@ constexpr const char* kHandCameraName = "hand_camera";
 double CriticalDamping(double kp, double inertia);
 
 /// The whole cell as MJCF text. `true_models` replace spec.robots[k].model (they carry the
-/// geometry effects); `drives` give each joint's position-actuator gain kp [N m/rad].
+/// geometry effects); `drives` give each joint's position-actuator gain kp [N m/rad]; `mounts`
+/// the compliance of each robot's target bracket: a compliant board hangs on three slide
+/// joints "robot<k>_mount_x/y/z" along the flange axes, springs of stiffness m g / d.
 std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel, 2>& true_models,
-                          const std::array<std::vector<JointDrive>, 2>& drives);
+                          const std::array<std::vector<JointDrive>, 2>& drives,
+                          const std::array<MountCompliance, 2>& mounts = {});
+
+/// Largest omega * timestep of a mount's spring (armature is added to stay below it): the
+/// explicit stiffness step of MuJoCo's Euler integrator is well inside its stability limit.
+constexpr double kMaxMountOmegaDt = 1.0;
 
 }  // namespace twin

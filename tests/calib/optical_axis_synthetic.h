@@ -74,7 +74,9 @@ inline OpticalAxisScenario MakeOpticalAxisScenario(std::uint64_t seed, double jo
                                  std::to_string(i) + " unreachable: " + best.reason);
       }
       seed_q = best.q;
-      AxisSample sample{k, best.q};
+      AxisSample sample;
+      sample.axis = k;
+      sample.q = best.q;
       for (int j = 0; j < 6; ++j) sample.q(j) += joint_noise * noise(rng);
       s.samples.push_back(sample);
     }

@@ -52,7 +52,9 @@ TEST(AxisSplit, BestConditionedPicksTheSubsetWithTheLargestSmallestSingularValue
     if (Holds(axes, 0) && Holds(axes, 4)) pair_best = std::max(pair_best, sigma);
   }
   for (const auto& [axes, sigma] : candidates) {
-    if (axes == cal) EXPECT_EQ(sigma, best);
+    if (axes == cal) {
+      EXPECT_EQ(sigma, best);
+    }
   }
   // The repeated pair is never the choice, and every subset holding it is worse than it.
   EXPECT_FALSE(Holds(cal, 0) && Holds(cal, 4));

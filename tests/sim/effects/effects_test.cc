@@ -67,6 +67,7 @@ std::map<std::string, EffectSpec> ValidSpecs() {
       {"encoder_quantization", Spec("encoder_quantization", {{"counts_per_rev", 1 << 17}})},
       {"encoder_noise", Spec("encoder_noise", {{"sigma_deg", 0.001}}, 0)},
       {"image_noise", Spec("image_noise", {{"sigma_levels", 2.0}})},
+      {"mount_deflection", Spec("mount_deflection", {{"deflection_x_mm", 0.04}}, 1)},
   };
 }
 
