@@ -155,13 +155,13 @@ TEST_F(TermsVsTwin, TransmissionErrorTermEqualsTheTwinsGearError) {
   // A sin(h q + phi) = A cos(phi) sin(h q) + A sin(phi) cos(h q).
   const double a4 = DegToRad(0.05), phi = DegToRad(30.0), a2 = DegToRad(0.02);
   m.term_values << a4 * std::cos(phi), a4 * std::sin(phi), a2, 0.0;
+  double largest = 0.0;  // how far the rigid chain misses
   for (const JointVector& target : Targets()) {
     ASSERT_EQ(cell.MoveTo(0, target).status, MoveStatus::kSettled);
     const MeasurementContext c = ContextOf(cell.ReadEncoders(0));
     EXPECT_LT((TwinTool(cell, 0) - TermTool(m, c, spec.robots[0].X_WB)).norm(), kAgreement);
-    // The gear error is visible: the rigid chain misses the tool by more than 0.05 mm.
-    EXPECT_GT((TwinTool(cell, 0) - TermTool(MakeRobotModel(chain), c, spec.robots[0].X_WB)).norm(),
-              5e-5);
+    largest = std::max(
+        largest, (TwinTool(cell, 0) - TermTool(MakeRobotModel(chain), c, spec.robots[0].X_WB)).norm());
     JointVector q(6);
     double s;
     const Eigen::VectorXd p = GetParameters(m);
@@ -169,6 +169,7 @@ TEST_F(TermsVsTwin, TransmissionErrorTermEqualsTheTwinsGearError) {
     // 1e-11 rad: the twin's link angle settles to < 1e-11 rad of its target here.
     EXPECT_LT((q - cell.Truth().q_link[0]).cwiseAbs().maxCoeff(), 1e-11);
   }
+  EXPECT_GT(largest, 1e-4) << "the gear errors must be visible";
 }
 
 TEST_F(TermsVsTwin, BacklashTermTakesTheSideOfTheApproach) {
