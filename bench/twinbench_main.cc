@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "bench/runs/calibration_run.h"
+#include "bench/runs/synthetic_measurements.h"
 #include "bench/io/model_loader.h"
 #include "bench/runs/twin_commands.h"
 #include "bench/io/urdf_model.h"
@@ -229,6 +230,15 @@ int main(int argc, char** argv) {
                        "board frame in the flange: x,y,z,roll,pitch,yaw [mm, deg] (default 0)");
   identify->add_option("--out", identify_options.out_dir, "output folder")->required();
 
+  SynthesizeOptions synth_options;
+  auto* synth = app.add_subcommand(
+      "synthesize-measurements",
+      "write a synthetic optical-axis measurements.csv (benchmarks of `identify`)");
+  synth->add_option("--model", synth_options.model, "nominal model (.yaml/.urdf)")->required();
+  synth->add_option("--rows", synth_options.rows, "measurement rows (15 to 1000000)");
+  synth->add_option("--seed", synth_options.seed, "seed of the true geometry and the noise");
+  synth->add_option("--out", synth_options.out, "output CSV")->required();
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -245,6 +255,7 @@ int main(int argc, char** argv) {
     if (*bench) return RunTwinBenchmark(bench_options);
     if (*run) return RunCalibrationScenario(run_options);
     if (*identify) return RunIdentify(identify_options);
+    if (*synth) return RunSynthesizeMeasurements(synth_options);
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitUserError;

@@ -325,7 +325,7 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
         {"method", rc.method},
         {"time_s", rc.identification_s},
         {"linearized",
-         {{"status", ToString(lin.status)}, {"iterations", lin.iterations},
+         {{"status", ToString(lin.status)}, {"reason", lin.reason}, {"iterations", lin.iterations},
           {"rank", lin.observability.rank}, {"eps_history_mm", eps},
           {"calibration_after_mm", Mm(lin.mean_misaligned_error_after)}}},
         {"nonlinear",
@@ -345,6 +345,7 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                          {"rms_depth_residual_mm", Mm(rc.refit_result.rms_depth_residual)}}
                   : json(nullptr)},
         {"linearized_vs_ceres_max_parameter_difference",
+         lin.status == LinearizedIdentificationStatus::kSkipped ? json(nullptr) : json
          {{"mm", 1000 * [&] {
              double m = 0;
              for (int i = 0; i < lin.correction.size(); ++i)

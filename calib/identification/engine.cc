@@ -297,7 +297,8 @@ IdentificationResult Identify(const RobotModel& start, const std::vector<Measure
         std::vector<double> r(rows);
         double cost = 0;
         a.problem->EvaluateResidualBlock(id, false, &cost, r.data(), nullptr);
-        ssr += 2.0 * cost;
+        const int end = g.num_rows < 0 ? rows : std::min(rows, g.first_row + g.num_rows);
+        for (int i = g.first_row; i < end; ++i) ssr += r[i] * r[i];
       }
       const double factor = std::sqrt(ssr / g.redundancy);  // weighted sigma of the group
       if (factor > 0 && std::isfinite(factor)) {

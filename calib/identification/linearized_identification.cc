@@ -73,6 +73,7 @@ const char* ToString(LinearizedIdentificationStatus status) {
   switch (status) {
     case LinearizedIdentificationStatus::kConverged: return "converged";
     case LinearizedIdentificationStatus::kMaxIterations: return "max_iterations";
+    case LinearizedIdentificationStatus::kSkipped: return "skipped";
   }
   return "unknown";
 }

@@ -33,9 +33,10 @@ void ValidateLinearizedIdentificationOptions(const LinearizedIdentificationOptio
 enum class LinearizedIdentificationStatus {
   kConverged,      ///< eps stopped decreasing (no LM step lowers it any more)
   kMaxIterations,  ///< max_iterations reached while eps was still decreasing
+  kSkipped,        ///< not run (the caller's choice, e.g. too many pairs; see reason)
 };
 
-/// Name of a status for messages ("converged", "max_iterations").
+/// Name of a status for messages ("converged", "max_iterations", "skipped").
 const char* ToString(LinearizedIdentificationStatus status);
 
 /// Outcome of IdentifyFromOpticalAxes.

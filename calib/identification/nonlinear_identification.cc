@@ -57,11 +57,11 @@ Vector3 AxisResidual(const KinematicModel& model, const ParameterVector& phi,
   Eigen::Matrix<double, 3, 2> N;
   N.col(0) = mu.unitOrthogonal();
   N.col(1) = mu.cross(N.col(0));
-  const OpticalAxisResidual f{m, ContextOf(q), Vector3::Zero(), point, N, weight};
+  const OpticalAxisLine f{Vector3::Zero(), point, N, weight};
+  const Vector3 p = RobotEndPoseT<double>(m, phi.data(), ContextOf(q)).p;
   const double s[2] = {0.0, 0.0};
-  const double* blocks[3] = {phi.data(), s, mu.data()};
   Vector3 r;
-  f(blocks, r.data());
+  f(p.data(), s, mu.data(), r.data());
   return r;
 }
 

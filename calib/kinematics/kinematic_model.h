@@ -68,7 +68,9 @@ struct Link {
 struct KinematicModel {
   /// A chain of `num_joints` jointed links plus the tool link, all parameters zero, limits
   /// [-pi, pi], links named link1..linkN and "tool".
-  explicit KinematicModel(int num_joints = kDefaultJoints);
+  explicit KinematicModel(int num_joints);
+  /// A six-axis chain (kDefaultJoints), as above.
+  KinematicModel() : KinematicModel(kDefaultJoints) {}
 
   std::string name;                         ///< robot name, prefix of parameter names
   Transform X_BL0 = Transform::Identity();  ///< base frame to DH frame 0

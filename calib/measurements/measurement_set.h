@@ -28,7 +28,9 @@ struct NuisanceBlock {
 /// the engine may re-estimate sigma from their sum of squares after a first solve.
 struct ResidualGroup {
   std::string name;                           ///< e.g. "perpendicular", "depth", "tracker"
-  std::vector<ceres::ResidualBlockId> blocks; ///< the group's residual blocks
+  std::vector<ceres::ResidualBlockId> blocks; ///< the residual blocks holding the group's rows
+  int first_row = 0;                          ///< its rows in each block: first_row ..
+  int num_rows = -1;                          ///< .. first_row + num_rows - 1 (-1: to the end)
   double* weight = nullptr;                   ///< 1 / sigma [1/m], read by the group's functors
   /// Degrees of freedom of the group: its independent residual rows minus the nuisance
   /// parameters it alone determines (the model's are shared and neglected).

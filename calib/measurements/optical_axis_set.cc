@@ -4,6 +4,7 @@
 
 #include "calib/common/errors.h"
 #include "calib/measurements/optical_axis_residual.h"
+#include "calib/measurements/point_measurement_cost.h"
 #include "calib/model/parameters.h"
 
 namespace twin {
@@ -109,34 +110,25 @@ void OpticalAxisSet::Initialize(const RobotModel& model) {
 
 void OpticalAxisSet::AddResiduals(const RobotModel& model, double* params,
                                   ceres::Problem* problem) {
-  const int n = model.num_parameters();
-  perp_blocks_.clear();
-  depth_blocks_.clear();
+  blocks_.clear();
   for (const AxisSample& smp : samples_) {
     const int k = smp.axis;
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<OpticalAxisResidual, kJetStride>(
-        new OpticalAxisResidual{model, smp.context(), smp.offset, c0_[k], N_[k], w_perp_});
-    cost->AddParameterBlock(n);
-    cost->AddParameterBlock(2);
-    cost->AddParameterBlock(3);
-    cost->SetNumResiduals(3);
+    const OpticalAxisLine line{smp.offset, c0_[k], N_[k], w_perp_};
+    // A Huber loss on the whole block (the perpendicular rows dominate it).
     ceres::LossFunction* loss =
         options_.huber_scale > 0.0
             ? new ceres::HuberLoss(options_.huber_scale / options_.sigma_perpendicular)
             : nullptr;
-    perp_blocks_.push_back(
-        problem->AddResidualBlock(cost, loss, {params, s_[k].data(), mu_[k].data()}));
     if (depth_) {
-      auto* dcost = new ceres::DynamicAutoDiffCostFunction<OpticalAxisDepthResidual, kJetStride>(
-          new OpticalAxisDepthResidual{model, smp.context(), smp.offset, c0_[k], N_[k], smp.depth,
-                                       w_depth_});
-      dcost->AddParameterBlock(n);
-      dcost->AddParameterBlock(2);
-      dcost->AddParameterBlock(3);
-      dcost->AddParameterBlock(1);
-      dcost->SetNumResiduals(1);
-      depth_blocks_.push_back(problem->AddResidualBlock(
-          dcost, nullptr, {params, s_[k].data(), mu_[k].data(), &t_[k]}));
+      auto* cost = new PointMeasurementCost<OpticalAxisLineDepth, 4, 2, 3, 1>(
+          model, smp.context(), new OpticalAxisLineDepth{line, smp.depth, w_depth_});
+      blocks_.push_back(problem->AddResidualBlock(
+          cost, loss, {params, s_[k].data(), mu_[k].data(), &t_[k]}));
+    } else {
+      auto* cost = new PointMeasurementCost<OpticalAxisLine, 3, 2, 3>(
+          model, smp.context(), new OpticalAxisLine(line));
+      blocks_.push_back(
+          problem->AddResidualBlock(cost, loss, {params, s_[k].data(), mu_[k].data()}));
     }
   }
   for (int k = 0; k < num_axes_; ++k) {
@@ -160,8 +152,8 @@ std::vector<ResidualGroup> OpticalAxisSet::groups() {
   // A perpendicular residual has 2 independent rows (it lies in the plane normal to the line);
   // each line takes 4 of them. A depth has 1 row; each axis offset takes 1.
   std::vector<ResidualGroup> out = {
-      {"perpendicular", perp_blocks_, &w_perp_, std::max(0, 2 * n - 4 * num_axes_)}};
-  if (depth_) out.push_back({"depth", depth_blocks_, &w_depth_, std::max(0, n - num_axes_)});
+      {"perpendicular", blocks_, 0, 3, &w_perp_, std::max(0, 2 * n - 4 * num_axes_)}};
+  if (depth_) out.push_back({"depth", blocks_, 3, 1, &w_depth_, std::max(0, n - num_axes_)});
   return out;
 }
 

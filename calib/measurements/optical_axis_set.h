@@ -70,7 +70,7 @@ class OpticalAxisSet : public MeasurementSet {
   std::vector<Vector3> mu_;
   std::vector<double> t_;
   double w_perp_ = 0.0, w_depth_ = 0.0;
-  std::vector<ceres::ResidualBlockId> perp_blocks_, depth_blocks_;
+  std::vector<ceres::ResidualBlockId> blocks_;
 };
 
 }  // namespace twin

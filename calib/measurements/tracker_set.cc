@@ -5,6 +5,7 @@
 #include <Eigen/SVD>
 
 #include "calib/common/errors.h"
+#include "calib/measurements/point_measurement_cost.h"
 #include "calib/measurements/tracker_point_residual.h"
 
 namespace twin {
@@ -95,14 +96,9 @@ Transform TrackerSet::X_TB() const {
 
 void TrackerSet::AddResiduals(const RobotModel& model, double* params, ceres::Problem* problem) {
   blocks_.clear();
-  const int n = model.num_parameters();
   for (const TrackerPoint& p : points_) {
-    auto* cost = new ceres::DynamicAutoDiffCostFunction<TrackerPointResidual, kJetStride>(
-        new TrackerPointResidual{model, p.context, p.p_T, p.sigma, weight_});
-    cost->AddParameterBlock(n);
-    cost->AddParameterBlock(4);
-    cost->AddParameterBlock(3);
-    cost->SetNumResiduals(3);
+    auto* cost = new PointMeasurementCost<TrackerPointResidual, 3, 4, 3>(
+        model, p.context, new TrackerPointResidual{p.p_T, p.sigma, weight_});
     blocks_.push_back(problem->AddResidualBlock(cost, nullptr, {params, q_TB_.data(), p_TB_.data()}));
   }
   problem->SetManifold(q_TB_.data(), new ceres::EigenQuaternionManifold());
@@ -113,7 +109,7 @@ std::vector<NuisanceBlock> TrackerSet::nuisance() {
 }
 
 std::vector<ResidualGroup> TrackerSet::groups() {
-  return {{"tracker", blocks_, &weight_, std::max(0, 3 * size() - 6)}};
+  return {{"tracker", blocks_, 0, -1, &weight_, std::max(0, 3 * size() - 6)}};
 }
 
 std::vector<Vector3> TrackerSet::Residuals(const RobotModel& model) const {

@@ -64,6 +64,8 @@ class ErrorTerm {
   virtual std::string Requires(const MeasurementContext& context) const = 0;
   /// True for terms with a gravity-sag stage (stage 3).
   virtual bool sags_under_gravity() const { return false; }
+  /// True for terms with a tool-offset stage (stage 4).
+  virtual bool offsets_tool() const { return false; }
 
   /// Stage 1: adds to the link angles q (N entries) [rad].
   virtual void OffsetJoints(const double* p, const MeasurementContext& c, double* q) const = 0;

@@ -98,6 +98,10 @@ MisalignedSummary Misaligned(const KinematicModel& before, const KinematicModel&
 
 void ValidateOpticalAxisOptions(const OpticalAxisOptions& o) {
   const std::string where = "OpticalAxisOptions";
+  if (o.linearized_max_pairs < 0) {
+    throw InputError(where + ".linearized_max_pairs",
+                     "must be >= 0, got " + std::to_string(o.linearized_max_pairs));
+  }
   if (o.robots.empty() || o.robots.size() > 2) {
     throw InputError(where + ".robots", "expected one or two robots to calibrate, got " +
                                             std::to_string(o.robots.size()));
@@ -237,8 +241,25 @@ void IdentifyRobot(const std::vector<int>& calibration_axes,
                          "least 2 optical axes (see the skipped poses and axes above)");
   }
   const auto t0 = Clock::now();
-  // Eq. 45-49: the paper's recursive linearized LM.
-  rc->linearized = IdentifyFromOpticalAxes(rc->nominal, cal, options.linearized);
+  // Eq. 45-49: the paper's recursive linearized LM, when its pair stack stays reasonable.
+  std::vector<long long> per_axis_count;
+  for (const AxisSample& s : cal) {
+    if (static_cast<int>(per_axis_count.size()) <= s.axis) per_axis_count.resize(s.axis + 1, 0);
+    ++per_axis_count[s.axis];
+  }
+  long long pairs = 0;
+  for (long long n : per_axis_count) pairs += n * (n - 1) / 2;
+  if (pairs <= options.linearized_max_pairs) {
+    rc->linearized = IdentifyFromOpticalAxes(rc->nominal, cal, options.linearized);
+  } else {
+    rc->linearized = LinearizedIdentificationResult{};
+    rc->linearized.status = LinearizedIdentificationStatus::kSkipped;
+    rc->linearized.reason = std::to_string(pairs) + " sample pairs exceed linearized_max_pairs = " +
+                            std::to_string(options.linearized_max_pairs) +
+                            " (eq. 22 is quadratic in the samples); the engine alone identifies";
+    rc->linearized.model = rc->nominal;
+    rc->linearized.correction = ParameterVector::Zero(rc->nominal.num_parameters());
+  }
   // Ceres with nuisance lines (and the scale measurement when depths were recorded).
   rc->nonlinear = IdentifyNonlinear(rc->nominal, cal, options.nonlinear);
   if (rc->nonlinear.status != NonlinearIdentificationStatus::kFailed) {

@@ -71,6 +71,11 @@ struct OpticalAxisOptions {
   /// (the kinematic error changes little over 20 mm), so the servo starts close.
   bool carry_correction = true;
   LinearizedIdentificationOptions linearized;  ///< the paper's method
+  /// The paper's method stacks every pair of samples of an axis (eq. 22: 3 rows of 5 (N + 1)
+  /// doubles each, ~840 bytes per pair for a six-axis arm), quadratic in the samples; above
+  /// this many pairs it is skipped (status "skipped") and the engine alone identifies, whose
+  /// cost is linear in the samples.
+  int linearized_max_pairs = 200000;
   NonlinearIdentificationOptions nonlinear;    ///< Ceres, with the scale measurement
   int kept_images = 3;               ///< servo before/after image pairs kept per robot
   /// Progress lines (one per aligned pose, stage changes); may be empty.

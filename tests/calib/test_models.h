@@ -40,6 +40,26 @@ inline KinematicModel ReinovoLikeModel(int robot = 0) {
   return m;
 }
 
+/// A redundant 7-joint arm (KUKA LBR iiwa 7-like standard DH: a = 0, d = 0.36, 0, 0.42, 0,
+/// 0.4, 0, 0.126 m, alternating +-90 deg twists), with plausible masses; tool link identity.
+inline KinematicModel SevenJointModel() {
+  KinematicModel m(7);
+  m.name = "iiwa";
+  const double d[7] = {0.36, 0, 0.42, 0, 0.4, 0, 0.126};
+  const double alpha[7] = {-90, 90, 90, -90, -90, 90, 0};
+  const double limit[7] = {170, 120, 170, 120, 170, 120, 175};
+  const double mass[7] = {4.0, 4.0, 3.0, 2.7, 1.7, 1.8, 0.3};
+  for (int i = 0; i < 7; ++i) {
+    Link& l = m.links[i];
+    l.dh = {0.0, d[i], 0.0, DegToRad(alpha[i]), 0.0};
+    l.limits = {DegToRad(-limit[i]), DegToRad(limit[i])};
+    l.inertia.mass = mass[i];
+    l.inertia.p_LiCom = Vector3(0.0, -0.03, 0.02);
+    l.inertia.I_Com = 0.02 * Matrix3::Identity();
+  }
+  return m;
+}
+
 /// Uniform random joint vector inside the limits.
 inline JointVector RandomJoints(const KinematicModel& m, std::mt19937_64& rng) {
   JointVector q(m.num_joints());

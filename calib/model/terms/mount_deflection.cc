@@ -12,6 +12,7 @@ namespace {
 class MountDeflection : public ErrorTermT<MountDeflection> {
  public:
   using ErrorTermT::ErrorTermT;
+  bool offsets_tool() const override { return true; }
 
   template <typename T>
   void OffsetToolT(const T* p, const Mat3T<T>& R_BF, const Vector3& g_B, Vec3T<T>* dp_F) const {

@@ -112,7 +112,7 @@ MassTotal ReferenceMass(const urdf::ModelInterface& urdf, const std::string& tip
 MassTotal ModelMass(const KinematicModel& m, const JointVector& q) {
   const FrameSet f = ForwardKinematics(m, q);
   MassTotal total;
-  for (int i = 0; i < 7; ++i) {
+  for (int i = 0; i < m.num_links(); ++i) {
     const LinkInertia& in = m.links[i].inertia;
     const Matrix3 R = f.X_BL[i + 1].linear();
     total.Add(in.mass, f.X_BL[i + 1] * in.p_LiCom, R * in.I_Com * R.transpose());
@@ -300,15 +300,19 @@ InertialSpec RandomInertial(std::mt19937& rng) {
           3.0 * Vector3(u(rng), u(rng), u(rng)), R * D * R.transpose()};
 }
 
-// A six-joint arm in an arbitrary convention: random origins and axes, fixed joints at the base,
-// after joints 2 and 4 and two at the tip, continuous joints, and a fixed side branch on l3
-// (so tip_link must be given: "tool0").
-std::string RandomArm(std::mt19937& rng) {
+// An arm of `n` revolute joints (6 by default) in an arbitrary convention: random origins and
+// axes, fixed joints at the base, after joints 2 and 4 and two at the tip, continuous joints,
+// and a fixed side branch on l3 (so tip_link must be given: "tool0").
+std::string RandomArm(std::mt19937& rng, int n = 6) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  const std::vector<std::pair<std::string, bool>> seq = {
-      {"mount", false}, {"j1", true},     {"j2", true},          {"mid_a", false},
-      {"j3", true},     {"j4", true},     {"mid_b", false},      {"j5", true},
-      {"j6", true},     {"flange_joint", false}, {"tool0_joint", false}};
+  std::vector<std::pair<std::string, bool>> seq = {{"mount", false}};
+  for (int i = 1; i <= n; ++i) {
+    seq.push_back({"j" + std::to_string(i), true});
+    if (i == 2) seq.push_back({"mid_a", false});
+    if (i == 4) seq.push_back({"mid_b", false});
+  }
+  seq.push_back({"flange_joint", false});
+  seq.push_back({"tool0_joint", false});
   std::vector<std::string> links = {"base_link"};
   std::map<std::string, InertialSpec> inertials;
   std::vector<JointSpec> joints;
@@ -522,6 +526,29 @@ TEST(UrdfModel, RandomConventionArmsMatchReferenceFk) {
   RecordProperty("max_position_error", Sci(worst.position));
   RecordProperty("max_rotation_error", Sci(worst.rotation));
   RecordProperty("max_com_error", Sci(worst.com));
+}
+
+TEST(UrdfModel, RandomSevenJointArmsMatchReferenceFk) {
+  // Redundant arms (7 revolute joints, e.g. a KUKA iiwa or a Franka Panda): the same import,
+  // the same tolerances (kPosTol: double rounding over ~20 transforms).
+  std::mt19937 rng(4);
+  UrdfImportOptions opt;
+  opt.tip_link = "tool0";
+  Deviation worst;
+  for (int arm = 0; arm < 20; ++arm) {
+    const std::string text = RandomArm(rng, 7);
+    const KinematicModel m = ParseUrdf(text, "random7.urdf", opt);
+    ASSERT_EQ(m.num_joints(), 7);
+    ASSERT_EQ(m.num_parameters(), 40);
+    const Deviation dev = CompareWithReference(text, "tool0", m, 50, rng);
+    worst.position = std::max(worst.position, dev.position);
+    worst.rotation = std::max(worst.rotation, dev.rotation);
+    worst.com = std::max(worst.com, dev.com);
+  }
+  EXPECT_LT(worst.position, kPosTol);
+  EXPECT_LT(worst.rotation, kRotTol);
+  EXPECT_LT(worst.com, kPosTol);
+  RecordProperty("max_position_error", Sci(worst.position));
 }
 
 TEST(UrdfModel, NearlyParallelAxesMatchReferenceFk) {

@@ -2,6 +2,7 @@
 
 #include <random>
 
+#include <ceres/jet.h>
 #include <gtest/gtest.h>
 
 #include "test_models.h"
@@ -83,6 +84,50 @@ TEST(IdentificationJacobian, MatchesCentralFiniteDifferences) {
       EXPECT_LT((J.block<3, 1>(0, k) - dp).norm(), 1e-8) << ParameterName(m.name, k);
       EXPECT_LT((J.block<3, 1>(3, k) - dw).norm(), 1e-8) << ParameterName(m.name, k);
     }
+  }
+}
+
+TEST(IdentificationJacobian, EqualsAutodiffOfTheTemplatedForwardKinematics) {
+  // The analytic Jacobian is kept for the pose planner's speed (twinbench benchmark-kinematics
+  // prints the ratio); it must equal the derivative of the one templated FK, for six- and
+  // seven-joint chains.
+  std::mt19937_64 rng(14);
+  for (const KinematicModel& base : {ReinovoLikeModel(), testing::SevenJointModel()}) {
+    for (int trial = 0; trial < 10; ++trial) {
+      const KinematicModel m = Perturbed(base, rng, 0.01, 0.05);
+      const JointVector q = RandomJoints(m, rng);
+      const ParameterJacobian J = IdentificationJacobian(m, q);
+      const ParameterVector p0 = GetParameters(m);
+      using Jet1 = ceres::Jet<double, 1>;
+      for (int k = 0; k < m.num_parameters(); ++k) {
+        std::vector<Jet1> phi(p0.size());
+        for (int i = 0; i < p0.size(); ++i) phi[i] = Jet1(p0(i));
+        phi[k].v[0] = 1.0;
+        std::vector<Jet1> qj(q.size());
+        for (int i = 0; i < q.size(); ++i) qj[i] = Jet1(q(i));
+        const RigidT<Jet1> X = ChainEndPoseT<Jet1>(m, phi.data(), qj.data(), Jet1(1.0));
+        for (int r = 0; r < 3; ++r) {
+          // 1e-12: both are exact derivatives; they differ by rounding only (entries < 2 m).
+          EXPECT_NEAR(J(r, k), X.p(r).v[0], 1e-12) << ParameterName(m.name, k);
+        }
+      }
+    }
+  }
+}
+
+TEST(ForwardKinematics, SevenJointChainEqualsTheCompositionOfItsLinks) {
+  std::mt19937_64 rng(15);
+  for (int trial = 0; trial < 20; ++trial) {
+    const KinematicModel m = Perturbed(testing::SevenJointModel(), rng, 0.01, 0.05);
+    const JointVector q = RandomJoints(m, rng);
+    const FrameSet f = ForwardKinematics(m, q);
+    Eigen::Matrix4d X = m.X_BL0.matrix();
+    for (int i = 0; i < m.num_links(); ++i) {
+      X = X * Elementary(m.links[i].dh, i < 7 ? q(i) : 0.0);
+      // 1e-12: a product of at most ten 4x4 matrices with entries below 1.5 in magnitude.
+      EXPECT_LT((f.X_BL[i + 1].matrix() - X).norm(), 1e-12) << "frame L" << i + 1;
+    }
+    EXPECT_LT((f.X_BE.matrix() - X * m.X_LtE.matrix()).norm(), 1e-12);
   }
 }
 

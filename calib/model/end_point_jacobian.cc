@@ -1,0 +1,104 @@
+#include "calib/model/end_point_jacobian.h"
+
+#include <array>
+#include <cmath>
+#include <vector>
+
+namespace twin {
+
+bool AnalyticEndPointJacobian(const RobotModel& model) {
+  for (const auto& t : model.terms) {
+    if (t->sags_under_gravity() || t->offsets_tool()) return false;
+  }
+  return true;
+}
+
+void EndPointJacobianAutodiff(const RobotModel& model, const double* params,
+                              const MeasurementContext& c, Vector3* p, PointJacobian* J) {
+  const int n = model.num_parameters();
+  J->resize(3, n);
+  std::vector<Jet> x(n);
+  for (int i = 0; i < n; ++i) x[i] = Jet(params[i]);
+  for (int begin = 0; begin < n; begin += kJetStride) {
+    const int end = std::min(n, begin + kJetStride);
+    for (int i = begin; i < end; ++i) x[i].v[i - begin] = 1.0;
+    const RigidT<Jet> X = RobotEndPoseT<Jet>(model, x.data(), c);
+    for (int r = 0; r < 3; ++r) {
+      for (int i = begin; i < end; ++i) (*J)(r, i) = X.p(r).v[i - begin];
+      (*p)(r) = X.p(r).a;
+    }
+    for (int i = begin; i < end; ++i) x[i].v[i - begin] = 0.0;
+  }
+  if (n == 0) *p = RobotEndPoseT<double>(model, params, c).p;
+}
+
+void EndPointJacobian(const RobotModel& model, const double* params, const MeasurementContext& c,
+                      Vector3* p, PointJacobian* J) {
+  if (!AnalyticEndPointJacobian(model)) {
+    EndPointJacobianAutodiff(model, params, c, p, J);
+    return;
+  }
+  const KinematicModel& chain = model.chain;
+  const int nj = chain.num_joints();
+  const int g = chain.num_parameters();
+  const int n = model.num_parameters();
+  J->resize(3, n);
+  // Link angles and length scale with the terms' derivatives (stages 1-2 need no FK).
+  std::vector<Jet> x(n);
+  for (int i = 0; i < n; ++i) x[i] = Jet(params[i]);
+  std::array<double, kMaxJoints> q;
+  double s = 1.0;
+  const int terms = n - g;
+  std::vector<std::array<double, kMaxJoints>> dq(terms);
+  std::vector<double> ds(terms, 0.0);
+  if (terms == 0) {
+    for (int i = 0; i < nj; ++i) q[i] = c.q(i);
+  }
+  for (int begin = g; begin < n; begin += kJetStride) {
+    const int end = std::min(n, begin + kJetStride);
+    for (int i = begin; i < end; ++i) x[i].v[i - begin] = 1.0;
+    Jet qj[kMaxJoints];
+    Jet sj;
+    LinkAnglesT<Jet>(model, x.data(), c, qj, &sj);
+    for (int i = 0; i < nj; ++i) {
+      q[i] = qj[i].a;
+      for (int k = begin; k < end; ++k) dq[k - g][i] = qj[i].v[k - begin];
+    }
+    s = sj.a;
+    for (int k = begin; k < end; ++k) ds[k - g] = sj.v[k - begin];
+    for (int i = begin; i < end; ++i) x[i].v[i - begin] = 0.0;
+  }
+  // Frames at those angles and that scale.
+  std::array<RigidT<double>, kMaxJoints + 2> X;
+  ChainFramesT<double>(chain, params, q.data(), s, X.data());
+  const RigidT<double>& X_BLt = X[chain.num_links()];
+  *p = X_BLt * chain.X_LtE.translation();
+  // Geometric columns (eq. 5-9; IdentificationJacobian's screws, lengths times s).
+  for (int i = 0; i < chain.num_links(); ++i) {
+    const RigidT<double>& Xp = X[i];
+    const RigidT<double>& Xn = X[i + 1];
+    const Vector3 z_prev = Xp.R.col(2);
+    const double beta = params[kParamsPerLink * i + 4];
+    const Vector3 x_mid = std::cos(beta) * Xn.R.col(0) + std::sin(beta) * Xn.R.col(2);
+    const int col = kParamsPerLink * i;
+    J->col(col + 0) = z_prev.cross(*p - Xp.p);
+    J->col(col + 1) = s * z_prev;
+    J->col(col + 2) = s * x_mid;
+    J->col(col + 3) = x_mid.cross(*p - Xn.p);
+    J->col(col + 4) = Xn.R.col(1).cross(*p - Xn.p);
+  }
+  // Term columns through the joint angles and the length scale.
+  if (terms > 0) {
+    const Vector3 dp_ds =
+        (*p - chain.X_BL0.translation() - X_BLt.R * chain.X_LtE.translation()) / s;
+    for (int k = 0; k < terms; ++k) {
+      Vector3 col = ds[k] * dp_ds;
+      for (int i = 0; i < nj; ++i) {
+        if (dq[k][i] != 0.0) col += dq[k][i] * X[i].R.col(2).cross(*p - X[i].p);
+      }
+      J->col(g + k) = col;
+    }
+  }
+}
+
+}  // namespace twin
