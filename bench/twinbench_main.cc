@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "bench/runs/calibration_run.h"
+#include "bench/runs/kinematics_benchmark.h"
 #include "bench/runs/synthetic_measurements.h"
 #include "bench/io/model_loader.h"
 #include "bench/runs/twin_commands.h"
@@ -239,6 +240,12 @@ int main(int argc, char** argv) {
   synth->add_option("--seed", synth_options.seed, "seed of the true geometry and the noise");
   synth->add_option("--out", synth_options.out, "output CSV")->required();
 
+  KinematicsBenchmarkOptions kb_options;
+  auto* kbench = app.add_subcommand(
+      "benchmark-kinematics", "time the analytic end-point Jacobian against autodiff");
+  kbench->add_option("model", kb_options.model, "model file (.yaml or .urdf)")->required();
+  kbench->add_option("--evaluations", kb_options.evaluations, "evaluations per figure");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -256,6 +263,7 @@ int main(int argc, char** argv) {
     if (*run) return RunCalibrationScenario(run_options);
     if (*identify) return RunIdentify(identify_options);
     if (*synth) return RunSynthesizeMeasurements(synth_options);
+    if (*kbench) return RunKinematicsBenchmark(kb_options);
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitUserError;

@@ -73,31 +73,37 @@ double SmallestJacobianSingularValue(const KinematicModel& model, const JointVec
   return s(s.size() - 1);
 }
 
-ParameterJacobian IdentificationJacobian(const KinematicModel& model, const JointVector& q) {
+void IdentificationColumns(int num_links, const RigidT<double>* X, const double* phi,
+                           const Vector3& p, double s, ParameterJacobian* J) {
   // Eq. 5 differentiates each factor of eq. 2. Each parameter moves everything after it by a
   // screw: theta_i rotates about z of L(i-1) through its origin; d_i translates along that z;
   // a_i translates along x' = R_BL(i-1) RotZ(theta_i) e_x; alpha_i rotates about x' through the
   // origin of Li; beta_i rotates about y of Li (RotY leaves e_y fixed) through the same origin.
-  const FrameSet f = ForwardKinematics(model, q);
-  const Vector3 p = f.X_BE.translation();
-  ParameterJacobian J(6, model.num_parameters());
-  for (int i = 0; i < model.num_links(); ++i) {
-    const Transform& X_prev = f.X_BL[i];
-    const Transform& X_next = f.X_BL[i + 1];
-    const Vector3 z_prev = X_prev.linear().col(2);
-    const Vector3 x_next = X_next.linear().col(0);
-    const Vector3 y_next = X_next.linear().col(1);
+  J->resize(6, kParamsPerLink * num_links);
+  for (int i = 0; i < num_links; ++i) {
+    const RigidT<double>& X_prev = X[i];
+    const RigidT<double>& X_next = X[i + 1];
+    const Vector3 z_prev = X_prev.R.col(2);
     // x' is x of Li before RotY(beta): RotY(beta) turns x about y, so undo it.
-    const double beta = model.links[i].dh.beta;
-    const Vector3 x_mid = std::cos(beta) * x_next + std::sin(beta) * X_next.linear().col(2);
-    const Vector3 o_next = X_next.translation();
+    const double beta = phi[kParamsPerLink * i + static_cast<int>(DhParameter::kBeta)];
+    const Vector3 x_mid = std::cos(beta) * X_next.R.col(0) + std::sin(beta) * X_next.R.col(2);
     const int c = i * kParamsPerLink;
-    J.col(c + static_cast<int>(DhParameter::kTheta)) = Twist(z_prev, X_prev.translation(), p);
-    J.col(c + static_cast<int>(DhParameter::kD)) << z_prev, Vector3::Zero();
-    J.col(c + static_cast<int>(DhParameter::kA)) << x_mid, Vector3::Zero();
-    J.col(c + static_cast<int>(DhParameter::kAlpha)) = Twist(x_mid, o_next, p);
-    J.col(c + static_cast<int>(DhParameter::kBeta)) = Twist(y_next, o_next, p);
+    J->col(c + static_cast<int>(DhParameter::kTheta)) = Twist(z_prev, X_prev.p, p);
+    J->col(c + static_cast<int>(DhParameter::kD)) << s * z_prev, Vector3::Zero();
+    J->col(c + static_cast<int>(DhParameter::kA)) << s * x_mid, Vector3::Zero();
+    J->col(c + static_cast<int>(DhParameter::kAlpha)) = Twist(x_mid, X_next.p, p);
+    J->col(c + static_cast<int>(DhParameter::kBeta)) = Twist(X_next.R.col(1), X_next.p, p);
   }
+}
+
+ParameterJacobian IdentificationJacobian(const KinematicModel& model, const JointVector& q) {
+  assert(q.size() == model.num_joints());
+  const FlatParameters flat(model);
+  std::array<RigidT<double>, kMaxJoints + 2> X;
+  ChainFramesT<double>(model, flat.phi.data(), q.data(), 1.0, X.data());
+  const Vector3 p = X[model.num_links()] * model.X_LtE.translation();
+  ParameterJacobian J;
+  IdentificationColumns(model.num_links(), X.data(), flat.phi.data(), p, 1.0, &J);
   return J;
 }
 

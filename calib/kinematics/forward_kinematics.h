@@ -107,4 +107,11 @@ using ParameterJacobian =
 /// order of parameters.h. Rotating rows 0-2 by R_BE^T gives the paper's EE-frame J_P.
 ParameterJacobian IdentificationJacobian(const KinematicModel& model, const JointVector& q);
 
+/// The columns of IdentificationJacobian from the frames X_BL (L0..Lt in B) of a chain of
+/// `num_links` links with geometric parameters `phi` (for the Hayati angles), the end point
+/// p_BE, and a length scale s that multiplies every d and a (so their columns are s times the
+/// unit-scale ones). Shared by IdentificationJacobian and the robot model's end-point Jacobian.
+void IdentificationColumns(int num_links, const RigidT<double>* X_BL, const double* phi,
+                           const Vector3& p_BE, double length_scale, ParameterJacobian* J);
+
 }  // namespace twin

@@ -74,19 +74,9 @@ void EndPointJacobian(const RobotModel& model, const double* params, const Measu
   const RigidT<double>& X_BLt = X[chain.num_links()];
   *p = X_BLt * chain.X_LtE.translation();
   // Geometric columns (eq. 5-9; IdentificationJacobian's screws, lengths times s).
-  for (int i = 0; i < chain.num_links(); ++i) {
-    const RigidT<double>& Xp = X[i];
-    const RigidT<double>& Xn = X[i + 1];
-    const Vector3 z_prev = Xp.R.col(2);
-    const double beta = params[kParamsPerLink * i + 4];
-    const Vector3 x_mid = std::cos(beta) * Xn.R.col(0) + std::sin(beta) * Xn.R.col(2);
-    const int col = kParamsPerLink * i;
-    J->col(col + 0) = z_prev.cross(*p - Xp.p);
-    J->col(col + 1) = s * z_prev;
-    J->col(col + 2) = s * x_mid;
-    J->col(col + 3) = x_mid.cross(*p - Xn.p);
-    J->col(col + 4) = Xn.R.col(1).cross(*p - Xn.p);
-  }
+  ParameterJacobian G;
+  IdentificationColumns(chain.num_links(), X.data(), params, *p, s, &G);
+  J->leftCols(g) = G.topRows<3>();
   // Term columns through the joint angles and the length scale.
   if (terms > 0) {
     const Vector3 dp_ds =
