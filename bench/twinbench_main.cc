@@ -11,6 +11,9 @@
 
 #include "bench/runs/calibration_run.h"
 #include "bench/runs/kinematics_benchmark.h"
+#include "bench/runs/planning_benchmark.h"
+#include "bench/runs/study_merge.h"
+#include "bench/runs/study_run.h"
 #include "bench/runs/synthetic_measurements.h"
 #include "bench/io/model_loader.h"
 #include "bench/runs/twin_commands.h"
@@ -218,6 +221,40 @@ int main(int argc, char** argv) {
   run->add_option("--out", run_options.out_dir, "output folder (replaced when complete)")
       ->required();
   run->add_flag("--quiet", run_options.quiet, "no progress lines");
+  run->add_option("--trial", run_options.trial,
+                  "study trial t: the scenario's truth and estimator seeds + t (default 0)")
+      ->check(CLI::Range(0, 1000000000));
+  run->add_option("--plan-cache", run_options.plan_cache,
+                  "folder of cached pose plans (plans once per planner input)");
+  bool no_images = false;
+  run->add_flag("--no-images", no_images, "write neither servo images nor report.html");
+
+  PlanningBenchmarkOptions planning_options;
+  auto* bench_planning = app.add_subcommand(
+      "benchmark-planning", "time the pose planning of a scenario's calibration (no twin)");
+  bench_planning->add_option("scenario", planning_options.scenario, "scenario file")->required();
+  bench_planning->add_option("--threads", planning_options.threads,
+                             "planner threads (default: one per core)");
+
+  StudyOptions study_options;
+  std::string shard = "0/1";
+  bool study_quiet = false;
+  auto* study = app.add_subcommand(
+      "study", "Monte Carlo study: trials of a scenario in parallel processes, resumable");
+  study->add_option("scenario", study_options.scenario, "scenario file")->required();
+  study->add_option("--trials", study_options.trials, "trials of the whole study")->required();
+  study->add_option("--jobs", study_options.jobs,
+                    "trial processes at a time (default: the CPUs available)");
+  study->add_option("--shard", shard, "run trials I, I+N, I+2N, ... (I/N, default 0/1)");
+  study->add_option("--out", study_options.out_dir, "study folder (rerun to resume)")->required();
+  study->add_option("--plan-cache", study_options.plan_cache,
+                    "plan cache folder (default OUT/plans)");
+  study->add_flag("--quiet", study_quiet, "no progress bar");
+  StudyMergeOptions merge_options;
+  auto* merge = app.add_subcommand(
+      "study-merge", "merge study shards into trials.jsonl, summary.json and summary.html");
+  merge->add_option("dirs", merge_options.dirs, "study folders (shards)")->required();
+  merge->add_option("--out", merge_options.out_dir, "merged study folder")->required();
   IdentifyOptions identify_options;
   auto* identify = app.add_subcommand(
       "identify", "identify a robot's parameters from recorded measurements (no twin)");
@@ -260,7 +297,17 @@ int main(int argc, char** argv) {
     if (*demo) return RunDemo(model_dir, samples, rng_seed);
     if (*render) return RunRender(render_options);
     if (*bench) return RunTwinBenchmark(bench_options);
-    if (*run) return RunCalibrationScenario(run_options);
+    if (*run) {
+      run_options.images = !no_images;
+      return RunCalibrationScenario(run_options);
+    }
+    if (*study) {
+      ParseShard(shard, &study_options.shard_index, &study_options.shard_count);
+      study_options.progress = !study_quiet;
+      return RunStudy(study_options);
+    }
+    if (*merge) return RunStudyMerge(merge_options);
+    if (*bench_planning) return RunPlanningBenchmark(planning_options);
     if (*identify) return RunIdentify(identify_options);
     if (*synth) return RunSynthesizeMeasurements(synth_options);
     if (*kbench) return RunKinematicsBenchmark(kb_options);

@@ -53,7 +53,11 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
       BoardGeometry{sc.twin.board.squares_x, sc.twin.board.squares_y, sc.twin.board.square_m};
 
   OpticalAxisOptions& o = c.options;
-  o.seed = sc.twin.seed;
+  // The estimator's own randomness follows the scenario's estimator seed (+ trial); a
+  // planning.seed pins the PSO for every trial (one plan per study, see PlanStore).
+  o.seed = sc.seeds.estimator;
+  o.servo.ik_seed = sc.seeds.estimator;
+  o.planner.seed = sc.seeds.estimator;
   o.robots = {sc.twin.board.robot, sc.twin.camera.robot};
   if (const auto f = m.Find("robots", false)) {
     if (!f->node.IsSequence() || f->node.size() < 1 || f->node.size() > 2) {

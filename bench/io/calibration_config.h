@@ -25,7 +25,9 @@
 //       max_visibility_angle_deg: 30   # C3
 //       camera_reach_mm: 400           # centre of the camera search box, from the active
 //       camera_height_mm: 400          #   base towards the passive base and up
-//       seed: 1
+//       seed: 1                      # PSO seed, the same for every trial of a study (the
+//                                    # plan is then planned once and cached); absent: the
+//                                    # scenario's estimator seed (+ trial), see scenario.h
 //     servo: {tolerance_px: 0.1, max_iterations: 10, gain: 1.0}
 //     calibration_axes: 3              # whole axes in the calibration set; the rest validate
 //     calibration_split: best_conditioned  # which axes: best_conditioned (the subset with the

@@ -20,8 +20,9 @@ namespace {
 using Keys = YamlKeys;
 
 const Keys kRootKeys = {"scenario"};
-const Keys kScenarioKeys = {"name",   "seed", "robots",  "camera",      "board",
-                            "tips",   "physics", "effects", "calibration", "handclasp"};
+const Keys kScenarioKeys = {"name", "seed",    "seeds",   "robots",      "camera",   "board",
+                            "tips", "physics", "effects", "calibration", "handclasp"};
+const Keys kSeedsKeys = {"truth", "estimator"};
 const Keys kRobot1Keys = {"name", "model", "installation", "base", "initial_joints_deg"};
 const Keys kRobot2Keys = {"name", "model", "installation", "base_from_robot1",
                           "initial_joints_deg"};
@@ -83,7 +84,7 @@ class ScenarioParser {
     out_.path = r_.source();
     out_.name = r_.String(m.Get("name"));
     if (out_.name.empty()) r_.Fail(m.Get("name"), "expected a non-empty scenario name");
-    if (const auto f = m.Find("seed", false)) out_.twin.seed = r_.Unsigned64(*f);
+    ParseSeeds(m);
     ParseRobots(m.Get("robots"));
     ParseCamera(m.Get("camera"));
     ParseBoard(m.Get("board"));
@@ -100,6 +101,23 @@ class ScenarioParser {
  private:
   void Locate(const std::string& spec_field, const YamlField& f) {
     locations_.Add(spec_field, r_.Where(f));
+  }
+
+  // `seed: N` drives both the truth and the estimator; `seeds: {truth, estimator}` sets them
+  // apart (each optional, default 1); both keys at once are refused.
+  void ParseSeeds(const YamlMap& m) {
+    const auto one = m.Find("seed", false);
+    const auto two = m.Find("seeds", false);
+    if (one && two) {
+      r_.Fail(*two, "give either seed (both streams) or seeds: {truth, estimator}, not both");
+    }
+    if (one) out_.seeds.truth = out_.seeds.estimator = r_.Unsigned64(*one);
+    if (two) {
+      const YamlMap sm(r_, *two, kSeedsKeys);
+      if (const auto f = sm.Find("truth", false)) out_.seeds.truth = r_.Unsigned64(*f);
+      if (const auto f = sm.Find("estimator", false)) out_.seeds.estimator = r_.Unsigned64(*f);
+    }
+    out_.twin.seed = out_.seeds.truth;
   }
 
   Transform PoseFrom(const YamlMap& m) const { return ReadPose(r_, m); }
@@ -414,6 +432,17 @@ Scenario ParseScenario(const std::string& text, const std::string& source,
 Scenario LoadScenario(const std::string& path) {
   const std::string text = ReadTextFile(path);
   return ParseScenario(text, path, std::filesystem::path(path).parent_path().string());
+}
+
+void ApplyTrial(int trial, Scenario* scenario) {
+  if (trial < 0) {
+    throw InputError("--trial", std::to_string(trial) + ": expected a trial number >= 0");
+  }
+  const auto t = static_cast<std::uint64_t>(trial) - static_cast<std::uint64_t>(scenario->trial);
+  scenario->seeds.truth += t;
+  scenario->seeds.estimator += t;
+  scenario->twin.seed = scenario->seeds.truth;
+  scenario->trial = trial;
 }
 
 }  // namespace twin

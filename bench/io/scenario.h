@@ -4,7 +4,15 @@
 //
 //   scenario:
 //     name: twin_demo                      # required
-//     seed: 7                              # optional (default 1): seed of every random effect
+//     seed: 7                              # optional (default 1): the seed of both random
+//                                          # streams below (truth and estimator)
+//     seeds: {truth: 7, estimator: 7}      # optional instead of seed (each default 1):
+//                                          # truth: the twin's draws (geometry errors, effects,
+//                                          # noise, the operator's error); estimator: the
+//                                          # estimator's own randomness (intrinsics view poses,
+//                                          # PSO planning unless calibration.planning.seed pins
+//                                          # it, IK restarts, taught points). Trial t of a study
+//                                          # (`twinbench run --trial t`) uses both + t.
 //     robots:                              # required, exactly two
 //       - name: r1                         # unique identifier ([A-Za-z_][A-Za-z0-9_]*), used by
 //                                          # camera.robot, board.robot, tips and effects; it also
@@ -73,6 +81,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <string>
 
 #include "bench/io/yaml_util.h"
@@ -80,11 +89,20 @@
 
 namespace twin {
 
+/// The two independent random streams of a scenario (trial 0; ApplyTrial offsets them).
+struct ScenarioSeeds {
+  std::uint64_t truth = 1;      ///< the twin: geometry draws, effects, noise, the operator
+  std::uint64_t estimator = 1;  ///< the estimator's own randomness (views, planning, IK)
+};
+
 /// A loaded scenario: the twin cell it describes plus where it came from.
 struct Scenario {
   std::string name;                                  ///< scenario.name
   std::string path;                                  ///< the file it was read from (source)
-  TwinSpec twin;                                     ///< the cell, in SI units, validated
+  TwinSpec twin;                                     ///< the cell, in SI units, validated;
+                                                     ///< twin.seed == seeds.truth
+  ScenarioSeeds seeds;                               ///< seeds of this trial
+  int trial = 0;                                     ///< the trial (ApplyTrial), 0 as loaded
   std::array<std::string, kNumRobots> robot_names;   ///< robot names, in file order
   std::array<std::string, kNumRobots> model_paths;   ///< model files as resolved and loaded
   /// The optional procedure sections, as written (node empty when absent); each procedure
@@ -103,5 +121,9 @@ Scenario ParseScenario(const std::string& text, const std::string& source,
 /// Reads and parses a scenario file; model paths are relative to the file's folder. A missing
 /// or unreadable file is an InputError naming it.
 Scenario LoadScenario(const std::string& path);
+
+/// Makes `scenario` trial `trial` of a study: both seeds become the file's seeds + trial
+/// (twin.seed follows seeds.truth). Throws InputError ("--trial") for a negative trial.
+void ApplyTrial(int trial, Scenario* scenario);
 
 }  // namespace twin

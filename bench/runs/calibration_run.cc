@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
+#include <memory>
 #include <limits>
 #include <map>
 #include <set>
@@ -17,6 +19,7 @@
 #include "bench/io/calibration_config.h"
 #include "bench/scoring/calibration_scoring.h"
 #include "bench/runs/handclasp_run.h"
+#include "bench/runs/plan_cache.h"
 #include "bench/runs/workflow_run.h"
 #include "bench/io/model_loader.h"
 #include "bench/io/model_yaml.h"
@@ -91,7 +94,7 @@ std::string Csv(double v, int precision = 10) {
 std::string CsvHeader(int joints) {
   std::string h = "robot,camera_robot,axis,index,set";
   for (int i = 1; i <= joints; ++i) h += ",q" + std::to_string(i) + "_deg";
-  return h + ",du_px,dv_px,depth_mm,offset_x_mm,offset_y_mm,offset_z_mm,frames,moves";
+  return h + ",du_px,dv_px,depth_mm,offset_x_mm,offset_y_mm,offset_z_mm,frames,moves,du0_px,dv0_px";
 }
 
 // One CSV row per aligned pose (what a hardware cell records).
@@ -111,7 +114,8 @@ void AppendRows(const RobotCalibration& rc, const std::string& robot, const std:
     *csv << ',' << Csv(p.pixel_error.x, 6) << ',' << Csv(p.pixel_error.y, 6) << ','
          << Csv(1000 * p.p_C.z()) << ',' << Csv(1000 * p.offset.x()) << ','
          << Csv(1000 * p.offset.y()) << ',' << Csv(1000 * p.offset.z()) << ',' << p.frames << ','
-         << p.moves << '\n';
+         << p.moves << ',' << Csv(p.first_pixel_error.x, 6) << ',' << Csv(p.first_pixel_error.y, 6)
+         << '\n';
   }
 }
 
@@ -156,17 +160,35 @@ class TimedCell : public Cell {
     ++frames;
     return image;
   }
+  cv::Mat GrabImageRegion(const cv::Rect& roi) override {
+    const auto t0 = Clock::now();
+    cv::Mat image = cell_.GrabImageRegion(roi);
+    grab_s += Seconds(t0);
+    ++frames;
+    ++region_frames;
+    pixels += static_cast<double>(image.total());
+    return image;
+  }
   MoveResult ExchangeTools() override { return cell_.ExchangeTools(); }
   int CameraRobot() override { return cell_.CameraRobot(); }
 
   double move_s = 0, grab_s = 0;
-  int moves = 0, frames = 0;
+  int moves = 0, frames = 0, region_frames = 0;
+  double pixels = 0;  // of the region frames
 
  private:
   Cell& cell_;
 };
 
 }  // namespace
+
+json ScenarioJson(const Scenario& sc) {
+  return json{{"name", sc.name},
+              {"file", sc.path},
+              {"seed", sc.seeds.truth},
+              {"seeds", {{"truth", sc.seeds.truth}, {"estimator", sc.seeds.estimator}}},
+              {"trial", sc.trial}};
+}
 
 OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, CalibrationConfig config,
                                     const fs::path& staging, bool quiet,
@@ -183,7 +205,7 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
   // Scoring: estimates meet truth only here, after the procedure ended.
   const auto t_score = Clock::now();
   const TwinTruth truth = cell.Truth();
-  (*report)["scenario"] = {{"name", sc.name}, {"file", sc.path}, {"seed", sc.twin.seed}};
+  (*report)["scenario"] = ScenarioJson(sc);
   const Intrinsics& ti = truth.camera.intrinsics;
   const Distortion& td = truth.camera.distortion;
   const PinholeIntrinsics& ei = result.intrinsics.intrinsics;
@@ -201,12 +223,13 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
   }
   std::ostringstream csv;
   csv << CsvHeader(csv_joints) << '\n';
-  double planning = 0, servoing = 0, identification = 0;
+  double planning = 0, planning_compute = 0, servoing = 0, identification = 0;
   json robots = json::object();
   for (const RobotCalibration& rc : result.robots) {
     const std::string name = sc.robot_names[rc.robot];
     const std::string camera = sc.robot_names[rc.camera_robot];
     planning += rc.planning_s;
+    planning_compute += rc.plan_compute_s;
     servoing += rc.servoing_s;
     identification += rc.identification_s;
     const KinematicModel true_model = BoardRobotModel(truth.models[rc.robot], truth.board.X_FT);
@@ -233,11 +256,15 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                        {"c3_visibility", rej.c3_visibility},
                        {"c4_min_distance", rej.c4_min_distance},
                        {"c5_max_distance", rej.c5_max_distance}}},
-                     {"time_s", rc.planning_s}};
-    int frames = 0;
+                     {"time_s", rc.plan_compute_s},
+                     {"wait_time_s", rc.planning_s},
+                     {"from_plan_store", rc.plan_from_store}};
+    int frames = 0, region_frames = 0, fallbacks = 0;
     double max_px = 0.0;
     for (const AlignedPose& p : rc.aligned) {
       frames += p.frames;
+      region_frames += p.region_frames;
+      fallbacks += p.full_frame_fallbacks;
       max_px = std::max({max_px, std::abs(p.pixel_error.x), std::abs(p.pixel_error.y)});
     }
     json failures = json::array();
@@ -265,6 +292,8 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                   {"failed_poses", rc.failed.size()},
                   {"mean_frames_per_pose", aligned > 0 ? json(double(frames) / aligned) : json()},
                   {"max_final_pixel_error_px", max_px},
+                  {"region_frames", region_frames},
+                  {"full_frame_fallbacks", fallbacks},
                   {"tolerance_px", config.options.servo.tolerance_px},
                   {"failures", failures},
                   {"images", images},
@@ -301,20 +330,31 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                    rc.refit ? rc.refit_result.scale : rc.nonlinear.scale}};
     r["unidentifiable"] = obs.unidentifiable;
     json combos = json::array();
+    const IdentificationCovariance& cov = rc.covariance;
     for (size_t i = 0; i < score.combination_estimated.size(); ++i) {
+      const bool has_sigma = cov.ok && static_cast<int>(i) < cov.sigma_z.size();
       combos.push_back({{"index", i}, {"estimated", 1000 * score.combination_estimated[i]},
-                        {"true", 1000 * score.combination_true[i]}});
+                        {"true", 1000 * score.combination_true[i]},
+                        {"sigma", has_sigma ? json(1000 * cov.sigma_z(i)) : json(nullptr)}});
     }
     r["identifiable_combinations"] = {{"count", obs.rank},
                                       {"unit", "mm or mrad (scaled coordinates, 1 m)"},
                                       {"rms_error", 1000 * score.combination_rms_error},
                                       {"max_error", 1000 * score.combination_max_error},
                                       {"items", combos}};
+    r["identifiable_combinations"]["covariance"] = {
+        {"status", cov.ok ? "ok" : "not_estimated"},
+        {"reason", cov.reason},
+        {"residual_sigma_mm", 1000 * cov.residual_sigma},
+        {"redundancy", cov.redundancy}};
     json params = json::array();
-    for (const ParameterComparison& p : score.parameters) {
+    for (size_t k = 0; k < score.parameters.size(); ++k) {
+      const ParameterComparison& p = score.parameters[k];
       const double f = p.length ? 1000.0 : RadToDeg(1.0);
+      const bool has_sigma = cov.ok && static_cast<int>(k) < cov.sigma_parameters.size();
       params.push_back({{"name", p.name}, {"unit", p.length ? "mm" : "deg"},
-                        {"estimated", f * p.estimated}, {"true", f * p.truth}});
+                        {"estimated", f * p.estimated}, {"true", f * p.truth},
+                        {"sigma", has_sigma ? json(f * cov.sigma_parameters(k)) : json(nullptr)}});
     }
     r["parameters"] = params;
     const LinearizedIdentificationResult& lin = rc.linearized;
@@ -369,10 +409,15 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
   std::ofstream(staging / "measurements.csv") << csv.str();
   const double scoring = Seconds(t_score);
   (*report)["timing_s"] = {{"total", Seconds(t_start)}, {"intrinsics", result.intrinsics_s},
-                        {"planning", planning},      {"servoing", servoing},
+                        {"planning", planning},      {"planning_compute", planning_compute},
+                        {"servoing", servoing},
                         {"identification", identification}, {"scoring", scoring},
                         {"cell",
                          {{"frames", timed.frames},
+                          {"region_frames", timed.region_frames},
+                          {"region_mean_pixels",
+                           timed.region_frames > 0 ? json(timed.pixels / timed.region_frames)
+                                                   : json(nullptr)},
                           {"grab_image", timed.grab_s},
                           {"moves", timed.moves},
                           {"move_to", timed.move_s}}}};
@@ -381,12 +426,18 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
 
 int RunCalibrationScenario(const RunOptions& o) {
   const auto t_start = Clock::now();
-  const Scenario sc = LoadScenario(o.scenario);
+  Scenario sc = LoadScenario(o.scenario);
+  ApplyTrial(o.trial, &sc);
   if (IsPresent(sc.handclasp) && !IsPresent(sc.calibration)) {
-    return RunHandclaspScenario(o.scenario, o.out_dir);  // base-frame calibration alone
+    // base-frame calibration alone
+    return RunHandclaspScenario(o.scenario, o.out_dir, std::cerr, o.trial);
   }
   if (IsPresent(sc.handclasp) && IsPresent(sc.calibration)) return RunWorkflowScenario(o);
   CalibrationConfig config = ParseCalibrationConfig(sc);
+  if (!o.plan_cache.empty()) {
+    config.options.plan_store = std::make_shared<FilePlanStore>(o.plan_cache);
+  }
+  if (!o.images) config.options.kept_images = 0;
   const fs::path out(o.out_dir);
   const fs::path staging = CreateStagingDirectory(o.out_dir);
   std::error_code ec;
@@ -397,7 +448,7 @@ int RunCalibrationScenario(const RunOptions& o) {
     json report;
     RunCalibrationStage(cell, sc, config, staging, o.quiet, t_start, &report);
     std::ofstream(staging / "report.json") << report.dump(2) << '\n';
-    std::ofstream(staging / "report.html") << RenderReportHtml(report);
+    if (o.images) std::ofstream(staging / "report.html") << RenderReportHtml(report);
     PublishDirectory(staging.string(), out.string());
 
     // Summary.
@@ -435,11 +486,13 @@ int RunCalibrationScenario(const RunOptions& o) {
                       : r["servo"]["mean_frames_per_pose"].get<double>());
     }
     const json& t = report["timing_s"];
-    std::printf("timing [s]: total %.1f = intrinsics %.1f + planning %.1f + servoing %.1f + "
-                "identification %.1f + scoring %.1f\n",
+    std::printf("timing [s]: total %.1f = intrinsics %.1f + waiting for the plans %.1f + "
+                "servoing %.1f + identification %.1f + scoring %.1f (planning %.1f in the "
+                "background)\n",
                 t["total"].get<double>(), t["intrinsics"].get<double>(),
                 t["planning"].get<double>(), t["servoing"].get<double>(),
-                t["identification"].get<double>(), t["scoring"].get<double>());
+                t["identification"].get<double>(), t["scoring"].get<double>(),
+                t["planning_compute"].get<double>());
     const json& cell_t = report["timing_s"]["cell"];
     std::printf("cell: %d frames in %.1f s (GrabImage), %d moves in %.1f s (MoveTo)\n",
                 cell_t["frames"].get<int>(), cell_t["grab_image"].get<double>(),

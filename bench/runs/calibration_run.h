@@ -21,7 +21,16 @@ struct RunOptions {
   std::string scenario;  ///< scenario file with a calibration: section
   std::string out_dir;   ///< output folder; replaced only once everything is written
   bool quiet = false;    ///< no progress lines
+  int trial = 0;         ///< study trial: both scenario seeds + trial (ApplyTrial)
+  /// Folder of the plan cache (PlanStore files keyed by the planner's inputs); empty: plan
+  /// every time.
+  std::string plan_cache;
+  bool images = true;    ///< write servo_*.png and report.html (studies leave them out)
 };
+
+/// The report's `scenario` key: name, file, seed (the truth seed, as before the split),
+/// seeds.{truth,estimator} and trial.
+nlohmann::json ScenarioJson(const Scenario& scenario);
 
 /// Runs the scenario and writes out_dir/report.json, measurements.csv, servo_*.png and
 /// report.html; prints progress and a summary. Returns the exit code. Throws InputError for bad

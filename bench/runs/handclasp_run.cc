@@ -279,7 +279,7 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
       scenario.twin.robots[0].X_WB.inverse() * scenario.twin.robots[1].X_WB;
   const std::array<JointVector, 2> seeds = {cell.ReadEncoders(0), cell.ReadEncoders(1)};
   TeachOptions teach;
-  teach.seed = scenario.twin.seed;
+  teach.seed = scenario.seeds.estimator;
   if (stage_options.identify_tips) teach.orientations_per_point = 4;
   const TaughtPoints taught =
       config.auto_points ? PlanTaughtPoints(tip_models, X_B1B2_layout, seeds, teach)
@@ -410,8 +410,9 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
 }
 
 int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir,
-                         std::ostream& progress) {
-  const Scenario scenario = LoadScenario(scenario_path);
+                         std::ostream& progress, int trial) {
+  Scenario scenario = LoadScenario(scenario_path);
+  ApplyTrial(trial, &scenario);
   const HandclaspConfig config = ParseHandclaspConfig(scenario);
   std::error_code ec;
   std::filesystem::create_directories(out_dir, ec);

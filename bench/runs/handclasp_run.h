@@ -131,9 +131,9 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
 /// Loads the scenario, runs its handclasp section with the nominal models for each trial of
 /// the batch and writes out_dir/report.json atomically (temporary file, then rename). Returns
 /// 0 when every trial calibrated, 1 otherwise (the report says why). Throws InputError for bad
-/// input (the CLI maps it to exit code 2).
+/// input (the CLI maps it to exit code 2). `trial` offsets both seeds (ApplyTrial).
 int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir,
-                         std::ostream& progress);
+                         std::ostream& progress, int trial = 0);
 /// As above, with progress on std::cerr.
 int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir);
 

@@ -71,7 +71,8 @@ nlohmann::json StageSummary(const HandclaspStageResult& r, const std::string& ki
 
 int RunWorkflowScenario(const RunOptions& o) {
   const auto t_start = Clock::now();
-  const Scenario sc = LoadScenario(o.scenario);
+  Scenario sc = LoadScenario(o.scenario);
+  ApplyTrial(o.trial, &sc);
   if (!IsPresent(sc.calibration)) {
     throw InputError(sc.path, "the dual-arm workflow needs a calibration: section");
   }
@@ -161,7 +162,7 @@ int RunWorkflowScenario(const RunOptions& o) {
       }
     }
     if (report.is_null() || !report.contains("scenario")) {
-      report["scenario"] = {{"name", sc.name}, {"file", sc.path}, {"seed", sc.twin.seed}};
+      report["scenario"] = ScenarioJson(sc);
     }
     report["procedure"] = "dual-arm workflow: handclasp (Gan et al. 2014) with nominal "
                           "kinematics, optical-axis calibration (Zhu et al. 2019), handclasp "

@@ -88,7 +88,14 @@ RobotScore ScoreRobot(const KinematicModel& nominal, const KinematicModel& ident
     s.parameters.push_back({ParameterName(nominal.name, i), IsLengthParameter(i), d_est(i),
                             d_true(i)});
   }
-  const Eigen::MatrixXd& V = observability.identifiable_basis;
+  // The SVD fixes each basis vector only up to its sign: the sign that makes its largest entry
+  // positive, so that trials (and two runs of one trial) report the same coordinates.
+  Eigen::MatrixXd V = observability.identifiable_basis;
+  for (int j = 0; j < V.cols(); ++j) {
+    Eigen::Index i = 0;
+    V.col(j).cwiseAbs().maxCoeff(&i);
+    if (V(i, j) < 0) V.col(j) = -V.col(j);
+  }
   if (V.cols() > 0) {
     const ParameterVector inv_scale = observability.column_scale.cwiseInverse();
     const Eigen::VectorXd ze = V.transpose() * inv_scale.cwiseProduct(d_est);

@@ -41,7 +41,8 @@ struct RobotScore {
   double scale_true = 1.0;       ///< similarity scale true / nominal positions [-]
   std::vector<ParameterComparison> parameters;
   /// Identifiable combinations (coordinates in the identifiable basis, scaled units: m for a
-  /// 1 m characteristic length, rad): identified, true, and their differences.
+  /// 1 m characteristic length, rad; each basis vector signed so that its largest entry is
+  /// positive): identified, true, and their differences.
   std::vector<double> combination_estimated, combination_true;
   double combination_rms_error = 0.0, combination_max_error = 0.0;
 };

@@ -13,4 +13,11 @@ const char* ToString(MoveStatus status) {
   return "unknown";
 }
 
+cv::Mat Cell::GrabImageRegion(const cv::Rect& roi) {
+  const cv::Mat frame = GrabImage();
+  const cv::Rect r = roi & cv::Rect(0, 0, frame.cols, frame.rows);
+  if (r.empty()) return cv::Mat();
+  return frame(r).clone();
+}
+
 }  // namespace twin

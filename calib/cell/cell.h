@@ -40,6 +40,11 @@ class Cell {
   virtual JointVector ReadEncoders(int robot) = 0;
   /// One frame of the hand camera: 8-bit BGR, OpenCV row order (row 0 at the top).
   virtual cv::Mat GrabImage() = 0;
+  /// The pixels `roi` of the next frame, clipped to the image: an image of the clipped size
+  /// whose pixel (0, 0) is frame pixel roi.tl(); nothing outside it is seen. A cell that can
+  /// render or read out a region faster overrides this (the twin renders only the region);
+  /// the default grabs a whole frame and crops it. An empty result: roi misses the image.
+  virtual cv::Mat GrabImageRegion(const cv::Rect& roi);
   /// Exchanges the hand camera and the chessboard between the two flanges, each onto the
   /// other's bracket (Zhu et al. 2019, section II: "the roles of the passive and active robots
   /// are exchanged"); the robots hold still. On a hardware cell the operator does it and

@@ -334,7 +334,14 @@ IdentificationResult Identify(const RobotModel& start, const std::vector<Measure
   // 4. Uncertainty from the Jacobian at the solution (tangent columns: z, then nuisance).
   const Eigen::MatrixXd J = DenseJacobian(a.problem.get(), a.blocks, &res.cost_after);
   const int k = static_cast<int>(J.cols());
-  const int dof = static_cast<int>(J.rows()) - k;
+  // Degrees of freedom: the groups' independent rows less the nuisance each determines (their
+  // redundancies), less the identifiable coordinates. Rows of a residual are not all
+  // independent (an optical-axis perpendicular has 3 rows in a plane), so J's row count would
+  // overstate them; without groups, the rows.
+  int dof = 0;
+  for (const GroupSummary& g : res.groups) dof += g.redundancy;
+  dof = res.groups.empty() ? static_cast<int>(J.rows()) - k : dof - rank;
+  res.redundancy = dof;
   res.sigma0 = dof > 0 ? std::sqrt(2.0 * res.cost_after / dof) : 0.0;
   Eigen::HouseholderQR<Eigen::MatrixXd> qr(J);
   const Eigen::MatrixXd R =
@@ -348,7 +355,8 @@ IdentificationResult Identify(const RobotModel& start, const std::vector<Measure
   const Eigen::MatrixXd cov_all =
       res.sigma0 * res.sigma0 * svd.matrixV() * inv2.asDiagonal() * svd.matrixV().transpose();
   const Eigen::MatrixXd& B = res.identifiable_directions;
-  res.covariance = B * cov_all.topLeftCorner(rank, rank) * B.transpose();
+  res.covariance_z = cov_all.topLeftCorner(rank, rank);
+  res.covariance = B * res.covariance_z * B.transpose();
   fill_parameters();
   for (int i = 0; i < n; ++i) {
     for (int j = i + 1; j < n; ++j) {

@@ -12,7 +12,8 @@
 //    (variance components: 1 / sigma_g from each group's sum of squares and redundancy) and a
 //    second solve.
 // 4. Uncertainty: covariance of z and the nuisance from the Jacobian at the solution, times the
-//    residual variance (sigma0^2 = 2 cost / (rows - unknowns)), mapped to every parameter:
+//    residual variance (sigma0^2 = 2 cost / redundancy, the independent rows less the
+//    unknowns), mapped to every parameter:
 //    Cov_phi = S V Cov_z V^T S; 1-sigma and the strongest correlations between parameters.
 // Memory and time are linear in the number of measurements (the dense Jacobian has one row per
 // residual row and one column per unknown; the SVD works on its R factor).
@@ -111,11 +112,14 @@ struct IdentificationResult {
   Eigen::MatrixXd identifiable_directions;
   Eigen::VectorXd z;                 ///< coordinates of the correction in those directions
   std::vector<IdentifiedParameter> parameters;  ///< every parameter, flat order
+  Eigen::MatrixXd covariance_z;      ///< of z (rank x rank) [-, the directions carry SI]
   Eigen::MatrixXd covariance;        ///< of the flat parameters [SI], held parameters 0
   std::vector<ParameterCorrelation> correlations;  ///< strongest first
   int residual_rows = 0;             ///< weighted residual rows
   int unknowns = 0;                  ///< rank + nuisance tangent dimensions
-  double sigma0 = 0;                 ///< sqrt(2 cost / (rows - unknowns)) [-]
+  /// Independent residual rows less all unknowns (sum of the groups' redundancies less rank).
+  int redundancy = 0;
+  double sigma0 = 0;                 ///< sqrt(2 cost / redundancy) [-]
   double cost_before = 0, cost_after = 0;  ///< Ceres cost (half the weighted sum of squares)
   std::vector<SetSummary> sets;
   std::vector<GroupSummary> groups;

@@ -100,16 +100,18 @@ ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi, const Kinem
                               relative_tolerance, known_invariants);
 }
 
-ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi,
-                                         const std::vector<std::string>& names,
-                                         const Eigen::VectorXd& column_scale,
-                                         double relative_tolerance,
-                                         const std::vector<Eigen::VectorXd>& known_invariants) {
+namespace {
+
+// The SVD of the column-scaled Phi, with the null space widened by the known invariants (see
+// the header); V only when `with_v` (the singular values do not depend on it: JacobiSVD's
+// rotations are chosen from the work matrix alone).
+Eigen::JacobiSVD<Square, Eigen::NoQRPreconditioner> ScaledSvd(
+    const Eigen::MatrixXd& Phi, const Eigen::VectorXd& column_scale, double relative_tolerance,
+    const std::vector<Eigen::VectorXd>& known_invariants, bool with_v, double* cut_out) {
   const int n = static_cast<int>(Phi.cols());
-  if (static_cast<int>(names.size()) != n || column_scale.size() != n || n == 0) {
+  if (column_scale.size() != n || n == 0) {
     throw InputError("AnalyseObservability", "Phi has " + std::to_string(Phi.cols()) +
-                                                 " columns, " + std::to_string(names.size()) +
-                                                 " names and " +
+                                                 " columns and " +
                                                  std::to_string(column_scale.size()) +
                                                  " column scales; they must agree (> 0)");
   }
@@ -117,11 +119,11 @@ ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi,
     throw InputError("AnalyseObservability.relative_tolerance",
                      "must be in (0, 1), got " + std::to_string(relative_tolerance));
   }
-  ObservabilityReport rep;
-  rep.column_scale = column_scale;
-  Eigen::MatrixXd A = Phi * rep.column_scale.asDiagonal();
+  const Eigen::MatrixXd A = Phi * column_scale.asDiagonal();
   const Square R = GivensR(A);
-  Eigen::JacobiSVD<Square, Eigen::NoQRPreconditioner> svd(R, Eigen::ComputeFullV);
+  // V of the first SVD is needed for the numerical null space when there are invariants.
+  Eigen::JacobiSVD<Square, Eigen::NoQRPreconditioner> svd(
+      R, with_v || !known_invariants.empty() ? Eigen::ComputeFullV : 0);
   const double cut = relative_tolerance * svd.singularValues()(0);
   if (!known_invariants.empty()) {
     // Null space W = span(numerical null space of A, invariants in scaled coordinates); then
@@ -142,12 +144,48 @@ ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi,
         throw InputError("AnalyseObservability", "an invariant has " + std::to_string(v.size()) +
                                                      " entries, expected " + std::to_string(n));
       }
-      add(v.cwiseQuotient(rep.column_scale));
+      add(v.cwiseQuotient(column_scale));
     }
     Square Q = Square::Identity(n, n);
     for (const auto& b : w) Q -= b * b.transpose();
-    svd.compute(R * Q, Eigen::ComputeFullV);
+    svd.compute(R * Q, with_v ? Eigen::ComputeFullV : 0);
   }
+  *cut_out = cut;
+  return svd;
+}
+
+}  // namespace
+
+SingularValuesAndRank ObservabilitySingularValues(
+    const Eigen::MatrixXd& Phi, const Eigen::VectorXd& column_scale, double relative_tolerance,
+    const std::vector<Eigen::VectorXd>& known_invariants) {
+  double cut = 0.0;
+  const auto svd =
+      ScaledSvd(Phi, column_scale, relative_tolerance, known_invariants, false, &cut);
+  SingularValuesAndRank out;
+  const auto& sv = svd.singularValues();
+  out.singular_values.assign(sv.data(), sv.data() + sv.size());
+  while (out.rank < sv.size() && sv(out.rank) > cut) ++out.rank;
+  return out;
+}
+
+ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi,
+                                         const std::vector<std::string>& names,
+                                         const Eigen::VectorXd& column_scale,
+                                         double relative_tolerance,
+                                         const std::vector<Eigen::VectorXd>& known_invariants) {
+  const int n = static_cast<int>(Phi.cols());
+  if (static_cast<int>(names.size()) != n || column_scale.size() != n || n == 0) {
+    throw InputError("AnalyseObservability", "Phi has " + std::to_string(Phi.cols()) +
+                                                 " columns, " + std::to_string(names.size()) +
+                                                 " names and " +
+                                                 std::to_string(column_scale.size()) +
+                                                 " column scales; they must agree (> 0)");
+  }
+  ObservabilityReport rep;
+  rep.column_scale = column_scale;
+  double cut = 0.0;
+  const auto svd = ScaledSvd(Phi, column_scale, relative_tolerance, known_invariants, true, &cut);
   const auto& sv = svd.singularValues();
   rep.singular_values.assign(sv.data(), sv.data() + sv.size());
   while (rep.rank < n && sv(rep.rank) > cut) ++rep.rank;

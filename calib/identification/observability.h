@@ -51,6 +51,18 @@ ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi, const Kinem
                                          double relative_tolerance,
                                          const std::vector<Eigen::VectorXd>& known_invariants = {});
 
+/// The first part of AnalyseObservability alone, with the same arithmetic: the singular values
+/// (descending) and the rank, without the bases and the names of the unidentifiable
+/// combinations (what the pose planner's fitness needs, many thousand times). Same
+/// requirements and errors.
+struct SingularValuesAndRank {
+  std::vector<double> singular_values;
+  int rank = 0;
+};
+SingularValuesAndRank ObservabilitySingularValues(
+    const Eigen::MatrixXd& Phi, const Eigen::VectorXd& column_scale, double relative_tolerance,
+    const std::vector<Eigen::VectorXd>& known_invariants = {});
+
 /// Column scales of the geometric parameters of `model` (see above).
 Eigen::VectorXd GeometricColumnScale(const KinematicModel& model);
 

@@ -1,6 +1,7 @@
 #include "calib/kinematics/forward_kinematics.h"
 
 #include <cassert>
+#include <cmath>
 
 #include <Eigen/SVD>
 
@@ -33,11 +34,21 @@ struct FlatParameters {
 
 }  // namespace
 
-FrameSet ForwardKinematics(const KinematicModel& model, const JointVector& q) {
+ChainTrig::ChainTrig(const KinematicModel& model) {
+  assert(model.num_links() <= kMaxJoints + 1);
+  for (int i = 0; i < model.num_links(); ++i) {
+    const DhParameters& dh = model.links[i].dh;
+    link[i] = {std::cos(dh.alpha), std::sin(dh.alpha), std::cos(dh.beta), std::sin(dh.beta)};
+  }
+}
+
+FrameSet ForwardKinematics(const KinematicModel& model, const JointVector& q,
+                           const ChainTrig* trig) {
   assert(q.size() == model.num_joints());
   const FlatParameters flat(model);
   std::array<RigidT<double>, kMaxJoints + 2> X;
-  ChainFramesT<double>(model, flat.phi.data(), q.data(), 1.0, X.data());
+  ChainFramesT<double>(model, flat.phi.data(), q.data(), 1.0, X.data(),
+                       trig ? trig->link.data() : nullptr);
   FrameSet f;
   f.num_joints = model.num_joints();
   for (int i = 0; i <= model.num_links(); ++i) f.X_BL[i] = ToTransform(X[i]);
@@ -45,14 +56,16 @@ FrameSet ForwardKinematics(const KinematicModel& model, const JointVector& q) {
   return f;
 }
 
-Transform EndPose(const KinematicModel& model, const JointVector& q) {
+Transform EndPose(const KinematicModel& model, const JointVector& q, const ChainTrig* trig) {
   assert(q.size() == model.num_joints());
   const FlatParameters flat(model);
-  return ToTransform(ChainEndPoseT<double>(model, flat.phi.data(), q.data(), 1.0));
+  return ToTransform(ChainEndPoseT<double>(model, flat.phi.data(), q.data(), 1.0,
+                                           trig ? trig->link.data() : nullptr));
 }
 
-JointJacobian ManipulatorJacobian(const KinematicModel& model, const JointVector& q) {
-  const FrameSet f = ForwardKinematics(model, q);
+JointJacobian ManipulatorJacobian(const KinematicModel& model, const JointVector& q,
+                                  const ChainTrig* trig) {
+  const FrameSet f = ForwardKinematics(model, q, trig);
   const Vector3 p = f.X_BE.translation();
   const int n = model.num_joints();
   JointJacobian J(6, n);
@@ -63,13 +76,15 @@ JointJacobian ManipulatorJacobian(const KinematicModel& model, const JointVector
   return J;
 }
 
-Eigen::VectorXd JacobianSingularValues(const KinematicModel& model, const JointVector& q) {
-  const Eigen::JacobiSVD<JointJacobian> svd(ManipulatorJacobian(model, q));
+Eigen::VectorXd JacobianSingularValues(const KinematicModel& model, const JointVector& q,
+                                       const ChainTrig* trig) {
+  const Eigen::JacobiSVD<JointJacobian> svd(ManipulatorJacobian(model, q, trig));
   return svd.singularValues();
 }
 
-double SmallestJacobianSingularValue(const KinematicModel& model, const JointVector& q) {
-  const Eigen::VectorXd s = JacobianSingularValues(model, q);
+double SmallestJacobianSingularValue(const KinematicModel& model, const JointVector& q,
+                                     const ChainTrig* trig) {
+  const Eigen::VectorXd s = JacobianSingularValues(model, q, trig);
   return s(s.size() - 1);
 }
 

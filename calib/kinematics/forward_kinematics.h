@@ -23,14 +23,22 @@ namespace twin {
 /// RotY(dh[4]), with dh = (theta_offset, d, a, alpha, beta) [rad, m, m, rad, rad] and q the
 /// link-side joint angle [rad]; `length_scale` multiplies d and a (1 for the geometric model;
 /// thermal terms change it).
+/// cos and sin of a link's constant angles alpha (dh[3]) and beta (dh[4]).
 template <typename T>
-RigidT<T> LinkTransformT(const T* dh, const T& q, const T& length_scale) {
+struct LinkTrigT {
+  T ca, sa, cb, sb;
+};
+
+/// Eq. 2 with the link's alpha and beta given by their cosines and sines (computed once by a
+/// caller that evaluates one model many times); the formula of the overload below.
+template <typename T>
+RigidT<T> LinkTransformT(const T* dh, const T& q, const T& length_scale,
+                         const LinkTrigT<T>& trig) {
   using std::cos;
   using std::sin;
   const T th = dh[0] + q;
   const T ct = cos(th), st = sin(th);
-  const T ca = cos(dh[3]), sa = sin(dh[3]);
-  const T cb = cos(dh[4]), sb = sin(dh[4]);
+  const T &ca = trig.ca, &sa = trig.sa, &cb = trig.cb, &sb = trig.sb;
   RigidT<T> X;
   X.R << ct * cb - st * sa * sb, -st * ca, ct * sb + st * sa * cb,
          st * cb + ct * sa * sb, ct * ca, st * sb - ct * sa * cb,
@@ -40,30 +48,43 @@ RigidT<T> LinkTransformT(const T* dh, const T& q, const T& length_scale) {
   return X;
 }
 
+template <typename T>
+RigidT<T> LinkTransformT(const T* dh, const T& q, const T& length_scale) {
+  using std::cos;
+  using std::sin;
+  return LinkTransformT(dh, q, length_scale,
+                        LinkTrigT<T>{cos(dh[3]), sin(dh[3]), cos(dh[4]), sin(dh[4])});
+}
+
 /// Eq. 1 on scalar T: the poses X_BL[0..N+1] of DH frames L0..Lt in the base frame B, for the
 /// geometric parameters `phi` (5 (N + 1) values, flat order of parameters.h), link-side joint
 /// angles `q_link` (N values) and a length scale applied to every d and a. X_BL must hold
-/// model.num_links() + 1 entries.
+/// model.num_links() + 1 entries. `trig` (optional, num_links() entries): the links' alpha and
+/// beta cosines and sines of these phi, precomputed (the same numbers, bit for bit).
 template <typename T>
 void ChainFramesT(const KinematicModel& model, const T* phi, const T* q_link,
-                  const T& length_scale, RigidT<T>* X_BL) {
+                  const T& length_scale, RigidT<T>* X_BL, const LinkTrigT<T>* trig = nullptr) {
   const int n = model.num_joints();
   X_BL[0] = RigidT<T>::FromTransform(model.X_BL0);
   for (int i = 0; i <= n; ++i) {
     const T q = i < n ? q_link[i] : T(0.0);
-    X_BL[i + 1] = X_BL[i] * LinkTransformT(phi + kParamsPerLink * i, q, length_scale);
+    const T* dh = phi + kParamsPerLink * i;
+    X_BL[i + 1] = X_BL[i] * (trig ? LinkTransformT(dh, q, length_scale, trig[i])
+                                  : LinkTransformT(dh, q, length_scale));
   }
 }
 
 /// Pose X_BE of the end frame on scalar T (same inputs as ChainFramesT).
 template <typename T>
 RigidT<T> ChainEndPoseT(const KinematicModel& model, const T* phi, const T* q_link,
-                        const T& length_scale) {
+                        const T& length_scale, const LinkTrigT<T>* trig = nullptr) {
   const int n = model.num_joints();
   RigidT<T> X = RigidT<T>::FromTransform(model.X_BL0);
   for (int i = 0; i <= n; ++i) {
     const T q = i < n ? q_link[i] : T(0.0);
-    X = X * LinkTransformT(phi + kParamsPerLink * i, q, length_scale);
+    const T* dh = phi + kParamsPerLink * i;
+    X = X * (trig ? LinkTransformT(dh, q, length_scale, trig[i])
+                  : LinkTransformT(dh, q, length_scale));
   }
   return X * RigidT<T>::FromTransform(model.X_LtE);
 }
@@ -77,25 +98,39 @@ struct FrameSet {
   const Transform& tool() const { return X_BL[num_joints + 1]; }
 };
 
-/// Eq. 1: poses of L0..Lt and E in B (ChainFramesT in double).
-FrameSet ForwardKinematics(const KinematicModel& model, const JointVector& q);
+/// The cosines and sines of every link's alpha and beta of one model, for repeated forward
+/// kinematics of that model at many joint angles (IK's iterations, the planner's checks): the
+/// functions below give bit-equal results with or without it, faster with it.
+struct ChainTrig {
+  ChainTrig() = default;  ///< empty: assign ChainTrig(model) before use
+  explicit ChainTrig(const KinematicModel& model);
+  std::array<LinkTrigT<double>, kMaxJoints + 1> link{};
+};
+
+/// Eq. 1: poses of L0..Lt and E in B (ChainFramesT in double); `trig` of this model or null.
+FrameSet ForwardKinematics(const KinematicModel& model, const JointVector& q,
+                           const ChainTrig* trig = nullptr);
 
 /// Pose of the end frame E in B (the tool: feature point or camera mount).
-Transform EndPose(const KinematicModel& model, const JointVector& q);
+Transform EndPose(const KinematicModel& model, const JointVector& q,
+                  const ChainTrig* trig = nullptr);
 
 /// 6 x N matrix with inline storage (Jacobians with respect to joint angles).
 using JointJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, kMaxJoints>;
 
 /// 6xN geometric Jacobian of the end frame: rows 0-2 map qdot to the velocity of E's origin,
 /// rows 3-5 to its angular velocity, both expressed in B [m/rad, rad/rad].
-JointJacobian ManipulatorJacobian(const KinematicModel& model, const JointVector& q);
+JointJacobian ManipulatorJacobian(const KinematicModel& model, const JointVector& q,
+                                  const ChainTrig* trig = nullptr);
 
 /// Singular values of ManipulatorJacobian, descending (min(6, N) of them). The smallest one is
 /// the singularity measure of constraint C2 (Zhu et al. 2019, section IV).
-Eigen::VectorXd JacobianSingularValues(const KinematicModel& model, const JointVector& q);
+Eigen::VectorXd JacobianSingularValues(const KinematicModel& model, const JointVector& q,
+                                       const ChainTrig* trig = nullptr);
 
 /// The smallest of JacobianSingularValues.
-double SmallestJacobianSingularValue(const KinematicModel& model, const JointVector& q);
+double SmallestJacobianSingularValue(const KinematicModel& model, const JointVector& q,
+                                     const ChainTrig* trig = nullptr);
 
 /// 6 x 5 (N + 1) matrix with inline storage (Jacobians with respect to link parameters).
 using ParameterJacobian =

@@ -24,8 +24,9 @@ struct Attempt {
 };
 
 // Pose error of q against the target: translation [m] and rotation vector in B [rad].
-Error6 PoseError(const KinematicModel& model, const Transform& X_target, const JointVector& q) {
-  const Transform X = EndPose(model, q);
+Error6 PoseError(const KinematicModel& model, const Transform& X_target, const JointVector& q,
+                 const ChainTrig& trig) {
+  const Transform X = EndPose(model, q, &trig);
   Error6 e;
   e.head<3>() = X_target.translation() - X.translation();
   const Eigen::AngleAxisd aa(X_target.linear() * X.linear().transpose());
@@ -74,13 +75,13 @@ JointVector ActiveSetStep(const KinematicModel& model, const JointVector& q,
 
 // Levenberg-Marquardt on the weighted pose error from one start; `limits` clamps each iterate.
 Attempt Descend(const KinematicModel& model, const Transform& X_target, JointVector q,
-                const IkOptions& o, bool limits) {
+                const IkOptions& o, bool limits, const ChainTrig& trig) {
   const double w = o.position_only ? 0.0 : o.orientation_weight;
   auto cost = [&](const Error6& e) {
     return e.head<3>().squaredNorm() + w * w * e.tail<3>().squaredNorm();
   };
   Attempt a;
-  Error6 e = PoseError(model, X_target, q);
+  Error6 e = PoseError(model, X_target, q, trig);
   double lambda = o.damping;
   for (a.iterations = 0; a.iterations < o.max_iterations; ++a.iterations) {
     if (e.head<3>().norm() <= o.position_tolerance &&
@@ -88,7 +89,7 @@ Attempt Descend(const KinematicModel& model, const Transform& X_target, JointVec
       a.converged = true;
       break;
     }
-    JointJacobian J = ManipulatorJacobian(model, q);
+    JointJacobian J = ManipulatorJacobian(model, q, &trig);
     Error6 ew = e;
     J.bottomRows<3>() *= w;
     ew.tail<3>() *= w;
@@ -101,7 +102,7 @@ Attempt Descend(const KinematicModel& model, const Transform& X_target, JointVec
       if (n > o.max_step) dq *= o.max_step / n;
       JointVector q_new = q + dq;
       if (limits) q_new = Clamp(model, q_new);
-      const Error6 e_new = PoseError(model, X_target, q_new);
+      const Error6 e_new = PoseError(model, X_target, q_new, trig);
       if (cost(e_new) < cost(e)) {
         q = q_new;
         e = e_new;
@@ -175,6 +176,7 @@ IkResult SolveIk(const KinematicModel& model, const Transform& X_BE_target,
     return r;
   }
   std::mt19937_64 rng(options.seed);
+  const ChainTrig trig(model);  // alpha, beta of the links: once for all iterations
   Attempt best;
   best.position_error = best.orientation_error = INFINITY;
   auto score = [&](const Attempt& a) {
@@ -189,7 +191,7 @@ IkResult SolveIk(const KinematicModel& model, const Transform& X_BE_target,
         q0(i) = u(rng);
       }
     }
-    const Attempt a = Descend(model, X_BE_target, q0, options, /*limits=*/true);
+    const Attempt a = Descend(model, X_BE_target, q0, options, /*limits=*/true, trig);
     r.iterations += a.iterations;
     r.starts = s + 1;
     if (a.converged) {
@@ -207,7 +209,7 @@ IkResult SolveIk(const KinematicModel& model, const Transform& X_BE_target,
   }
   // No start converged inside the limits. Tell "outside the limits" from "out of reach" by
   // solving once more without limits.
-  const Attempt free = Descend(model, X_BE_target, q_seed, options, /*limits=*/false);
+  const Attempt free = Descend(model, X_BE_target, q_seed, options, /*limits=*/false, trig);
   r.iterations += free.iterations;
   if (free.converged) {
     JointVector q = free.q;

@@ -65,15 +65,16 @@ double JointLimitDistance(const KinematicModel& m, const JointVector& q) {
 
 // C1 and C2 of one configuration.
 Cause CheckConfiguration(const KinematicModel& m, const JointVector& q,
-                         const PosePlannerOptions& o) {
+                         const PosePlannerOptions& o, const ChainTrig& trig) {
   if (JointLimitDistance(m, q) < o.min_joint_limit_distance) return Cause::kC1;
-  if (SmallestJacobianSingularValue(m, q) < o.min_singular_value) return Cause::kC2;
+  if (SmallestJacobianSingularValue(m, q, &trig) < o.min_singular_value) return Cause::kC2;
   return Cause::kNone;
 }
 
 struct Planner {
   KinematicModel active;   // flange model
   KinematicModel passive;
+  ChainTrig active_trig, passive_trig;  // of the two models (repeated FK)
   Transform X_BaBp;
   Transform X_BpBa;
   Transform X_CF;
@@ -99,9 +100,9 @@ struct Planner {
 
     const IkResult ik_a = SolveIk(active, X_BaBp * X_BpC * X_CF, MidRange(active), o.ik);
     if (ik_a.status != IkStatus::kSuccess) return Cause::kActiveIk;
-    if (Cause c = CheckConfiguration(active, ik_a.q, o); c != Cause::kNone) return c;
+    if (Cause c = CheckConfiguration(active, ik_a.q, o, active_trig); c != Cause::kNone) return c;
     // Camera as the active robot actually reaches it (within IK tolerance).
-    const Transform X_BpC_fk = X_BpBa * EndPose(active, ik_a.q) * X_CF.inverse();
+    const Transform X_BpC_fk = X_BpBa * EndPose(active, ik_a.q, &active_trig) * X_CF.inverse();
 
     out->camera_origin = X_BpC_fk.translation();
     out->direction = X_BpC_fk.linear().col(2);
@@ -123,8 +124,10 @@ struct Planner {
       X_BpE.translation() = p_c + d_i * mu;
       const IkResult ik_p = SolveIk(passive, X_BpE, seed, o.ik);
       if (ik_p.status != IkStatus::kSuccess) return Cause::kPassiveIk;
-      if (Cause c = CheckConfiguration(passive, ik_p.q, o); c != Cause::kNone) return c;
-      const Transform X_BpE_fk = EndPose(passive, ik_p.q);
+      if (Cause c = CheckConfiguration(passive, ik_p.q, o, passive_trig); c != Cause::kNone) {
+        return c;
+      }
+      const Transform X_BpE_fk = EndPose(passive, ik_p.q, &passive_trig);
       const Vector3 n_fk = X_BpE_fk.linear() * o.board_normal_in_E;
       const double visibility = std::acos(std::clamp(n_fk.dot(-out->direction), -1.0, 1.0));
       if (visibility > o.max_visibility_angle) return Cause::kC3;
@@ -242,8 +245,10 @@ double PoseSetFitness(const KinematicModel& passive,
     }
   }
   const MisalignedErrorStack stack = StackMisalignedErrors(passive, samples, directions);
-  const ObservabilityReport report = AnalyseObservability(
-      ProfiledPhi(stack), passive, rank_tolerance, LineConstraintInvariants(passive));
+  // The singular values alone (AnalyseObservability's arithmetic without bases and names).
+  const SingularValuesAndRank report =
+      ObservabilitySingularValues(ProfiledPhi(stack), GeometricColumnScale(passive),
+                                  rank_tolerance, LineConstraintInvariants(passive));
   const std::vector<double> sv(report.singular_values.begin(),
                                report.singular_values.begin() + report.rank);
   const double o1 = ObservabilityIndexO1(sv);  // eq. 34
@@ -275,6 +280,8 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
   Planner pl;
   pl.active = FlangeModel(active);
   pl.passive = passive;
+  pl.active_trig = ChainTrig(pl.active);
+  pl.passive_trig = ChainTrig(pl.passive);
   pl.X_BaBp = X_BaBp;
   pl.X_BpBa = X_BaBp.inverse();
   pl.X_CF = X_FC.inverse();
@@ -379,6 +386,10 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
     out.history.push_back(g_f);
 
     for (int it = 0; it < o.iterations; ++it) {
+      if (o.cancel && o.cancel->load()) {
+        out.failure = "cancelled";
+        return out;
+      }
       for (Particle& p : swarm) {
         const Eigen::VectorXd x_old = p.x;
         const std::vector<PlannedAxis> axes_old = p.axes;

@@ -18,7 +18,9 @@
 // then rolled about itself; passive joint angles come from SolveIk on the passive model.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -62,6 +64,9 @@ struct PosePlannerOptions {
   /// Threads running the independent PSO runs (0: one per hardware thread). The result does
   /// not depend on it: every run has its own seed.
   int threads = 0;
+  /// Optional: when it becomes true the runs stop and the result is kNoFeasiblePoses with
+  /// reason "cancelled" (a procedure that failed elsewhere). Not an input of the plan.
+  std::shared_ptr<std::atomic<bool>> cancel;
 };
 
 /// Throws InputError naming the bad field and value. Geometric infeasibility (for example

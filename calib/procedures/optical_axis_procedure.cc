@@ -1,7 +1,11 @@
 #include "calib/procedures/optical_axis_procedure.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <future>
+#include <map>
+#include <memory>
 #include <cmath>
 #include <optional>
 #include <set>
@@ -13,6 +17,7 @@
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/inverse_kinematics.h"
+#include "calib/vision/board_region.h"
 
 namespace twin {
 namespace {
@@ -34,10 +39,10 @@ std::string Fixed(double v, int digits) {
 // The feature point P in the camera frame from the board's pose: solvePnP (IPPE, planar) on
 // all inner corners with the known square length, estimated intrinsics and distortion. The
 // centre corner is the board's centre of symmetry, so P does not depend on how OpenCV ordered
-// the corners. nullopt when the board is not found or lies behind the camera.
-std::optional<Vector3> FeaturePointInCamera(const cv::Mat& image, const BoardGeometry& board,
+// the corners. nullopt when the board was not found or lies behind the camera. `det` is in
+// frame coordinates.
+std::optional<Vector3> FeaturePointInCamera(const FeatureDetection& det, const BoardGeometry& board,
                                             const IntrinsicsResult& intr) {
-  const FeatureDetection det = DetectFeaturePoint(image, board);
   if (det.status != DetectionStatus::kFound) return std::nullopt;
   const cv::Size n = det.pattern_size;
   std::vector<cv::Point3d> object;
@@ -92,6 +97,44 @@ MisalignedSummary Misaligned(const KinematicModel& before, const KinematicModel&
   m.before = MeanMisalignedErrorNorm(before, samples);
   m.after = MeanMisalignedErrorNorm(after, samples);
   return m;
+}
+
+// A plan and where it came from.
+struct PlanOutcome {
+  PosePlanResult plan;
+  bool from_store = false;
+  double seconds = 0;  // wall time of the lookup and the planning
+};
+
+// The plan of `inputs`: from the store when it has it, else planned (and kept there).
+PlanOutcome PlanWithStore(PlanInputs inputs, std::shared_ptr<PlanStore> store,
+                          std::shared_ptr<std::atomic<bool>> cancel) {
+  const auto t0 = Clock::now();
+  PlanOutcome out;
+  std::optional<PosePlanResult> stored;
+  if (store) stored = store->Find(inputs);
+  if (stored) {
+    out.plan = std::move(*stored);
+    out.from_store = true;
+  } else {
+    PosePlannerOptions o = inputs.options;
+    o.cancel = cancel;
+    try {
+      out.plan = PlanCalibrationPoses(inputs.active, inputs.passive, inputs.X_BaBp, inputs.X_FC, o);
+    } catch (...) {
+      if (store) store->Abandon(inputs);
+      throw;
+    }
+    if (store) {
+      if (out.plan.status == PosePlannerStatus::kSuccess) {
+        store->Store(inputs, out.plan);
+      } else {
+        store->Abandon(inputs);
+      }
+    }
+  }
+  out.seconds = Seconds(t0);
+  return out;
 }
 
 }  // namespace
@@ -280,15 +323,20 @@ void IdentifyRobot(const std::vector<int>& calibration_axes,
   }
   rc->holdout = rc->identified;
   rc->refit = false;
+  rc->covariance = IdentificationCovariance{};
+  if (rc->method != "linearized") {
+    rc->covariance = EstimateIdentificationCovariance(rc->nominal, cal, rc->nonlinear);
+  }
   if (options.refit_all_axes && !val_kept.empty()) {
     std::vector<int> all = cal_kept;
     all.insert(all.end(), val_kept.begin(), val_kept.end());
     std::sort(all.begin(), all.end());
     const auto t1 = Clock::now();
-    NonlinearIdentificationResult f =
-        IdentifyNonlinear(rc->nominal, Subset(rc->samples, all), options.nonlinear);
+    const std::vector<AxisSample> all_samples = Subset(rc->samples, all);
+    NonlinearIdentificationResult f = IdentifyNonlinear(rc->nominal, all_samples, options.nonlinear);
     rc->identification_s += Seconds(t1);
     if (f.status != NonlinearIdentificationStatus::kFailed) {
+      rc->covariance = EstimateIdentificationCovariance(rc->nominal, all_samples, f);
       rc->identified = f.model;
       rc->method = std::string(f.depth_used ? "ceres_with_scale" : "ceres") + "_all_axes";
       rc->refit_result = std::move(f);
@@ -319,6 +367,30 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
                                         ToString(m.status) + ": " + m.reason);
     }
   };
+
+  // Pose planning (section IV) depends on the knowledge alone: every robot's plan starts now in
+  // the background, overlapping the intrinsics and the servoing of the robots before it. The
+  // plans do not depend on when or in which thread they run.
+  auto cancel = std::make_shared<std::atomic<bool>>(false);
+  std::map<int, std::future<PlanOutcome>> plan_jobs;
+  // Declared after plan_jobs, so destroyed first: an exception below stops the planners early
+  // instead of waiting for them.
+  struct CancelOnExit {
+    std::shared_ptr<std::atomic<bool>> flag;
+    ~CancelOnExit() { flag->store(true); }
+  } cancel_on_exit{cancel};
+  for (const int r : options.robots) {
+    const int a = 1 - r;
+    PlanInputs inputs{knowledge.nominal[a], BoardRobotModel(knowledge.nominal[r], knowledge.X_FT),
+                      a == 0 ? knowledge.X_B1B2 : Transform(knowledge.X_B1B2.inverse()),
+                      knowledge.X_FC, options.planner};
+    say(name(r) + ": planning " + std::to_string(options.planner.num_axes) + " axes x " +
+        std::to_string(options.planner.positions_per_axis) + " positions (PSO, " +
+        std::to_string(options.planner.runs) + " runs x " +
+        std::to_string(options.planner.iterations) + " iterations), in the background");
+    plan_jobs[r] = std::async(std::launch::async, PlanWithStore, std::move(inputs),
+                              options.plan_store, cancel);
+  }
 
   // 1. Intrinsics (section VI.A), board views around the start pose.
   {
@@ -371,13 +443,12 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
     const KinematicModel& active = knowledge.nominal[a];
     const Transform X_BaBp = a == 0 ? knowledge.X_B1B2 : Transform(knowledge.X_B1B2.inverse());
 
-    // 2a. Pose planning (section IV).
+    // 2a. Pose planning (section IV): started at the beginning (below), collected here.
     auto t0 = Clock::now();
-    say(name(r) + ": planning " + std::to_string(options.planner.num_axes) + " axes x " +
-        std::to_string(options.planner.positions_per_axis) + " positions (PSO, " +
-        std::to_string(options.planner.runs) + " runs x " +
-        std::to_string(options.planner.iterations) + " iterations)");
-    rc.plan = PlanCalibrationPoses(active, rc.nominal, X_BaBp, knowledge.X_FC, options.planner);
+    PlanOutcome planned_outcome = plan_jobs.at(r).get();  // rethrows the planner's exception
+    rc.plan = std::move(planned_outcome.plan);
+    rc.plan_from_store = planned_outcome.from_store;
+    rc.plan_compute_s = planned_outcome.seconds;
     rc.planning_s = Seconds(t0);
     if (rc.plan.status != PosePlannerStatus::kSuccess) {
       throw InputError(name(r) + " planning", rc.plan.reason);
@@ -386,7 +457,10 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
       std::ostringstream os;
       os.precision(4);
       os << name(r) << ": best fitness 1/O1 = " << rc.plan.best_fitness << " (run "
-         << rc.plan.best_run + 1 << "), " << Fixed(rc.planning_s, 1) << " s";
+         << rc.plan.best_run + 1 << "), "
+         << (rc.plan_from_store ? std::string("from the plan store (same planner inputs)")
+                                : Fixed(rc.plan_compute_s, 1) + " s in the background")
+         << ", waited " << Fixed(rc.planning_s, 1) << " s";
       say(os.str());
     }
 
@@ -401,6 +475,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
     setup.intrinsics = out.intrinsics.intrinsics;
     setup.board = knowledge.board;
     const int num_axes = static_cast<int>(rc.plan.axes.size());
+    ServoStepModel step_model;  // learnt over this robot's poses
     for (int k = 0; k < num_axes; ++k) {
       const PlannedAxis& axis = rc.plan.axes[k];
       const int p = static_cast<int>(axis.q_passive.size());
@@ -430,6 +505,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
                             setup.R_FC;
       Vector3 correction = Vector3::Zero();
       bool have_correction = false;
+      cv::Rect next_region;  // where the board should appear at the next position
       // Steps 2-4: each position servoed onto the axis and its joint angles saved.
       for (int i = 0; i < p; ++i) {
         const JointVector& planned = axis.q_passive[i];
@@ -437,10 +513,15 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
         if (options.carry_correction && have_correction) {
           Transform target = EndPose(rc.nominal, planned);
           target.translation() += correction;
-          const IkResult ik = SolveIk(rc.nominal, target, planned);
+          IkOptions ik_options;
+          ik_options.seed = options.servo.ik_seed;
+          const IkResult ik = SolveIk(rc.nominal, target, planned, ik_options);
           if (ik.status == IkStatus::kSuccess && WithinLimits(rc.nominal, ik.q)) start = ik.q;
         }
-        const ServoResult sr = AlignFeatureToOpticalAxis(cell, setup, start, options.servo);
+        const ServoResult sr = AlignFeatureToOpticalAxis(
+            cell, setup, start, options.servo, next_region,
+            options.learn_servo_steps ? &step_model : nullptr);
+        next_region = cv::Rect();
         std::string where = name(r) + " axis " + std::to_string(k + 1) + "/" +
                             std::to_string(num_axes) + " position " + std::to_string(i + 1) +
                             "/" + std::to_string(p);
@@ -450,7 +531,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
           continue;
         }
         const std::optional<Vector3> p_C =
-            FeaturePointInCamera(sr.image_after, knowledge.board, out.intrinsics);
+            FeaturePointInCamera(sr.detection_after, knowledge.board, out.intrinsics);
         if (!p_C) {
           rc.failed.push_back({k, i, "board_pose_failed",
                                "aligned, but solvePnP found no board pose in the last image",
@@ -468,6 +549,9 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
         ap.offset = R_BpC * Vector3(p_C->x(), p_C->y(), 0.0);
         ap.frames = sr.frames;
         ap.moves = sr.moves;
+        ap.region_frames = sr.region_frames;
+        ap.full_frame_fallbacks = sr.full_frame_fallbacks;
+        ap.first_pixel_error = sr.first_pixel_error;
         rc.aligned.push_back(ap);
         AxisSample smp;
         smp.axis = k;
@@ -478,13 +562,32 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
         correction = EndPose(rc.nominal, sr.q_passive).translation() -
                      EndPose(rc.nominal, planned).translation();
         have_correction = true;
+        if (options.servo.use_regions && options.carry_correction) {
+          // The next position starts on the axis again (carried correction), 20 mm along it:
+          // the board stays about where it is, a few percent larger or smaller.
+          next_region = PredictBoardRegion(sr.detection_after, cv::Point2d(0, 0),
+                                           options.servo.region_margin_squares + 1.0,
+                                           options.servo.region_slack_px, cv::Size(1 << 20, 1 << 20));
+        }
         if (static_cast<int>(rc.images.size()) < options.kept_images && i == 0) {
           ServoImages im;
           im.axis = k;
           im.index = i;
-          im.before = sr.image_before;
-          im.after = sr.image_after;
-          const FeatureDetection d0 = DetectFeaturePoint(sr.image_before, knowledge.board);
+          // Regions shown in place on a black frame (what the camera did not read out).
+          const cv::Size frame = sr.image_before_origin == cv::Point(0, 0)
+                                     ? sr.image_before.size()
+                                     : sr.image_after.size();
+          auto in_frame = [&](const cv::Mat& part, const cv::Point& origin) {
+            if (origin == cv::Point(0, 0) && part.size() == frame) return part;
+            cv::Mat full(frame, part.type(), cv::Scalar::all(0));
+            const cv::Rect r = cv::Rect(origin, part.size()) & cv::Rect(cv::Point(0, 0), frame);
+            part(cv::Rect(cv::Point(0, 0), r.size())).copyTo(full(r));
+            return full;
+          };
+          im.before = in_frame(sr.image_before, sr.image_before_origin);
+          im.after = in_frame(sr.image_after, sr.image_after_origin);
+          FeatureDetection d0 = DetectFeaturePoint(sr.image_before, knowledge.board);
+          ToFrameCoordinates(sr.image_before_origin, &d0);
           if (d0.status == DetectionStatus::kFound) {
             im.error_before = cv::Point2d(d0.feature_px.x - setup.intrinsics.cx,
                                           d0.feature_px.y - setup.intrinsics.cy);

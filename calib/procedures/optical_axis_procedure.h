@@ -18,6 +18,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -26,8 +27,10 @@
 #include "calib/cell/cell.h"
 #include "calib/vision/feature_detector.h"
 #include "calib/vision/intrinsics_calibration.h"
+#include "calib/identification/identification_covariance.h"
 #include "calib/identification/linearized_identification.h"
 #include "calib/identification/nonlinear_identification.h"
+#include "calib/planning/plan_store.h"
 #include "calib/planning/pose_planner.h"
 #include "calib/vision/visual_servo.h"
 
@@ -52,7 +55,9 @@ struct OpticalAxisOptions {
   std::vector<int> robots = {1, 0};  ///< robots to calibrate (passive), in this order
   int intrinsics_views = 40;         ///< board views for Zhang's method [-]
   IntrinsicsOptions intrinsics;      ///< options of CalibrateIntrinsics
-  std::uint64_t seed = 1;            ///< seed of the intrinsics view poses
+  std::uint64_t seed = 1;            ///< seed of the intrinsics view poses (the planner and the
+                                     ///< servo's IK restarts have their own, planner.seed and
+                                     ///< servo.ik_seed)
   PosePlannerOptions planner;        ///< PSO (q, p, swarm, iterations, runs, C1-C5)
   ServoOptions servo;                ///< alignment (tolerance 0.1 px, iteration limit)
   int calibration_axes = 3;          ///< axes in the calibration set, the rest validate
@@ -70,6 +75,9 @@ struct OpticalAxisOptions {
   /// Start each position of an axis with the correction the servo found at the previous one
   /// (the kinematic error changes little over 20 mm), so the servo starts close.
   bool carry_correction = true;
+  /// Servo moves commanded through a step model learnt over each robot's poses
+  /// (ServoStepModel), so that first moves land within tolerance more often.
+  bool learn_servo_steps = true;
   LinearizedIdentificationOptions linearized;  ///< the paper's method
   /// The paper's method stacks every pair of samples of an axis (eq. 22: 3 rows of 5 (N + 1)
   /// doubles each, ~840 bytes per pair for a six-axis arm), quadratic in the samples; above
@@ -78,6 +86,9 @@ struct OpticalAxisOptions {
   int linearized_max_pairs = 200000;
   NonlinearIdentificationOptions nonlinear;    ///< Ceres, with the scale measurement
   int kept_images = 3;               ///< servo before/after image pairs kept per robot
+  /// Optional: plans looked up before planning and kept after (a study's trials that are told
+  /// the same share one plan); null plans every time.
+  std::shared_ptr<PlanStore> plan_store;
   /// Progress lines (one per aligned pose, stage changes); may be empty.
   std::function<void(const std::string&)> progress;
 };
@@ -105,6 +116,9 @@ struct AlignedPose {
   Vector3 offset = Vector3::Zero();   ///< AxisSample::offset: (p_C.x, p_C.y, 0) in Bp [m]
   int frames = 0;                     ///< images grabbed for this pose
   int moves = 0;                      ///< corrective moves
+  int region_frames = 0;              ///< of `frames`, regions (ServoResult)
+  int full_frame_fallbacks = 0;       ///< regions without the board
+  cv::Point2d first_pixel_error{0, 0};  ///< (du, dv) of the first image [px]
 };
 
 /// One pose the servo could not align; skipped, the run goes on.
@@ -136,6 +150,7 @@ struct RobotCalibration {
   int camera_robot = 1;                ///< active robot index
   KinematicModel nominal;              ///< BoardRobotModel of the nominal model
   PosePlanResult plan;
+  bool plan_from_store = false;        ///< the plan came from options.plan_store
   std::vector<AlignedPose> aligned;
   std::vector<FailedPose> failed;
   std::vector<AxisSample> samples;     ///< all aligned poses, axis = plan axis index
@@ -153,10 +168,15 @@ struct RobotCalibration {
                                        ///< failed): what the misaligned errors are of
   bool refit = false;                  ///< identified is the all-axes refit
   NonlinearIdentificationResult refit_result;  ///< Ceres on all usable axes, when refit
+  /// Covariance of the delivered model's identifiable coordinates (the refit's, or the
+  /// calibration-set Ceres solution's; not ok for the linearized fallback).
+  IdentificationCovariance covariance;
   MisalignedSummary calibration_error, validation_error;  ///< eq. 46
   std::vector<MisalignedSummary> per_axis;  ///< per plan axis (samples 0 when dropped)
   std::vector<ServoImages> images;
-  double planning_s = 0, servoing_s = 0, identification_s = 0;  ///< wall times [s]
+  /// Wall times [s]: planning_s is how long the procedure waited for the plan (planning runs
+  /// in the background from the start), plan_compute_s how long the planning itself took.
+  double planning_s = 0, plan_compute_s = 0, servoing_s = 0, identification_s = 0;
 };
 
 /// Outcome of RunOpticalAxisCalibration.

@@ -7,6 +7,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "calib/cell/cell_moves.h"
+#include "calib/vision/board_region.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/inverse_kinematics.h"
@@ -47,7 +48,33 @@ double DepthFromPnp(const FeatureDetection& det, const BoardGeometry& board,
   return p_C[2];
 }
 
+// Moves shorter than this do not teach the step model: the image noise of the two detections
+// (about 0.03 px each) would be more than 2 % of the motion, the size of what it learns.
+constexpr double kMinLearningStepPx = 2.0;
+// The identity prior of the step model weighs as much as a 2 px move in each direction: the
+// first long moves (tens of pixels at the first position of an axis) outweigh it at once.
+constexpr double kStepModelPriorPx = 2.0;
+
 }  // namespace
+
+Eigen::Matrix2d ServoStepModel::Matrix(double prior_px) const {
+  const double w = prior_px * prior_px;
+  const Eigen::Matrix2d A = sum_oc + w * Eigen::Matrix2d::Identity();
+  const Eigen::Matrix2d B = sum_cc + w * Eigen::Matrix2d::Identity();
+  const Eigen::Matrix2d M = A * B.inverse();
+  // A model far from the identity is a wrong model (a move that collided, a mislocked board):
+  // the rough rotations are off by degrees, not tens of degrees.
+  if (!M.allFinite() || (M - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff() > 0.3) {
+    return Eigen::Matrix2d::Identity();
+  }
+  return M;
+}
+
+void ServoStepModel::Add(const Eigen::Vector2d& c, const Eigen::Vector2d& observed) {
+  sum_oc += observed * c.transpose();
+  sum_cc += c * c.transpose();
+  ++pairs;
+}
 
 void ValidateServoOptions(const ServoOptions& o) {
   const std::string where = "ServoOptions";
@@ -84,7 +111,9 @@ const char* ToString(ServoStatus status) {
 
 ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
                                       const JointVector& q_passive_start,
-                                      const ServoOptions& options) {
+                                      const ServoOptions& options,
+                                      const cv::Rect& first_region,
+                                      ServoStepModel* step_model) {
   ValidateServoOptions(options);
   ValidateBoardGeometry(setup.board, "ServoSetup.board");
   if (setup.passive_robot != 0 && setup.passive_robot != 1) {
@@ -125,12 +154,39 @@ ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
   const Matrix3 R_BpC = setup.R_BaBp.transpose() * R_BaF * setup.R_FC;
 
   IkOptions ik_options;
+  ik_options.seed = options.ik_seed;
+  cv::Rect region = options.use_regions ? first_region : cv::Rect();
+  Eigen::Vector2d last_command = Eigen::Vector2d::Zero(), last_error = Eigen::Vector2d::Zero();
+  bool have_command = false;
+  cv::Size frame_size(0, 0);  // known after the first whole frame
   for (int iteration = 0;; ++iteration) {
-    const cv::Mat image = cell.GrabImage();
-    ++result.frames;
-    if (result.image_before.empty()) result.image_before = image.clone();
+    // A region where the board is expected, else (or when it is not found there) a frame.
+    cv::Mat image;
+    cv::Point origin(0, 0);
+    FeatureDetection det;
+    if (!region.empty()) {
+      image = cell.GrabImageRegion(region);
+      ++result.frames;
+      ++result.region_frames;
+      origin = region.tl();
+      if (!image.empty()) det = DetectFeaturePoint(image, setup.board);
+      if (det.status != DetectionStatus::kFound) ++result.full_frame_fallbacks;
+    }
+    if (det.status != DetectionStatus::kFound) {
+      image = cell.GrabImage();
+      ++result.frames;
+      origin = cv::Point(0, 0);
+      frame_size = image.size();
+      det = DetectFeaturePoint(image, setup.board);
+    }
+    if (result.image_before.empty()) {
+      result.image_before = image.clone();
+      result.image_before_origin = origin;
+    }
     result.image_after = image;
-    const FeatureDetection det = DetectFeaturePoint(image, setup.board);
+    result.image_after_origin = origin;
+    ToFrameCoordinates(origin, &det);
+    result.detection_after = det;
     if (det.status != DetectionStatus::kFound) {
       return finish(ServoStatus::kBoardNotFound,
                     "frame " + std::to_string(result.frames) + ": " + det.reason);
@@ -139,6 +195,14 @@ ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
     const double du = det.feature_px.x - k.cx;
     const double dv = det.feature_px.y - k.cy;
     result.pixel_error = cv::Point2d(du, dv);
+    if (result.moves == 0) {  // the first detection of this pose
+      result.first_pixel_error = result.pixel_error;
+    }
+    if (step_model && have_command) {
+      // What the last move did to the image, against what it commanded.
+      const Eigen::Vector2d observed(du - last_error.x(), dv - last_error.y());
+      if (last_command.norm() >= kMinLearningStepPx) step_model->Add(last_command, observed);
+    }
     if (std::abs(du) < options.tolerance_px && std::abs(dv) < options.tolerance_px) {
       return finish(ServoStatus::kAligned, "");
     }
@@ -159,9 +223,11 @@ ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
       }
     }
     // Eq. 42: offset of P from the axis in C (x right, y down), then in Bp. P must move by
-    // minus that offset to reach the axis.
-    const Vector3 dP_C(du * z / k.fx, dv * z / k.fy, 0.0);
-    const Vector3 step_Bp = -options.gain * (R_BpC * dP_C);
+    // minus that offset to reach the axis: the wanted image motion is -gain (du, dv), and the
+    // command that achieves it by the learnt step model M^-1 of that.
+    Eigen::Vector2d command = -options.gain * Eigen::Vector2d(du, dv);
+    if (step_model) command = step_model->Matrix(kStepModelPriorPx).inverse() * command;
+    const Vector3 step_Bp = R_BpC * Vector3(command.x() * z / k.fx, command.y() * z / k.fy, 0.0);
     if (step_Bp.norm() > options.max_step_m) {
       return finish(ServoStatus::kNotConverged,
                     "correction of " + Num(step_Bp.norm()) + " m exceeds max_step_m = " +
@@ -184,6 +250,17 @@ ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
     }
     const MoveResult move = cell.MoveTo(passive, ik.q);
     ++result.moves;
+    last_command = command;
+    last_error = Eigen::Vector2d(du, dv);
+    have_command = true;
+    if (options.use_regions) {
+      // The move should bring P onto the principal point: the board moves by -gain (du, dv).
+      // Before a whole frame was seen the cell clips the region to its image.
+      if (frame_size.width == 0) frame_size = cv::Size(1 << 20, 1 << 20);
+      region = PredictBoardRegion(det, -options.gain * cv::Point2d(du, dv),
+                                  options.region_margin_squares, options.region_slack_px,
+                                  frame_size);
+    }
     if (move.status != MoveStatus::kSettled) {
       return finish(move.status == MoveStatus::kOutOfLimits ? ServoStatus::kJointLimits
                                                             : ServoStatus::kMoveFailed,

@@ -4,8 +4,10 @@
 // base-to-base and hand-eye rotations, estimated intrinsics and the printed board geometry.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
+#include <Eigen/Core>
 #include <opencv2/core.hpp>
 
 #include "calib/cell/cell.h"
@@ -43,10 +45,34 @@ struct ServoOptions {
   double gain = 1.0;           ///< fraction of the estimated correction applied per move, (0, 2)
   double nominal_depth_m = 0;  ///< depth z_f of P [m]; 0 estimates it per image with solvePnP
   double max_step_m = 0.05;    ///< largest translation of one move; larger ones are refused [m]
+  std::uint64_t ik_seed = 1;   ///< seed of nominal IK's random restarts (reproducible)
+  /// After a detection, grab only the region where the board will be (Cell::GrabImageRegion,
+  /// board_region.h); a whole frame when the board is not found there (and first, unless a
+  /// first region is given).
+  bool use_regions = true;
+  double region_margin_squares = 2.5;  ///< region grown by this many squares per side [-]
+  double region_slack_px = 12.0;       ///< and by this much for the prediction's error [px]
 };
 
 /// Throws InputError naming the bad field and value.
 void ValidateServoOptions(const ServoOptions& options);
+
+/// What the servo learns of its own moves: how the image of P moves when it commands a motion
+/// of c pixels, observed = M c. With rough rotations (hand-eye, base) M is a rotation and
+/// scale a few percent off the identity, so a single move from a few pixels misses 0.1 px;
+/// M is fitted by least squares to the (commanded, observed) pairs of earlier moves and
+/// regularized toward the identity. One model per calibrated robot carries over its poses and
+/// axes (the rough hand-eye error is the same in every image).
+struct ServoStepModel {
+  Eigen::Matrix2d sum_oc = Eigen::Matrix2d::Zero();  ///< sum of observed c^T [px^2]
+  Eigen::Matrix2d sum_cc = Eigen::Matrix2d::Zero();  ///< sum of c c^T [px^2]
+  int pairs = 0;                                     ///< moves learnt from
+  /// M = (sum_oc + w I)(sum_cc + w I)^-1, w = prior_px^2 (the identity weighs as much as a
+  /// move of prior_px in each direction).
+  Eigen::Matrix2d Matrix(double prior_px) const;
+  /// Adds a move that commanded c and was observed to move the image by `observed` [px].
+  void Add(const Eigen::Vector2d& c, const Eigen::Vector2d& observed);
+};
 
 enum class ServoStatus {
   kAligned,         ///< |du|, |dv| < tolerance_px
@@ -70,6 +96,12 @@ struct ServoResult {
   JointVector q_passive;  ///< final passive encoder reading [rad]
   cv::Mat image_before;                        ///< first image grabbed (reports)
   cv::Mat image_after;                         ///< last image grabbed (reports)
+  cv::Point2d first_pixel_error{0, 0};         ///< (du, dv) of the first image [px]
+  cv::Point image_before_origin{0, 0};         ///< frame pixel of image_before's (0, 0)
+  cv::Point image_after_origin{0, 0};          ///< frame pixel of image_after's (0, 0)
+  FeatureDetection detection_after;            ///< of the last image, frame coordinates
+  int region_frames = 0;                       ///< of `frames`, regions (GrabImageRegion)
+  int full_frame_fallbacks = 0;                ///< regions without the board, then a frame
 };
 
 /// Moves the passive robot to q_passive_start, then repeats: grab an image, detect P, and if
@@ -77,8 +109,14 @@ struct ServoResult {
 /// dP_Bp = R_BpC (du z / fx, dv z / fy, 0) (eq. 42-43), keeping its nominal orientation, via
 /// nominal IK seeded at the encoders. Never loops past max_iterations moves. Throws InputError
 /// for bad options or setup (robot index, board); cell failures come back as a status.
+/// With options.use_regions, `first_region` (frame pixels; empty: a whole frame) is where to
+/// look in the first image (for example PredictBoardRegion of the previous pose's detection).
+/// With `step_model` (optional, updated), each move commands M^-1 of the wanted image motion
+/// and moves of at least 2 px teach the model (see ServoStepModel).
 ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
                                       const JointVector& q_passive_start,
-                                      const ServoOptions& options = {});
+                                      const ServoOptions& options = {},
+                                      const cv::Rect& first_region = cv::Rect(),
+                                      ServoStepModel* step_model = nullptr);
 
 }  // namespace twin

@@ -632,6 +632,20 @@ cv::Mat TwinCell::GrabImage() {
   return image;
 }
 
+cv::Mat TwinCell::GrabImageRegion(const cv::Rect& roi) {
+  Impl& s = *impl_;
+  const Intrinsics& K = s.spec.camera.intrinsics;
+  const cv::Rect r = roi & cv::Rect(0, 0, K.width, K.height);
+  if (r.empty()) return cv::Mat();
+  if (r.width == K.width && r.height == K.height) return GrabImage();
+  const cv::Rect canvas_region = s.distortion ? s.distortion->CanvasRegion(r) : r;
+  cv::Mat image =
+      s.HandRenderer().RenderPinholeRegion(s.m.get(), s.d.get(), s.camera, s.canvas, canvas_region);
+  if (s.distortion) image = s.distortion->ApplyRegion(image, canvas_region, r);
+  for (const auto& e : s.effects) e->ApplyToImage(&image, &s.image_rng);
+  return image;
+}
+
 TwinTruth TwinCell::Truth() const {
   const Impl& s = *impl_;
   TwinTruth t;

@@ -38,6 +38,9 @@ class TwinCell : public Cell {
   MoveResult MoveTo(int robot, const JointVector& q_target) override;
   JointVector ReadEncoders(int robot) override;
   cv::Mat GrabImage() override;
+  /// Renders only the region (OffscreenRenderer::RenderPinholeRegion; with distortion the
+  /// canvas region it samples, DistortionMapper::CanvasRegion), then the image effects.
+  cv::Mat GrabImageRegion(const cv::Rect& roi) override;
   MoveResult ExchangeTools() override;
   int CameraRobot() override;
   /// The simulated operator's handclasp (Gan et al. 2014, section 3): using the true

@@ -103,6 +103,36 @@ cv::Mat DistortionMapper::Apply(const cv::Mat& canvas_image) const {
   return distorted;
 }
 
+cv::Rect DistortionMapper::CanvasRegion(const cv::Rect& roi) const {
+  if (map_x_.empty()) return roi;
+  double min_x, max_x, min_y, max_y;
+  cv::minMaxLoc(map_x_(roi), &min_x, &max_x);
+  cv::minMaxLoc(map_y_(roi), &min_y, &max_y);
+  // Bilinear sampling at x reads floor(x) and floor(x) + 1.
+  const int x0 = static_cast<int>(std::floor(min_x)), y0 = static_cast<int>(std::floor(min_y));
+  const int x1 = static_cast<int>(std::floor(max_x)) + 2, y1 = static_cast<int>(std::floor(max_y)) + 2;
+  return cv::Rect(x0, y0, x1 - x0, y1 - y0) & cv::Rect(0, 0, canvas_.width, canvas_.height);
+}
+
+cv::Mat DistortionMapper::ApplyRegion(const cv::Mat& canvas_part, const cv::Rect& canvas_region,
+                                      const cv::Rect& roi) const {
+  if (canvas_part.cols != canvas_region.width || canvas_part.rows != canvas_region.height) {
+    throw std::invalid_argument("DistortionMapper: canvas part is " +
+                                std::to_string(canvas_part.cols) + "x" +
+                                std::to_string(canvas_part.rows) + ", its region " +
+                                std::to_string(canvas_region.width) + "x" +
+                                std::to_string(canvas_region.height));
+  }
+  if (map_x_.empty()) return canvas_part.clone();
+  // The maps of roi, in the coordinates of the canvas part (whole-pixel shifts: exact).
+  const cv::Mat mx = map_x_(roi) - static_cast<float>(canvas_region.x);
+  const cv::Mat my = map_y_(roi) - static_cast<float>(canvas_region.y);
+  cv::Mat distorted;
+  cv::remap(canvas_part, distorted, mx, my, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+            cv::Scalar::all(0));
+  return distorted;
+}
+
 void AddImageNoise(cv::Mat* image, double sigma, std::uint64_t seed) {
   if (image == nullptr || image->empty() || sigma <= 0) return;
   // The pixels are whole numbers, so round(pixel + n) = pixel + round(n): the noise is drawn

@@ -20,6 +20,14 @@ class DistortionMapper {
   const Intrinsics& canvas() const { return canvas_; }
   /// The distorted image from an ideal canvas render (bilinear remap).
   cv::Mat Apply(const cv::Mat& canvas_image) const;
+  /// The canvas rectangle whose pixels the distorted pixels `roi` (inside the image) sample:
+  /// the bounding box of their map entries with the bilinear neighbours, inside the canvas.
+  /// Without distortion, roi itself.
+  cv::Rect CanvasRegion(const cv::Rect& roi) const;
+  /// The distorted pixels `roi` from the canvas pixels `canvas_region` (CanvasRegion(roi),
+  /// rendered by region): equal to Apply's pixels there.
+  cv::Mat ApplyRegion(const cv::Mat& canvas_part, const cv::Rect& canvas_region,
+                      const cv::Rect& roi) const;
   /// Remap tables (CV_32FC1, distorted image size): the canvas x / y [px] that each distorted
   /// pixel samples (empty without distortion, where Apply returns a copy of its input).
   const cv::Mat& map_x() const { return map_x_; }

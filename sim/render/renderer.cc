@@ -113,6 +113,22 @@ void SetPinholeFrustum(mjvGLCamera* cam, const Intrinsics& K, double near_m, dou
   cam->frustum_center = static_cast<float>(-n * (K.cx + 0.5) / K.fy + halfwidth);
 }
 
+// The frustum of the pixels `roi` of the image of K: the full frustum's near-plane window
+// (left = -n (cx + 0.5) / fy, top = n (cy + 0.5) / fy, n / fy per pixel) cut to roi's columns
+// and rows. MuJoCo's halfwidth, 0.5 w / h (top - bottom) for the roi-sized viewport, is then
+// 0.5 w n / fy: the same pixel size as the full frame.
+void SetRegionFrustum(mjvGLCamera* cam, const Intrinsics& K, const cv::Rect& roi, double near_m,
+                      double far_m) {
+  const double pixel = near_m / K.fy;
+  const double left = -near_m * (K.cx + 0.5) / K.fy + pixel * roi.x;
+  const double top = near_m * (K.cy + 0.5) / K.fy - pixel * roi.y;
+  cam->frustum_near = static_cast<float>(near_m);
+  cam->frustum_far = static_cast<float>(far_m);
+  cam->frustum_top = static_cast<float>(top);
+  cam->frustum_bottom = static_cast<float>(top - pixel * roi.height);
+  cam->frustum_center = static_cast<float>(left + 0.5 * pixel * roi.width);
+}
+
 }  // namespace
 
 struct OffscreenRenderer::Impl {
@@ -151,15 +167,22 @@ struct OffscreenRenderer::Impl {
     RenderScene();
   }
 
-  void RenderScene() {
-    const mjrRect viewport = {0, 0, width, height};
+  // Renders into the viewport (0, 0, w, h) of the framebuffer (default: all of it) and reads
+  // it back into `rgb`.
+  void RenderScene(int w = 0, int h = 0) {
+    const mjrRect viewport = {0, 0, w > 0 ? w : width, h > 0 ? h : height};
     mjr_render(viewport, &scene, &context);
     mjr_readPixels(rgb.data(), nullptr, viewport, &context);
   }
 
-  // The read-back buffer as 8-bit BGR with OpenCV's top-down rows.
-  cv::Mat ToBgr() const {
-    const cv::Mat bottom_up(height, width, CV_8UC3, const_cast<unsigned char*>(rgb.data()));
+  // The read-back buffer (w x h, default the framebuffer) as 8-bit BGR with OpenCV's
+  // top-down rows.
+  cv::Mat ToBgr(int w = 0, int h = 0) const {
+    if (w <= 0 || h <= 0) {
+      w = width;
+      h = height;
+    }
+    const cv::Mat bottom_up(h, w, CV_8UC3, const_cast<unsigned char*>(rgb.data()));
     cv::Mat flipped, bgr;
     cv::flip(bottom_up, flipped, 0);
     cv::cvtColor(flipped, bgr, cv::COLOR_RGB2BGR);
@@ -235,6 +258,41 @@ cv::Mat OffscreenRenderer::RenderPinhole(const mjModel* model, mjData* data, int
   if (K.fx != K.fy) ScaleScene(&r.scene, AxisScale(centre, right, K.fx / K.fy));
   r.RenderScene();
   return r.ToBgr();
+}
+
+cv::Mat OffscreenRenderer::RenderPinholeRegion(const mjModel* model, mjData* data, int camera_id,
+                                               const Intrinsics& K, const cv::Rect& roi) {
+  Impl& r = *impl_;
+  if (K.width != r.width || K.height != r.height) {
+    throw std::invalid_argument("OffscreenRenderer: intrinsics are " + std::to_string(K.width) +
+                                "x" + std::to_string(K.height) + ", renderer is " +
+                                std::to_string(r.width) + "x" + std::to_string(r.height));
+  }
+  if (roi.width < 1 || roi.height < 1 || roi.x < 0 || roi.y < 0 || roi.x + roi.width > r.width ||
+      roi.y + roi.height > r.height) {
+    throw std::invalid_argument("OffscreenRenderer: region " + std::to_string(roi.width) + "x" +
+                                std::to_string(roi.height) + " at (" + std::to_string(roi.x) +
+                                ", " + std::to_string(roi.y) + ") is not inside the " +
+                                std::to_string(r.width) + "x" + std::to_string(r.height) +
+                                " image");
+  }
+  mjvCamera cam;
+  mjv_defaultCamera(&cam);
+  cam.type = mjCAMERA_FIXED;
+  cam.fixedcamid = camera_id;
+  r.MakeCurrent();
+  mjv_updateScene(model, data, &r.option, nullptr, &cam, mjCAT_ALL, &r.scene);
+  const double near_m = r.near_m > 0 ? r.near_m : r.scene.camera[0].frustum_near;
+  const double far_m = r.far_m > 0 ? r.far_m : r.scene.camera[0].frustum_far;
+  double centre[3], right[3];
+  CameraCentreAndRight(r.scene, centre, right);
+  for (int view = 0; view < 2; ++view) {
+    SetRegionFrustum(&r.scene.camera[view], K, roi, near_m, far_m);
+    for (int i = 0; i < 3; ++i) r.scene.camera[view].pos[i] = static_cast<float>(centre[i]);
+  }
+  if (K.fx != K.fy) ScaleScene(&r.scene, AxisScale(centre, right, K.fx / K.fy));
+  r.RenderScene(roi.width, roi.height);
+  return r.ToBgr(roi.width, roi.height);
 }
 
 cv::Mat OffscreenRenderer::RenderFree(const mjModel* model, mjData* data,

@@ -31,6 +31,14 @@ class OffscreenRenderer {
   /// the renderer's). Returns 8-bit BGR in OpenCV row order.
   cv::Mat RenderPinhole(const mjModel* model, mjData* data, int camera_id, const Intrinsics& K);
 
+  /// The pixels `roi` of RenderPinhole's image alone (roi inside K's image): the viewport is
+  /// roi's size and the frustum the matching off-centre part of the full one (its near-plane
+  /// window shifted by roi's offset in pixels), so each pixel is the full frame's pixel, up to
+  /// the rasteriser's rounding at edges (renderer_test measures it). roi.width x roi.height BGR.
+  /// Throws std::invalid_argument for a roi outside the image.
+  cv::Mat RenderPinholeRegion(const mjModel* model, mjData* data, int camera_id,
+                              const Intrinsics& K, const cv::Rect& roi);
+
   /// Renders a free (third-person) camera; returns 8-bit BGR in OpenCV row order.
   cv::Mat RenderFree(const mjModel* model, mjData* data, const mjvCamera& camera);
 

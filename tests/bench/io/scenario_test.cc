@@ -515,3 +515,59 @@ TEST(ScenarioErrorTest, DefaultedFieldFallsBackToItsSection) {
 
 }  // namespace
 }  // namespace twin
+
+// ---- Seeds: one for the truth, one for the estimator ----
+
+namespace twin {
+namespace {
+
+TEST(ScenarioSeedsTest, SeedDrivesBothStreams) {
+  const Scenario s = Parse(DemoText());  // twin_demo.yaml: seed: 7
+  EXPECT_EQ(s.seeds.truth, 7u);
+  EXPECT_EQ(s.seeds.estimator, 7u);
+  EXPECT_EQ(s.twin.seed, 7u);
+  EXPECT_EQ(s.trial, 0);
+}
+
+TEST(ScenarioSeedsTest, SeedsSetTruthAndEstimatorApart) {
+  const Scenario s = Parse(Replaced(DemoText(), "seed: 7", "seeds: {truth: 11, estimator: 42}"));
+  EXPECT_EQ(s.seeds.truth, 11u);
+  EXPECT_EQ(s.seeds.estimator, 42u);
+  EXPECT_EQ(s.twin.seed, 11u);  // the twin draws from the truth seed only
+  const Scenario d = Parse(Replaced(DemoText(), "seed: 7", "seeds: {estimator: 42}"));
+  EXPECT_EQ(d.seeds.truth, 1u);  // the default of an absent key
+  EXPECT_EQ(d.seeds.estimator, 42u);
+}
+
+TEST(ScenarioSeedsTest, TrialOffsetsBothSeeds) {
+  Scenario s = Parse(Replaced(DemoText(), "seed: 7", "seeds: {truth: 11, estimator: 42}"));
+  ApplyTrial(5, &s);
+  EXPECT_EQ(s.trial, 5);
+  EXPECT_EQ(s.seeds.truth, 16u);
+  EXPECT_EQ(s.seeds.estimator, 47u);
+  EXPECT_EQ(s.twin.seed, 16u);
+  ApplyTrial(2, &s);  // relative to the file's seeds, not to the last trial
+  EXPECT_EQ(s.seeds.truth, 13u);
+  EXPECT_EQ(s.seeds.estimator, 44u);
+  try {
+    ApplyTrial(-1, &s);
+    ADD_FAILURE() << "a negative trial was accepted";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(Contains(e.what(), "--trial"));
+  }
+}
+
+TEST(ScenarioSeedsTest, SeedAndSeedsTogetherAreRefusedAtTheirLine) {
+  const std::string text =
+      Replaced(DemoText(), "seed: 7", "seed: 7\n  seeds: {truth: 1, estimator: 2}");
+  const std::string e = ParseError(text);
+  EXPECT_TRUE(Contains(e, At(LineOf(text, "seeds:")) + " scenario.seeds"));
+  EXPECT_TRUE(Contains(e, "not both"));
+  const std::string bad = Replaced(DemoText(), "seed: 7", "seeds: {truth: 1, noise: 2}");
+  EXPECT_TRUE(Contains(ParseError(bad), "noise"));
+  const std::string negative = Replaced(DemoText(), "seed: 7", "seeds: {truth: -3}");
+  EXPECT_TRUE(Contains(ParseError(negative), "scenario.seeds.truth"));
+}
+
+}  // namespace
+}  // namespace twin

@@ -97,6 +97,42 @@ TEST_F(VisualServoTest, AlignsTheFeaturePointWithinTenIterations) {
   EXPECT_LT(std::hypot(p_CP.x(), p_CP.y()), 1e-4) << p_CP.transpose();
 }
 
+// After the first whole frame the servo grabs only the predicted board region
+// (board_region.h); a first region that misses the board costs one whole frame more.
+TEST_F(VisualServoTest, GrabsRegionsAfterTheFirstFrameAndFallsBackWhenTheBoardIsMissing) {
+  const TwinSpec spec = PerturbedSpec();
+  TwinCell cell(spec, "visual_servo_test");
+  const ServoSetup setup = SetupFor(spec, cell);
+  const ServoResult r = AlignFeatureToOpticalAxis(cell, setup, OffsetStart(), ServoOptions{});
+  std::printf("servo with regions: frames %d (%d regions, %d fallbacks), moves %d, region "
+              "%dx%d px\n",
+              r.frames, r.region_frames, r.full_frame_fallbacks, r.moves, r.image_after.cols,
+              r.image_after.rows);
+  ASSERT_EQ(r.status, ServoStatus::kAligned) << r.reason;
+  EXPECT_EQ(r.region_frames, r.frames - 1);  // every frame after the first
+  EXPECT_EQ(r.full_frame_fallbacks, 0);
+  EXPECT_LT(r.image_after.total(), cell.GrabImage().total() / 4);  // a region, not a frame
+  // The last detection is in frame coordinates: on the principal point within tolerance.
+  EXPECT_LT(std::abs(r.detection_after.feature_px.x - setup.intrinsics.cx), 0.1);
+  EXPECT_LT(std::abs(r.detection_after.feature_px.y - setup.intrinsics.cy), 0.1);
+
+  TwinCell cell2(spec, "visual_servo_test");
+  const ServoResult m = AlignFeatureToOpticalAxis(cell2, SetupFor(spec, cell2), OffsetStart(),
+                                                  ServoOptions{}, cv::Rect(0, 0, 120, 90));
+  ASSERT_EQ(m.status, ServoStatus::kAligned) << m.reason;
+  EXPECT_EQ(m.full_frame_fallbacks, 1);
+  EXPECT_EQ(m.frames, m.moves + 2);  // the missed region and the whole frame after it
+
+  ServoOptions whole;
+  whole.use_regions = false;
+  TwinCell cell3(spec, "visual_servo_test");
+  const ServoResult w = AlignFeatureToOpticalAxis(cell3, SetupFor(spec, cell3), OffsetStart(),
+                                                  whole, cv::Rect(0, 0, 120, 90));
+  ASSERT_EQ(w.status, ServoStatus::kAligned) << w.reason;
+  EXPECT_EQ(w.region_frames, 0);
+  EXPECT_EQ(w.frames, w.moves + 1);
+}
+
 TEST_F(VisualServoTest, OneIterationIsNotEnough) {
   const TwinSpec spec = PerturbedSpec();
   TwinCell cell(spec, "visual_servo_test");

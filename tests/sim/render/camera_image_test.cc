@@ -130,3 +130,39 @@ TEST(AddImageNoise, SaturatesInsteadOfWrapping) {
 
 }  // namespace
 }  // namespace twin
+
+namespace twin {
+namespace {
+
+// A region of the distorted image from only the canvas region it samples equals the whole
+// remap there exactly: the same bilinear weights (maps shifted by whole pixels) on the same
+// canvas pixels.
+TEST(DistortionMapper, RegionFromItsCanvasRegionEqualsTheWholeRemap) {
+  Intrinsics K;
+  Distortion D;
+  D.k1 = -0.12;
+  D.k2 = 0.03;
+  D.p1 = 0.001;
+  D.p2 = -0.0005;
+  const DistortionMapper mapper(K, D);
+  cv::Mat canvas(mapper.canvas().height, mapper.canvas().width, CV_8UC3);
+  cv::randu(canvas, cv::Scalar::all(0), cv::Scalar::all(256));
+  const cv::Mat full = mapper.Apply(canvas);
+  for (const cv::Rect& roi : {cv::Rect(412, 284, 200, 200), cv::Rect(0, 0, 160, 120),
+                              cv::Rect(864, 648, 160, 120), cv::Rect(3, 700, 1021, 68)}) {
+    const cv::Rect c = mapper.CanvasRegion(roi);
+    EXPECT_TRUE((c & cv::Rect(0, 0, canvas.cols, canvas.rows)) == c);
+    const cv::Mat part = mapper.ApplyRegion(canvas(c).clone(), c, roi);
+    ASSERT_EQ(part.size(), roi.size());
+    EXPECT_EQ(cv::norm(part, full(roi), cv::NORM_INF), 0.0) << roi;
+    // Only what is needed: a centred 200 px region samples little more than itself.
+    if (roi.width == 200) EXPECT_LT(c.area(), 2 * roi.area());
+  }
+  EXPECT_THROW(mapper.ApplyRegion(canvas, cv::Rect(0, 0, 10, 10), cv::Rect(0, 0, 5, 5)),
+               std::invalid_argument);
+  const DistortionMapper none(K, Distortion());
+  EXPECT_EQ(none.CanvasRegion(cv::Rect(5, 6, 7, 8)), cv::Rect(5, 6, 7, 8));
+}
+
+}  // namespace
+}  // namespace twin

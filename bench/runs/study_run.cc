@@ -1,0 +1,458 @@
+#include "bench/runs/study_run.h"
+
+#include <fcntl.h>
+#include <sched.h>
+#include <signal.h>
+#include <sys/file.h>
+#include <sys/personality.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <climits>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/io/calibration_config.h"
+#include "bench/io/content_hash.h"
+#include "bench/io/model_loader.h"
+#include "bench/io/scenario.h"
+#include "bench/report/study_summary.h"
+#include "bench/report/study_summary_html.h"
+#include "bench/runs/handclasp_run.h"
+#include "bench/runs/trial_record.h"
+#include "bench/runs/trials_file.h"
+#include "calib/common/errors.h"
+
+namespace twin {
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double Seconds(Clock::time_point since) {
+  return std::chrono::duration<double>(Clock::now() - since).count();
+}
+
+volatile sig_atomic_t g_interrupted = 0;
+void OnSignal(int) { g_interrupted = 1; }
+
+// The CPUs this process may run on (a Slurm allocation or taskset narrows them).
+int UsableCpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
+  return static_cast<int>(std::clamp(sysconf(_SC_NPROCESSORS_ONLN), 1L, 4096L));
+}
+
+std::string SelfExecutable() {
+  std::error_code ec;
+  const fs::path p = fs::read_symlink("/proc/self/exe", ec);
+  if (ec) throw InputError("twinbench study", "cannot find its own executable: " + ec.message());
+  return p.string();
+}
+
+std::string Duration(double s) {
+  if (!(s >= 0) || s > 1e7) return "?";
+  char buf[32];
+  const long t = static_cast<long>(s + 0.5);
+  if (t >= 3600) {
+    std::snprintf(buf, sizeof(buf), "%ldh%02ldm", t / 3600, (t / 60) % 60);
+  } else if (t >= 60) {
+    std::snprintf(buf, sizeof(buf), "%ldm%02lds", t / 60, t % 60);
+  } else {
+    std::snprintf(buf, sizeof(buf), "%lds", t);
+  }
+  return buf;
+}
+
+// The reason a trial process gave: its last "error: ..." line (InputError), else its last
+// "internal error: ..." line, else its last non-empty line.
+std::string ReasonFromLog(const std::string& log_path) {
+  std::ifstream in(log_path);
+  std::string line, error, internal, last;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    last = line;
+    if (line.rfind("error: ", 0) == 0) error = line.substr(7);
+    if (line.rfind("internal error: ", 0) == 0) internal = line;
+  }
+  std::string r = !error.empty() ? error : !internal.empty() ? internal : last;
+  if (r.size() > 400) r = r.substr(0, 400) + "...";
+  return r;
+}
+
+// A trial process: `executable run SCENARIO --trial t ...` with stdout and stderr to `log`,
+// killed (SIGKILL) when the study process dies.
+pid_t SpawnTrial(const std::string& executable, const std::vector<std::string>& args,
+                 const std::string& cwd, const std::vector<std::string>& env,
+                 const std::string& log) {
+  std::vector<char*> argv;
+  argv.push_back(const_cast<char*>(executable.c_str()));
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  std::vector<char*> envp;
+  for (const std::string& e : env) envp.push_back(const_cast<char*>(e.c_str()));
+  envp.push_back(nullptr);
+  const pid_t parent = getpid();
+  const pid_t pid = fork();
+  if (pid < 0) throw std::runtime_error(std::string("fork failed: ") + std::strerror(errno));
+  if (pid > 0) return pid;
+  // Child: only async-signal-safe calls until exec.
+  prctl(PR_SET_PDEATHSIG, SIGKILL);
+  if (getppid() != parent) _exit(127);  // the study died before prctl
+  // The same address layout in every trial process: cv::calibrateCamera's result depends on
+  // where its buffers lie (about 1e-6 px in the intrinsics with address-space randomization,
+  // measured; alignment-dependent SIMD / BLAS kernels), so that a trial reproduces bit for
+  // bit only without it. Where personality(2) is not allowed the trial runs randomized.
+  const int persona = personality(0xffffffff);
+  if (persona != -1) personality(static_cast<unsigned long>(persona) | ADDR_NO_RANDOMIZE);
+  signal(SIGINT, SIG_DFL);
+  signal(SIGTERM, SIG_DFL);
+  const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  if (fd >= 0) {
+    dup2(fd, STDOUT_FILENO);
+    dup2(fd, STDERR_FILENO);
+    close(fd);
+  }
+  const int devnull = open("/dev/null", O_RDONLY);
+  if (devnull >= 0) {
+    dup2(devnull, STDIN_FILENO);
+    close(devnull);
+  }
+  if (chdir(cwd.c_str()) != 0) _exit(127);
+  execve(executable.c_str(), argv.data(), envp.data());
+  _exit(127);
+}
+
+// The parts of a trial process in flight.
+struct Running {
+  int trial = 0;
+  Clock::time_point start;
+  std::string out, log;
+};
+
+class Progress {
+ public:
+  Progress(bool enabled, int total, int recorded_before)
+      : enabled_(enabled), tty_(isatty(STDERR_FILENO) == 1), total_(total),
+        done_(recorded_before), start_(Clock::now()) {}
+
+  void Finished(int trial, const std::string& status, double wall_s, int running) {
+    ++done_;
+    ++done_now_;
+    if (status != "ok") ++failed_;
+    if (!enabled_) return;
+    const double rate = done_now_ / std::max(1e-9, Seconds(start_));  // trials per second
+    const double eta = (total_ - done_) / std::max(1e-9, rate);
+    if (tty_) {
+      Bar(running, eta);
+    } else {
+      std::fprintf(stderr, "study: trial %d %s in %.1f s; %d/%d done, %d failed, %d running, "
+                   "ETA %s\n", trial, status.c_str(), wall_s, done_, total_, failed_, running,
+                   done_ < total_ ? Duration(eta).c_str() : "0s");
+    }
+  }
+  void Started(int running) {
+    if (enabled_ && tty_) Bar(running, done_now_ > 0 ? -2 : -1);
+  }
+  void End() {
+    if (enabled_ && tty_) std::fprintf(stderr, "\n");
+  }
+  int failed() const { return failed_; }
+
+ private:
+  void Bar(int running, double eta) {
+    const int width = 30;
+    const int filled = total_ > 0 ? width * done_ / total_ : width;
+    std::string bar(filled, '#');
+    bar += std::string(width - filled, '.');
+    std::string eta_text = eta == -1 ? "?" : Duration(eta);
+    if (eta == -2) eta_text = last_eta_;
+    last_eta_ = eta_text;
+    std::fprintf(stderr, "\rstudy [%s] %d/%d done, %d failed, %d running, ETA %s   ",
+                 bar.c_str(), done_, total_, failed_, running, eta_text.c_str());
+    std::fflush(stderr);
+  }
+
+  bool enabled_, tty_;
+  int total_, done_, done_now_ = 0, failed_ = 0;
+  Clock::time_point start_;
+  std::string last_eta_ = "?";
+};
+
+// Refuses a folder that holds another scenario's or another shard's study; writes study.json.
+void CheckStudyFile(const fs::path& path, const json& wanted) {
+  std::ifstream in(path);
+  if (in) {
+    json have;
+    try {
+      have = json::parse(in);
+    } catch (const std::exception& e) {
+      throw InputError(path.string(), std::string("not a study file: ") + e.what());
+    }
+    if (have.value("scenario_hash", "") != wanted["scenario_hash"]) {
+      throw InputError(path.string(),
+                       "the folder holds a study of another scenario (hash " +
+                           have.value("scenario_hash", std::string("?")) + ", this one " +
+                           wanted["scenario_hash"].get<std::string>() +
+                           "); choose another --out");
+    }
+    if (have.value("shard", "") != wanted["shard"]) {
+      throw InputError(path.string(), "the folder holds shard " +
+                                          have.value("shard", std::string("?")) + ", not " +
+                                          wanted["shard"].get<std::string>() +
+                                          "; choose another --out");
+    }
+  }
+  WriteFileAtomically(path.string(), wanted.dump(2) + "\n");
+}
+
+}  // namespace
+
+void ParseShard(const std::string& text, int* index, int* count) {
+  const std::size_t slash = text.find('/');
+  auto number = [&](const std::string& s) {
+    if (s.empty() || s.size() > 9 || s.find_first_not_of("0123456789") != std::string::npos) {
+      throw InputError("--shard", "expected I/N with whole numbers 0 <= I < N, got '" + text + "'");
+    }
+    return std::stoi(s);
+  };
+  if (slash == std::string::npos) {
+    throw InputError("--shard", "expected I/N with whole numbers 0 <= I < N, got '" + text + "'");
+  }
+  *index = number(text.substr(0, slash));
+  *count = number(text.substr(slash + 1));
+  if (*count < 1 || *index >= *count) {
+    throw InputError("--shard", "expected I/N with whole numbers 0 <= I < N, got '" + text + "'");
+  }
+}
+
+void ValidateStudyOptions(const StudyOptions& o) {
+  if (o.trials < 1) {
+    throw InputError("--trials", std::to_string(o.trials) + ": expected at least 1 trial");
+  }
+  if (o.jobs < 0) throw InputError("--jobs", std::to_string(o.jobs) + ": expected >= 1");
+  if (o.shard_count < 1 || o.shard_index < 0 || o.shard_index >= o.shard_count) {
+    throw InputError("--shard", std::to_string(o.shard_index) + "/" +
+                                    std::to_string(o.shard_count) + ": expected 0 <= I < N");
+  }
+  if (o.out_dir.empty()) throw InputError("--out", "expected a folder");
+}
+
+int RunStudy(const StudyOptions& o) {
+  ValidateStudyOptions(o);
+  // Everything a trial would refuse is refused here, before anything runs.
+  const Scenario sc = LoadScenario(o.scenario);
+  if (IsPresent(sc.calibration)) ParseCalibrationConfig(sc);
+  if (IsPresent(sc.handclasp)) ParseHandclaspConfig(sc);
+  if (!IsPresent(sc.calibration) && !IsPresent(sc.handclasp)) {
+    throw InputError(sc.path + " scenario",
+                     "a study needs a calibration: or handclasp: section (what `twinbench run` "
+                     "runs)");
+  }
+  const std::string hash = ScenarioHash(sc);
+  const std::string executable = o.executable.empty() ? SelfExecutable() : o.executable;
+  const int jobs = o.jobs > 0 ? o.jobs : UsableCpus();
+  const std::string scenario_path = fs::absolute(o.scenario).lexically_normal().string();
+
+  const fs::path out(o.out_dir);
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) throw InputError(o.out_dir, "cannot create the study folder: " + ec.message());
+  // One study process per folder at a time.
+  const std::string lock_path = (out / ".study.lock").string();
+  const int lock_fd = open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock_fd < 0 || flock(lock_fd, LOCK_EX | LOCK_NB) != 0) {
+    throw InputError(o.out_dir, "another study runs in this folder (" + lock_path + " is locked)");
+  }
+  const std::string shard = std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count);
+  CheckStudyFile(out / "study.json", json{{"scenario_file", scenario_path},
+                                          {"scenario", sc.name},
+                                          {"scenario_hash", hash},
+                                          {"trials", o.trials},
+                                          {"shard", shard}});
+
+  const std::string trials_path = (out / "trials.jsonl").string();
+  TrialsFileContent content = ReadTrialsFile(trials_path);
+  if (content.torn_tail) {
+    std::fprintf(stderr, "study: dropping the torn last line of %s (a killed study)\n",
+                 trials_path.c_str());
+    TruncateTrialsFile(trials_path, content.valid_bytes);
+  }
+  std::set<int> recorded;
+  for (const json& r : content.records) {
+    if (r.value("scenario_hash", "") != hash) {
+      throw InputError(trials_path, "trial " + r["trial"].dump() +
+                                        " was recorded for another scenario (hash " +
+                                        r.value("scenario_hash", std::string("?")) +
+                                        ", this one " + hash + "); choose another --out");
+    }
+    recorded.insert(r["trial"].get<int>());
+  }
+  std::vector<int> todo;
+  int in_shard = 0, recorded_in_shard = 0;
+  for (int t = o.shard_index; t < o.trials; t += o.shard_count) {
+    ++in_shard;
+    if (recorded.count(t)) {
+      ++recorded_in_shard;
+    } else {
+      todo.push_back(t);
+    }
+  }
+  const fs::path work = out / "work";
+  fs::remove_all(work, ec);  // trials in flight when a study was killed: run again
+  fs::create_directories(work, ec);
+  if (ec) throw InputError((out / "work").string(), "cannot create: " + ec.message());
+  const std::string plans = o.plan_cache.empty() ? (out / "plans").string() : o.plan_cache;
+
+  std::printf("twinbench study: %s (hash %s), trials %d of shard %s: %d recorded, %d to run, "
+              "%d at a time\n",
+              sc.name.c_str(), hash.c_str(), in_shard, shard.c_str(), recorded_in_shard,
+              static_cast<int>(todo.size()), jobs);
+  std::fflush(stdout);
+
+  struct sigaction sa {};
+  sa.sa_handler = OnSignal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: waitpid returns EINTR
+  struct sigaction old_int {}, old_term {};
+  sigaction(SIGINT, &sa, &old_int);
+  sigaction(SIGTERM, &sa, &old_term);
+  // One llvmpipe and one OpenCV thread per trial: the processes are the parallelism.
+  // A fixed mmap threshold: glibc raises it whenever a thread frees a large block, so whether
+  // a later large buffer comes from mmap or from the heap (and how it is aligned) would depend
+  // on the timing of the threads (with the address layout, SpawnTrial).
+  // The trial's whole environment is this fixed list, and its arguments are the same strings
+  // wherever the study's folder lies (relative to the work folder, its working directory, with
+  // the plan cache linked there): the environment and the arguments sit on the stack of the
+  // new process, so their sizes move every stack buffer's alignment, and with it (measured:
+  // a trial under Slurm differed from the same trial run locally by 1e-6 px in the intrinsics)
+  // the result.
+  const std::vector<std::string> env = {"PATH=/usr/local/bin:/usr/bin:/bin", "LANG=C",
+                                        "LC_ALL=C", "LP_NUM_THREADS=1",
+                                        "OPENCV_FOR_THREADS_NUM=1",
+                                        "MALLOC_MMAP_THRESHOLD_=131072"};
+  fs::create_directories(plans, ec);
+  if (!ec) fs::create_directory_symlink(fs::absolute(plans), work / "plans", ec);
+  if (ec) throw InputError((work / "plans").string(), "cannot link the plan cache: " + ec.message());
+
+  Progress progress(o.progress, in_shard, recorded_in_shard);
+  std::map<pid_t, Running> running;
+  std::size_t next = 0;
+  double wall_sum = 0;
+  int finished = 0;
+  const auto t_study = Clock::now();
+  while ((next < todo.size() || !running.empty()) && !g_interrupted) {
+    while (next < todo.size() && static_cast<int>(running.size()) < jobs) {
+      const int t = todo[next++];
+      Running r;
+      r.trial = t;
+      r.start = Clock::now();
+      r.out = (work / ("trial_" + std::to_string(t))).string();
+      r.log = r.out + ".log";
+      const pid_t pid = SpawnTrial(executable,
+                                   {"run", scenario_path, "--trial", std::to_string(t), "--out",
+                                    "trial_" + std::to_string(t), "--quiet", "--no-images",
+                                    "--plan-cache", "plans"},
+                                   work.string(), env, r.log);
+      running[pid] = r;
+      progress.Started(static_cast<int>(running.size()));
+    }
+    int status = 0;
+    const pid_t pid = waitpid(-1, &status, 0);
+    if (pid < 0) {
+      if (errno == EINTR) continue;
+      throw std::runtime_error(std::string("waitpid failed: ") + std::strerror(errno));
+    }
+    const auto it = running.find(pid);
+    if (it == running.end()) continue;
+    const Running r = it->second;
+    running.erase(it);
+    TrialOutcome outcome;
+    outcome.wall_s = Seconds(r.start);
+    outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status)
+                                          : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+    json report;
+    {
+      std::ifstream in(r.out + "/report.json");
+      if (in) {
+        try {
+          report = json::parse(in);
+          outcome.report = &report;
+        } catch (const std::exception&) {
+        }
+      }
+    }
+    if (outcome.exit_code == 0 && outcome.report) {
+      outcome.status = report.value("status", std::string("ok")) == "failed" ? "failed" : "ok";
+    } else {
+      outcome.status = "failed";
+    }
+    if (outcome.status == "failed") {
+      outcome.reason = report.is_object() && report.contains("reason") && report["reason"].is_string()
+                           ? report["reason"].get<std::string>()
+                           : ReasonFromLog(r.log);
+      if (WIFSIGNALED(status)) {
+        outcome.reason = "killed by signal " + std::to_string(WTERMSIG(status)) +
+                         (outcome.reason.empty() ? "" : ": " + outcome.reason);
+      }
+      if (outcome.reason.empty()) {
+        outcome.reason = "exit code " + std::to_string(outcome.exit_code) + ", no report";
+      }
+    }
+    Scenario trial_scenario = sc;
+    ApplyTrial(r.trial, &trial_scenario);
+    AppendTrialRecord(trials_path, MakeTrialRecord(hash, trial_scenario, outcome));
+    if (outcome.status == "failed") {
+      fs::create_directories(out / "logs", ec);
+      fs::rename(r.log, out / "logs" / ("trial_" + std::to_string(r.trial) + ".log"), ec);
+    }
+    fs::remove_all(r.out, ec);
+    fs::remove(r.log, ec);
+    fs::remove_all(r.out + ".partial", ec);
+    progress.Finished(r.trial, outcome.status, outcome.wall_s, static_cast<int>(running.size()));
+    wall_sum += outcome.wall_s;
+    ++finished;
+  }
+  progress.End();
+  sigaction(SIGINT, &old_int, nullptr);
+  sigaction(SIGTERM, &old_term, nullptr);
+  if (g_interrupted) {
+    for (const auto& [pid, r] : running) kill(pid, SIGTERM);
+    for (const auto& [pid, r] : running) waitpid(pid, nullptr, 0);
+    fs::remove_all(work, ec);
+    std::fprintf(stderr, "study: interrupted; %d trial(s) in flight were not recorded; run the "
+                 "same command again to resume\n", static_cast<int>(running.size()));
+    close(lock_fd);
+    return 130;
+  }
+  fs::remove_all(work, ec);
+
+  const std::vector<json> records = ReadTrialsFile(trials_path).records;
+  const json summary = SummarizeStudy(records);
+  WriteFileAtomically((out / "summary.json").string(), summary.dump(2) + "\n");
+  WriteFileAtomically((out / "summary.html").string(), RenderStudySummaryHtml(summary, records));
+  std::printf("study: %d trials of shard %s recorded (%d failed); this run: %d trials in %.1f "
+              "s, mean trial wall time %.2f s; wrote %s/{trials.jsonl, summary.json, "
+              "summary.html}\n",
+              in_shard, shard.c_str(), summary["trials"]["failed"].get<int>(), finished,
+              Seconds(t_study), finished > 0 ? wall_sum / finished : 0.0, out.string().c_str());
+  close(lock_fd);
+  return 0;
+}
+
+}  // namespace twin

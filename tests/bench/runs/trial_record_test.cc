@@ -1,0 +1,113 @@
+#include "bench/runs/trial_record.h"
+
+#include <gtest/gtest.h>
+
+namespace twin {
+namespace {
+
+using json = nlohmann::json;
+
+json Report() {
+  return json::parse(R"({
+    "scenario": {"name": "s", "seed": 3},
+    "intrinsics": {"error_px": {"fx": 0.25, "cx": -1.5}, "views_used": 12},
+    "robots": {"r2": {
+      "planning": {"best_fitness": 2.5, "fitness_history": [[3, 2.5]], "time_s": 4.0,
+                   "from_plan_store": true},
+      "servo": {"aligned_poses": 12, "images": [{"file": "a.png"}], "mean_frames_per_pose": null,
+                "failures": [{"axis": 1, "status": "move_failed"}]},
+      "split": {"candidates": [{"calibration_axes": [0, 1]}], "rule": "best_conditioned"},
+      "parameters": [{"name": "r2.link1.theta", "unit": "deg", "estimated": 0.1, "true": 0.2}],
+      "identification": {"method": "ceres_with_scale", "linearized": {"eps_history_mm": [1, 2]},
+                         "nonlinear": {"depth_used": true}}}},
+    "timing_s": {"total": 9.5, "cell": {"frames": 40}}
+  })");
+}
+
+TEST(TrialRecordTest, FlattensNumbersStringsAndTimingApart) {
+  const FlatReport f = FlattenReport(Report());
+  EXPECT_EQ(f.figures["intrinsics.error_px.fx"], 0.25);
+  EXPECT_EQ(f.figures["intrinsics.views_used"], 12);
+  EXPECT_EQ(f.figures["robots.r2.planning.best_fitness"], 2.5);
+  EXPECT_EQ(f.figures["robots.r2.servo.aligned_poses"], 12);
+  // Items with a name are keyed by it, others by index.
+  EXPECT_EQ(f.figures["robots.r2.parameters[r2.link1.theta].estimated"], 0.1);
+  EXPECT_EQ(f.figures["robots.r2.parameters[r2.link1.theta].true"], 0.2);
+  EXPECT_EQ(f.figures["robots.r2.servo.failures[0].axis"], 1);
+  EXPECT_EQ(f.figures["robots.r2.identification.nonlinear.depth_used"], true);
+  EXPECT_EQ(f.labels["robots.r2.servo.failures[0].status"], "move_failed");
+  EXPECT_EQ(f.labels["robots.r2.identification.method"], "ceres_with_scale");
+  EXPECT_EQ(f.labels["robots.r2.parameters[r2.link1.theta].unit"], "deg");
+  // Timing and how it ran, apart.
+  EXPECT_EQ(f.timing["timing_s.total"], 9.5);
+  EXPECT_EQ(f.timing["timing_s.cell.frames"], 40);
+  EXPECT_EQ(f.timing["robots.r2.planning.time_s"], 4.0);
+  EXPECT_EQ(f.timing["robots.r2.planning.from_plan_store"], true);
+  // Left out: traces, the image list, split candidates, nulls, the scenario block.
+  for (const json* part : {&f.figures, &f.labels, &f.timing}) {
+    for (const auto& [key, value] : part->items()) {
+      EXPECT_EQ(key.find("fitness_history"), std::string::npos) << key;
+      EXPECT_EQ(key.find("eps_history"), std::string::npos) << key;
+      EXPECT_EQ(key.find("images"), std::string::npos) << key;
+      EXPECT_EQ(key.find("candidates"), std::string::npos) << key;
+      EXPECT_EQ(key.find("mean_frames_per_pose"), std::string::npos) << key;
+      EXPECT_NE(key.rfind("scenario", 0), 0u) << key;
+      EXPECT_EQ(key.find("time_s") != std::string::npos || key.find("timing_s") == 0 ||
+                    key.find("from_plan_store") != std::string::npos,
+                part == &f.timing)
+          << key;
+    }
+  }
+}
+
+TEST(TrialRecordTest, RecordCarriesIdentitySeedsStatusAndFigures) {
+  Scenario sc;
+  sc.name = "study_small";
+  sc.seeds = {100, 200};
+  ApplyTrial(4, &sc);
+  const json report = Report();
+  TrialOutcome o;
+  o.status = "ok";
+  o.report = &report;
+  o.wall_s = 3.25;
+  const json r = MakeTrialRecord("0123456789abcdef", sc, o);
+  EXPECT_EQ(r["scenario_hash"], "0123456789abcdef");
+  EXPECT_EQ(r["scenario"], "study_small");
+  EXPECT_EQ(r["trial"], 4);
+  EXPECT_EQ(r["seeds"]["truth"], 104);
+  EXPECT_EQ(r["seeds"]["estimator"], 204);
+  EXPECT_EQ(r["status"], "ok");
+  EXPECT_EQ(r["reason"], "");
+  EXPECT_EQ(r["figures"]["intrinsics.error_px.cx"], -1.5);
+  EXPECT_EQ(r["run"]["wall_s"], 3.25);
+  EXPECT_EQ(r["run"]["timing"]["timing_s.total"], 9.5);
+  // Two runs of the same trial differ only in how they ran.
+  TrialOutcome o2 = o;
+  o2.wall_s = 99;
+  json report2 = report;
+  report2["timing_s"]["total"] = 1.0;
+  report2["robots"]["r2"]["planning"]["from_plan_store"] = false;
+  o2.report = &report2;
+  const json r2 = MakeTrialRecord("0123456789abcdef", sc, o2);
+  EXPECT_NE(r, r2);
+  EXPECT_EQ(ComparablePart(r), ComparablePart(r2));
+  report2["intrinsics"]["error_px"]["fx"] = 0.26;
+  EXPECT_NE(ComparablePart(r), ComparablePart(MakeTrialRecord("0123456789abcdef", sc, o2)));
+}
+
+TEST(TrialRecordTest, AFailedTrialWithoutAReportKeepsItsReason) {
+  Scenario sc;
+  sc.name = "x";
+  TrialOutcome o;
+  o.status = "failed";
+  o.reason = "r2 planning: no feasible pose";
+  o.exit_code = 2;
+  const json r = MakeTrialRecord("h", sc, o);
+  EXPECT_EQ(r["status"], "failed");
+  EXPECT_EQ(r["reason"], "r2 planning: no feasible pose");
+  EXPECT_EQ(r["exit_code"], 2);
+  EXPECT_TRUE(r["figures"].empty());
+}
+
+}  // namespace
+}  // namespace twin

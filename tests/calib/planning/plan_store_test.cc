@@ -1,0 +1,56 @@
+#include "calib/planning/plan_store.h"
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "test_models.h"
+
+namespace twin {
+namespace {
+
+using testing::ReinovoLikeModel;
+
+PlanInputs Inputs() {
+  PlanInputs in;
+  in.active = ReinovoLikeModel(0);
+  in.passive = ReinovoLikeModel(1);
+  in.X_BaBp.translation() = Vector3(1.2, 0.0, 0.0);
+  in.X_FC.translation() = Vector3(0.0, 0.0, 0.05);
+  return in;
+}
+
+TEST(PlanStoreTest, InputsTextIsStableAndLeavesThreadsOut) {
+  const PlanInputs a = Inputs();
+  EXPECT_EQ(PlanInputsText(a), PlanInputsText(Inputs()));
+  PlanInputs b = a;
+  b.options.threads = 7;  // the plan does not depend on it (pose_planner.h)
+  EXPECT_EQ(PlanInputsText(a), PlanInputsText(b));
+}
+
+TEST(PlanStoreTest, EveryInputThatChangesThePlanChangesTheText) {
+  const std::string base = PlanInputsText(Inputs());
+  const std::vector<std::pair<const char*, std::function<void(PlanInputs*)>>> edits = {
+      {"active link d", [](PlanInputs* p) { p->active.links[2].dh.d += 1e-12; }},
+      {"passive tool a", [](PlanInputs* p) { p->passive.tool().dh.a += 1e-9; }},
+      {"passive limit", [](PlanInputs* p) { p->passive.links[0].limits.upper -= 1e-9; }},
+      {"passive X_LtE", [](PlanInputs* p) { p->passive.X_LtE.translation().z() += 1e-9; }},
+      {"X_BaBp", [](PlanInputs* p) { p->X_BaBp.translation().y() = 1e-15; }},
+      {"X_FC", [](PlanInputs* p) { p->X_FC.linear()(0, 1) = 1e-15; }},
+      {"seed", [](PlanInputs* p) { p->options.seed = 2; }},
+      {"swarm", [](PlanInputs* p) { p->options.swarm_size = 11; }},
+      {"C3", [](PlanInputs* p) { p->options.max_visibility_angle *= 1.0000001; }},
+      {"ik seed", [](PlanInputs* p) { p->options.ik.seed = 9; }},
+      {"board normal", [](PlanInputs* p) { p->options.board_normal_in_E.x() = 1e-12; }},
+  };
+  for (const auto& [what, edit] : edits) {
+    PlanInputs p = Inputs();
+    edit(&p);
+    EXPECT_NE(PlanInputsText(p), base) << what;  // exact (hex) numbers: the last bit counts
+  }
+}
+
+}  // namespace
+}  // namespace twin
