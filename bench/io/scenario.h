@@ -5,6 +5,8 @@
 //   scenario:
 //     name: twin_demo                      # required
 //     seed: 7                              # optional (default 1): seed of every random effect
+//                                          # (and, until issue 12 splits it, of the
+//                                          # estimator's own randomness)
 //     robots:                              # required, exactly two
 //       - name: r1                         # unique identifier ([A-Za-z_][A-Za-z0-9_]*), used by
 //                                          # camera.robot, board.robot, tips and effects; it also
@@ -55,6 +57,11 @@
 //     calibration: {...}                   # optional: the optical-axis procedure (see
 //                                          # bench/io/calibration_config.h)
 //     handclasp: {...}                     # optional: the handclasp base-frame procedure
+//                                          # (bench/runs/handclasp_run.h)
+//     acceptance:                          # optional: criteria on report.json figures that
+//       - {figure: robots.r2.truth_position_error_mm.rigid.after.rms, max: 0.3}  # make
+//                                          # `twinbench run` exit 3 when missed
+//                                          # (bench/report/acceptance.h)
 //     effects:                             # optional list, applied on the truth side
 //       - type: transmission_error         # required; one of EffectTypes()
 //         declared: false                  # optional (default true): told to the estimator?
@@ -93,6 +100,8 @@ struct Scenario {
   /// (base-frame calibration by handclasp).
   YamlField calibration;
   YamlField handclasp;
+  /// `acceptance:`, the CI verdict's criteria on report figures (bench/report/acceptance.h).
+  YamlField acceptance;
 };
 
 /// Parses scenario text. `source` names it in messages; relative model paths are resolved

@@ -7,7 +7,9 @@
 #include <iostream>
 #include <sstream>
 
+#include "bench/io/output_files.h"
 #include "bench/runs/handclasp_run.h"
+#include "bench/report/acceptance.h"
 #include "bench/report/report_html.h"
 #include "calib/common/errors.h"
 #include "calib/procedures/handclasp_procedure.h"
@@ -86,18 +88,20 @@ int RunWorkflowScenario(const RunOptions& o) {
                          std::to_string(handclasp.trials));
   }
   CalibrationConfig config = ParseCalibrationConfig(sc);
+  const Acceptance acceptance = ParseAcceptance(sc);
+  ValidateOutputFolder(o.out_dir, "--out");
+  if (!o.junit.empty()) ValidateOutputFile(o.junit, "--junit");
+  InstallMujocoErrorHandlers();
+  TwinCell cell(sc.twin, sc.path);  // a cell that does not settle at its start is bad input
 
   const fs::path out(o.out_dir);
   const fs::path staging = CreateStagingDirectory(o.out_dir);
-  std::error_code ec;
   std::ostringstream discard;
   std::ostream& progress = o.quiet ? static_cast<std::ostream&>(discard) : std::cout;
-  int rc = 0;
+  AcceptanceVerdict verdict;
   try {
-    InstallMujocoErrorHandlers();
     progress << "twinbench run: dual-arm workflow, scenario " << sc.name << " (" << sc.path
              << ")\n";
-    TwinCell cell(sc.twin, sc.path);
     const int initial_camera_robot = cell.CameraRobot();
     nlohmann::json report;
     nlohmann::json workflow;
@@ -171,13 +175,29 @@ int RunWorkflowScenario(const RunOptions& o) {
     report["base_frame"]["installation"] = ToString(handclasp.constraint);
     report["base_frame"]["workflow"] = workflow;
     if (report.contains("timing_s")) report["timing_s"]["workflow_total"] = Seconds(t_start);
+    if (!failure.empty()) {
+      // A refused stage is exit 2 with its reason (README, exit codes); nothing is written.
+      std::string detail;
+      for (const char* stage : {"calibrated_kinematics", "nominal_kinematics"}) {
+        if (workflow.contains(stage) && workflow[stage]["stage"].contains("reason")) {
+          detail = ": " + workflow[stage]["stage"]["reason"].get<std::string>();
+          break;
+        }
+      }
+      throw InputError(sc.path, "the dual-arm workflow refused: " + failure + detail);
+    }
+    verdict = EvaluateAcceptance(acceptance, &report);
 
     {
       std::ofstream f(staging / "report.json");
       f << report.dump(2) << '\n';
       if (!f) throw InputError((staging / "report.json").string(), "writing the report failed");
     }
-    std::ofstream(staging / "report.html") << RenderReportHtml(report);
+    {
+      std::ofstream f(staging / "report.html");
+      f << RenderReportHtml(report);
+      if (!f) throw InputError((staging / "report.html").string(), "writing the report failed");
+    }
     PublishDirectory(staging.string(), out.string());
 
     const auto line = [&](const char* key, const char* label) {
@@ -203,16 +223,20 @@ int RunWorkflowScenario(const RunOptions& o) {
       if (workflow.contains("calibrated_kinematics")) {
         line("calibrated_kinematics", "  handclasp, calibrated kinematics");
       }
-      if (!failure.empty()) std::printf("workflow failed: %s\n", failure.c_str());
       std::printf("wrote %s/{report.json, report.html, measurements.csv, servo_*.png}\n",
                   out.string().c_str());
     }
-    rc = failure.empty() ? 0 : 1;
+  } catch (const InputError& e) {
+    DiscardStaging(staging.string());
+    if (e.where().rfind(sc.path, 0) == 0) throw;
+    throw InputError(sc.path, e.what());  // a run-time refusal names the scenario too
   } catch (...) {
-    fs::remove_all(staging, ec);
+    DiscardStaging(staging.string());
     throw;
   }
-  return rc;
+  if (!o.junit.empty()) WriteJunit(o.junit, sc.name, verdict, Seconds(t_start));
+  PrintVerdict(verdict);
+  return VerdictExitCode(verdict);
 }
 
 }  // namespace twin
