@@ -1,10 +1,15 @@
-// twinbench: the command-line entry point. User errors (InputError, bad arguments) exit 2.
+// twinbench: the command-line entry point. Exit codes (README, "Exit codes"): 0 success; 2 bad
+// input or a refused procedure, with `error: <where>: <what>` on stderr; 3 a run that missed
+// its acceptance criteria; 1 only for our own bugs (`internal error: ...`). An interrupted run
+// (SIGINT, SIGTERM, SIGHUP) removes its staging folder and ends by the signal.
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <iostream>
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -16,6 +21,7 @@
 #include "bench/runs/study_run.h"
 #include "bench/runs/synthetic_measurements.h"
 #include "bench/io/model_loader.h"
+#include "bench/io/output_files.h"
 #include "bench/runs/twin_commands.h"
 #include "bench/io/urdf_model.h"
 #include "bench/io/yaml_util.h"
@@ -23,29 +29,51 @@
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/inverse_kinematics.h"
 #include "calib/model/parameters.h"
+#include "sim/world/mujoco_handles.h"
 
 namespace twin {
 namespace {
 
 constexpr int kExitUserError = 2;
+constexpr int kExitInternalError = 1;
 
-// Parses "a,b,c" into exactly n numbers; `option` names the flag in the message.
-std::vector<double> ParseList(const std::string& text, int n, const std::string& option) {
-  std::vector<double> v;
-  std::stringstream ss(text);
+// Parses "a,b,c" into exactly n finite numbers of magnitude at most `limit` (the option's
+// plausibility limit, `why` its reason); `option` names the flag in the message. Empty items
+// (a trailing comma) are refused.
+std::vector<double> ParseList(const std::string& text, int n, const std::string& option,
+                              double limit, const std::string& why) {
+  std::vector<std::string> items;
   std::string item;
-  while (std::getline(ss, item, ',')) {
-    try {
-      size_t used = 0;
-      v.push_back(std::stod(item, &used));
-      if (item.find_first_not_of(" \t", used) != std::string::npos) throw std::invalid_argument("");
-    } catch (const std::exception&) {
-      throw InputError(option, "expected a number, got '" + item + "'");
+  for (char c : text) {
+    if (c == ',') {
+      items.push_back(item);
+      item.clear();
+    } else {
+      item += c;
     }
   }
-  if (static_cast<int>(v.size()) != n) {
+  items.push_back(item);
+  if (static_cast<int>(items.size()) != n) {
     throw InputError(option, "expected " + std::to_string(n) + " comma-separated numbers, got '" +
                                  text + "'");
+  }
+  std::vector<double> v;
+  for (const std::string& it : items) {
+    double x = 0.0;
+    try {
+      size_t used = 0;
+      x = std::stod(it, &used);
+      if (it.find_first_not_of(" \t", used) != std::string::npos) throw std::invalid_argument("");
+    } catch (const std::exception&) {
+      throw InputError(option, "expected a number, got '" + it + "'");
+    }
+    if (!std::isfinite(x)) throw InputError(option, "expected a finite number, got '" + it + "'");
+    if (std::abs(x) > limit) {
+      std::ostringstream os;
+      os << "expected numbers within +-" << limit << " (" << why << "), got '" << it << "'";
+      throw InputError(option, os.str());
+    }
+    v.push_back(x);
   }
   return v;
 }
@@ -54,7 +82,8 @@ std::vector<double> ParseList(const std::string& text, int n, const std::string&
 JointVector ParseJointsDeg(const std::string& text, const KinematicModel& model,
                            const std::string& option) {
   const int n = model.num_joints();
-  const std::vector<double> v = ParseList(text, n, option);
+  const std::vector<double> v =
+      ParseList(text, n, option, 720.0, "degrees; no joint travels more than two turns");
   JointVector q(n);
   for (int i = 0; i < n; ++i) {
     if (!std::isfinite(v[i])) {
@@ -111,8 +140,9 @@ int RunFk(const std::string& path, const std::string& q_text) {
 int RunIk(const std::string& path, const std::string& xyz, const std::string& rpy,
           const std::string& seed, bool position_only) {
   const KinematicModel m = LoadRobotModel(path);
-  const std::vector<double> p = ParseList(xyz, 3, "--xyz");
-  const std::vector<double> r = ParseList(rpy, 3, "--rpy");
+  const std::vector<double> p =
+      ParseList(xyz, 3, "--xyz", 1e4, "millimetres; no arm reaches 10 m");
+  const std::vector<double> r = ParseList(rpy, 3, "--rpy", 360.0, "degrees; angles are periodic");
   Transform target = Transform::Identity();
   target.translation() = Vector3(p[0], p[1], p[2]) * 1e-3;
   target.linear() = RpyToRotation(Vector3(DegToRad(r[0]), DegToRad(r[1]), DegToRad(r[2])));
@@ -132,6 +162,7 @@ int RunIk(const std::string& path, const std::string& xyz, const std::string& rp
 }
 
 int RunExportUrdf(const std::string& path, const std::string& out) {
+  ValidateOutputFile(out, "--out");
   WriteFileAtomically(out, ModelToUrdf(LoadRobotModel(path)));
   std::printf("wrote %s\n", out.c_str());
   return 0;
@@ -176,6 +207,11 @@ int RunDemo(const std::string& model_dir, int samples, unsigned seed) {
 
 int main(int argc, char** argv) {
   using namespace twin;
+  // Before any thread exists: interrupts remove staging folders (bench/io/output_files.h), and
+  // MuJoCo never writes MUJOCO_LOG.TXT into the current folder (its warnings and errors become
+  // exceptions, reported on stderr).
+  InstallInterruptCleanup();
+  InstallMujocoErrorHandlers();
   CLI::App app{"twinbench: digital-twin test bench for dual-robot kinematic calibration"};
   app.require_subcommand(1);
 
@@ -255,6 +291,12 @@ int main(int argc, char** argv) {
       "study-merge", "merge study shards into trials.jsonl, summary.json and summary.html");
   merge->add_option("dirs", merge_options.dirs, "study folders (shards)")->required();
   merge->add_option("--out", merge_options.out_dir, "merged study folder")->required();
+  run->add_option("--junit", run_options.junit,
+                  "write the acceptance criteria's verdict as JUnit XML to this file");
+  std::string check_scenario;
+  auto* check = app.add_subcommand(
+      "check", "validate a scenario as `run` would (sections, acceptance, the cell), run nothing");
+  check->add_option("scenario", check_scenario, "scenario file")->required();
   IdentifyOptions identify_options;
   auto* identify = app.add_subcommand(
       "identify", "identify a robot's parameters from recorded measurements (no twin)");
@@ -286,10 +328,19 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
-    return rc == 0 ? 0 : kExitUserError;
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    std::fprintf(stderr, "error: command line: %s (see twinbench --help)\n", e.what());
+    return kExitUserError;
   }
   try {
+    // Output folders are checked before anything runs ("--out ''", a file, "/").
+    const std::vector<std::pair<CLI::App*, const std::string*>> outputs = {
+        {render, &render_options.out_dir}, {run, &run_options.out_dir},
+        {identify, &identify_options.out_dir}};
+    for (const auto& [sub, folder] : outputs) {
+      if (*sub) ValidateOutputFolder(*folder, "--out");
+    }
+    if (*check) return CheckScenario(check_scenario);
     if (*info) return RunInfo(model);
     if (*fk) return RunFk(model, q);
     if (*ik) return RunIk(model, xyz, rpy, seed, position_only);
@@ -314,9 +365,13 @@ int main(int argc, char** argv) {
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitUserError;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // Output paths that cannot be written (permissions, a full disk) are the user's to fix.
+    std::fprintf(stderr, "error: %s: %s\n", e.path1().string().c_str(), e.code().message().c_str());
+    return kExitUserError;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "internal error: %s\n", e.what());
-    return 1;
+    return kExitInternalError;
   }
-  return 1;
+  return kExitInternalError;
 }

@@ -8,7 +8,7 @@ PACKAGES=(
   build-essential cmake pkg-config
   libeigen3-dev libceres-dev libopencv-dev
   libmujoco-dev libqhull-dev libosmesa6-dev
-  liburdfdom-dev liburdfdom-headers-dev
+  liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev
   slurmctld slurmd slurm-client munge

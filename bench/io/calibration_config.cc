@@ -1,7 +1,9 @@
 #include "bench/io/calibration_config.h"
 
 #include <algorithm>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "bench/io/yaml_util.h"
 #include "calib/common/errors.h"
@@ -10,10 +12,10 @@ namespace twin {
 namespace {
 
 const YamlKeys kKeys = {"robots",           "rough_base_from_robot1", "rough_hand_eye",
-                        "board_mount",      "intrinsics_views",       "planning",
-                        "servo",            "calibration_axes",       "scoring",
-                        "calibration_split", "refit_all_axes"};
-const YamlKeys kPoseKeys = {"xyz_mm", "rpy_deg", "zyz_deg"};
+                        "board_mount",      "board_squares",          "board_square_mm",
+                        "intrinsics_views", "planning",               "servo",
+                        "calibration_axes", "scoring",                "calibration_split",
+                        "refit_all_axes"};
 const YamlKeys kPlanningKeys = {"axes",
                                 "positions_per_axis",
                                 "swarm_size",
@@ -32,6 +34,39 @@ const YamlKeys kPlanningKeys = {"axes",
 const YamlKeys kServoKeys = {"tolerance_px", "max_iterations", "gain"};
 const YamlKeys kScoringKeys = {"configurations", "seed"};
 
+// Plausibility limits of the told values: the same as the twin's (sim/world/twin_spec.cc).
+constexpr double kMaxToldBaseDistanceM = 20.0;
+constexpr double kMaxToldToolOffsetM = 1.0;
+// Largest PSO effort: 20 times the paper's 10 particles x 100 iterations x 5 runs.
+constexpr double kMaxPlanningEvaluations = 1e5;
+
+std::string DescribeNumber(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+// A whole number in [lo, hi]; `why` is the limit's reason.
+int BoundedInteger(const YamlReader& r, const YamlField& f, int lo, int hi, const char* why) {
+  const int v = r.Integer(f);
+  if (v < lo || v > hi) {
+    r.Fail(f, "expected a whole number from " + std::to_string(lo) + " to " + std::to_string(hi) +
+                  " (" + why + "), got " + std::to_string(v));
+  }
+  return v;
+}
+
+// A number in [lo, hi] in the key's unit; `why` is the limit's reason.
+double BoundedNumber(const YamlReader& r, const YamlField& f, double lo, double hi,
+                     const char* why) {
+  const double v = r.Number(f);
+  if (v < lo || v > hi) {
+    r.Fail(f, "expected a number in [" + DescribeNumber(lo) + ", " + DescribeNumber(hi) + "] (" +
+                  why + "), got " + DescribeNumber(v));
+  }
+  return v;
+}
+
 }  // namespace
 
 CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
@@ -43,14 +78,34 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
   }
   const YamlMap m(r, sc.calibration, kKeys);
   CalibrationConfig c;
+  // What the estimator is told comes from this section only, never from the twin's truth
+  // (scenario.robots[1].base_from_robot1, camera.hand_eye, board.*): the nominal models are
+  // the model files (the twin perturbs them by its geometry effects).
   for (int k = 0; k < 2; ++k) c.knowledge.nominal[k] = sc.twin.robots[k].model;
-  const auto pose = [&](const YamlField& f) { return ReadPose(r, YamlMap(r, f, kPoseKeys)); };
-  c.knowledge.X_B1B2 = pose(m.Get("rough_base_from_robot1"));
-  c.knowledge.X_FC = pose(m.Get("rough_hand_eye"));
-  c.knowledge.X_FT = sc.twin.board.X_FT;
-  if (const auto f = m.Find("board_mount", false)) c.knowledge.X_FT = pose(*f);
-  c.knowledge.board =
-      BoardGeometry{sc.twin.board.squares_x, sc.twin.board.squares_y, sc.twin.board.square_m};
+  c.knowledge.X_B1B2 = ReadPoseWithin(r, m.Get("rough_base_from_robot1"), kMaxToldBaseDistanceM,
+                                    "two arms that see each other stand within a few metres");
+  c.knowledge.X_FC = ReadPoseWithin(r, m.Get("rough_hand_eye"), kMaxToldToolOffsetM,
+                                  "a flange tool's bracket is shorter than a metre");
+  c.knowledge.X_FT = ReadPoseWithin(r, m.Get("board_mount"), kMaxToldToolOffsetM,
+                                  "a flange tool's bracket is shorter than a metre");
+  {
+    const YamlField squares = m.Get("board_squares");
+    const std::vector<int> n = r.Integers(squares, 2);
+    for (std::size_t k = 0; k < 2; ++k) {
+      if (n[k] < 2 || n[k] > 30 || n[k] % 2 != 0) {
+        r.Fail(squares.Item(k), "expected an even number of squares from 2 to 30 (the feature "
+                                "point is the centre inner corner; larger patterns are beyond "
+                                "any flange-mounted target), got " + std::to_string(n[k]));
+      }
+    }
+    const YamlField square = m.Get("board_square_mm");
+    const double mm = r.Number(square);
+    if (!(mm >= 1.0 && mm <= 500.0)) {
+      r.Fail(square, "expected a square side in [1, 500] mm (a printed square of a flange-"
+                     "mounted board), got " + DescribeNode(square.node));
+    }
+    c.knowledge.board = BoardGeometry{n[0], n[1], mm / 1000.0};
+  }
 
   OpticalAxisOptions& o = c.options;
   // The estimator's own randomness follows the scenario's estimator seed (+ trial); a
@@ -79,37 +134,64 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
       o.robots.push_back(index);
     }
   }
-  if (const auto f = m.Find("intrinsics_views", false)) o.intrinsics_views = r.Integer(*f);
+  if (const auto f = m.Find("intrinsics_views", false)) {
+    o.intrinsics_views = BoundedInteger(r, *f, 3, 500, "Zhang's method needs 3 views; 500 "
+                                                       "rendered views are minutes of frames");
+  }
   PosePlannerOptions& p = o.planner;
   if (const auto f = m.Find("planning", false)) {
     const YamlMap pm(r, *f, kPlanningKeys);
-    const auto integer = [&](const char* key, int* v) {
-      if (const auto g = pm.Find(key, false)) *v = r.Integer(*g);
+    // Plausibility limits, each with its reason; together they bound the planning's time
+    // (evaluations = swarm x iterations x runs, each a few IK solutions).
+    const auto integer = [&](const char* key, int lo, int hi, const char* why, int* v) {
+      if (const auto g = pm.Find(key, false)) *v = BoundedInteger(r, *g, lo, hi, why);
     };
-    const auto number = [&](const char* key, double scale, double* v) {
-      if (const auto g = pm.Find(key, false)) *v = r.Number(*g) * scale;
+    const auto number = [&](const char* key, double scale, double lo, double hi,
+                            const char* why, double* v) {
+      if (const auto g = pm.Find(key, false)) *v = BoundedNumber(r, *g, lo, hi, why) * scale;
     };
-    integer("axes", &p.num_axes);
-    integer("positions_per_axis", &p.positions_per_axis);
-    integer("swarm_size", &p.swarm_size);
-    integer("iterations", &p.iterations);
-    integer("runs", &p.runs);
-    number("distance_step_mm", 1e-3, &p.distance_step);
-    number("planning_max_distance_mm", 1e-3, &p.planning_max_distance);
-    number("min_distance_mm", 1e-3, &p.min_distance);
-    number("max_distance_mm", 1e-3, &p.max_distance);
-    number("min_joint_limit_distance_deg", DegToRad(1.0), &p.min_joint_limit_distance);
-    number("min_singular_value", 1.0, &p.min_singular_value);
-    number("max_visibility_angle_deg", DegToRad(1.0), &p.max_visibility_angle);
-    number("camera_reach_mm", 1e-3, &p.camera_reach);
-    number("camera_height_mm", 1e-3, &p.camera_height);
+    integer("axes", 1, 20, "the paper plans 5; 20 axes is hours of servoing", &p.num_axes);
+    integer("positions_per_axis", 3, 100, "a line needs 3 points; the paper takes 10",
+            &p.positions_per_axis);
+    integer("swarm_size", 1, 1000, "the paper's swarm is 10", &p.swarm_size);
+    integer("iterations", 1, 10000, "the paper iterates 100 times", &p.iterations);
+    integer("runs", 1, 100, "the paper runs 5 times", &p.runs);
+    const double evaluations = double(p.swarm_size) * p.iterations * p.runs;
+    if (evaluations > kMaxPlanningEvaluations) {
+      r.Fail(*f, "swarm_size x iterations x runs = " + DescribeNumber(evaluations) +
+                     " fitness evaluations; at most " + DescribeNumber(kMaxPlanningEvaluations) +
+                     " (20 times the paper's 5000, already minutes of planning)");
+    }
+    const char* distance = "camera-board distances of a hand camera are below 5 m";
+    number("distance_step_mm", 1e-3, 0.1, 5000, distance, &p.distance_step);
+    number("planning_max_distance_mm", 1e-3, 1, 5000, distance, &p.planning_max_distance);
+    number("min_distance_mm", 1e-3, 0, 5000, distance, &p.min_distance);
+    number("max_distance_mm", 1e-3, 1, 5000, distance, &p.max_distance);
+    number("min_joint_limit_distance_deg", DegToRad(1.0), 0, 90,
+           "a margin of more than 90 deg to every limit leaves no pose", &p.min_joint_limit_distance);
+    number("min_singular_value", 1.0, 0, 10,
+           "manipulator singular values of arms this size are below 2", &p.min_singular_value);
+    number("max_visibility_angle_deg", DegToRad(1.0), 0.1, 89,
+           "a board seen at 90 deg or more is seen edge-on or from behind",
+           &p.max_visibility_angle);
+    const char* reach = "the camera region lies within the cell, a few metres";
+    number("camera_reach_mm", 1e-3, -5000, 5000, reach, &p.camera_reach);
+    number("camera_height_mm", 1e-3, -5000, 5000, reach, &p.camera_height);
     if (const auto g = pm.Find("seed", false)) p.seed = r.Unsigned64(*g);
   }
   if (const auto f = m.Find("servo", false)) {
     const YamlMap sm(r, *f, kServoKeys);
-    if (const auto g = sm.Find("tolerance_px", false)) o.servo.tolerance_px = r.Number(*g);
-    if (const auto g = sm.Find("max_iterations", false)) o.servo.max_iterations = r.Integer(*g);
-    if (const auto g = sm.Find("gain", false)) o.servo.gain = r.Number(*g);
+    if (const auto g = sm.Find("tolerance_px", false)) {
+      o.servo.tolerance_px = BoundedNumber(r, *g, 1e-3, 100, "the detector's corners are good to "
+                                           "~0.05 px; 100 px is no alignment");
+    }
+    if (const auto g = sm.Find("max_iterations", false)) {
+      o.servo.max_iterations = BoundedInteger(r, *g, 1, 1000, "the servo converges in a few "
+                                              "iterations; each is a frame and a move");
+    }
+    if (const auto g = sm.Find("gain", false)) {
+      o.servo.gain = BoundedNumber(r, *g, 0.01, 2.0, "a gain above 2 makes the servo diverge");
+    }
   }
   o.calibration_axes = std::min(3, p.num_axes);
   if (const auto f = m.Find("calibration_axes", false)) o.calibration_axes = r.Integer(*f);
@@ -128,9 +210,9 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
     const YamlMap sm(r, *f, kScoringKeys);
     if (const auto g = sm.Find("configurations", false)) {
       c.scoring_configurations = r.Integer(*g);
-      if (c.scoring_configurations < 10) {
-        r.Fail(*g, "expected at least 10 configurations, got " +
-                       std::to_string(c.scoring_configurations));
+      if (c.scoring_configurations < 10 || c.scoring_configurations > 100000) {
+        r.Fail(*g, "expected 10 to 100000 configurations (the scoring's time grows with them), "
+                   "got " + std::to_string(c.scoring_configurations));
       }
     }
     if (const auto g = sm.Find("seed", false)) c.scoring_seed = r.Unsigned64(*g);

@@ -1,14 +1,15 @@
 // The `calibration:` section of a scenario: what the estimator is told (rough base-to-base and
-// hand-eye transforms, the board mount by drawing) and the options of the optical-axis
-// procedure. Example (scenarios/paper_reinovo.yaml); every key is optional unless marked:
+// hand-eye transforms, the board by drawing) and the options of the optical-axis procedure.
+// Example (scenarios/paper_reinovo.yaml); every key is optional unless marked:
 //
 //   calibration:
 //     robots: [r2, r1]                 # passive robots, in calibration order (default: the
 //                                      # board robot, then the camera robot)
 //     rough_base_from_robot1: {xyz_mm: [1200, 0, 0], zyz_deg: [180, 0, 0]}  # required
 //     rough_hand_eye: {xyz_mm: [60, -60, -26], rpy_deg: [0, 0, 0]}       # required, X_FC
-//     board_mount: {xyz_mm: [0, 0, 40], rpy_deg: [0, 0, 0]}  # X_FT by drawing (default: the
-//                                      # scenario's board.mount)
+//     board_mount: {xyz_mm: [0, 0, 40], rpy_deg: [0, 0, 0]}  # required: X_FT by drawing
+//     board_squares: [4, 4]            # required: the printed board (even counts, 2..30)
+//     board_square_mm: 20              # required: its printed square side [1, 500] mm
 //     intrinsics_views: 25             # board views for Zhang's method
 //     planning:                        # section IV and eq. 50 (defaults: the paper's)
 //       axes: 5                        # q
@@ -36,6 +37,16 @@
 //                                      # (false: the calibration-set model)
 //     scoring: {configurations: 200, seed: 1}   # truth metrics (bench only)
 //
+// Told versus true: the told values come from this section only. The twin's truth (the
+// scenario's robots[1].base_from_robot1, camera.hand_eye and intrinsics, board.*) is never
+// read for them; a missing told value is an error. The nominal models are the model files
+// (the truth is them perturbed by the geometry effects). tests/bench/told_versus_true_test.cc
+// changes every truth-only value of a scenario and requires this section's result unchanged.
+// Plausibility limits (each with its reason in the message): told base within 20 m, told
+// tools within 1 m; intrinsics_views 3..500; planning axes 1..20, positions 3..100, swarm
+// 1..1000, iterations 1..10000, runs 1..100 and at most 1e5 evaluations in all; distances up
+// to 5000 mm; servo tolerance 0.001..100 px, iterations 1..1000, gain 0.01..2; scoring
+// configurations 10..100000.
 // Errors are InputErrors naming file:line and the key path, like the rest of the scenario.
 #pragma once
 

@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "bench/io/model_yaml.h"
+#include "bench/io/output_files.h"
 #include "bench/io/urdf_model.h"
 #include "calib/common/errors.h"
 
@@ -25,19 +26,36 @@ KinematicModel LoadRobotModel(const std::string& path) {
 
 void PublishDirectory(const std::string& staging, const std::string& out) {
   namespace fs = std::filesystem;
-  std::error_code ec;
-  const fs::path old = out + ".old";
-  fs::remove_all(old, ec);
-  if (fs::exists(out)) fs::rename(out, old);
-  fs::rename(staging, out);
-  fs::remove_all(old, ec);
+  // Held off from the interrupt clean-up: either the staging folder is removed before the
+  // renames, or the output is complete after them. The old output is kept aside until the new
+  // one is in place.
+  WithCleanupHeld([&] {
+    std::error_code ec;
+    const fs::path old = out + ".old";
+    fs::remove_all(old, ec);
+    if (fs::exists(out)) {
+      fs::rename(out, old, ec);
+      if (ec) throw InputError(out, "cannot replace the output folder: " + ec.message());
+    }
+    fs::rename(staging, out, ec);
+    if (ec) {
+      std::error_code ignored;
+      if (fs::exists(old)) fs::rename(old, out, ignored);
+      throw InputError(out, "cannot move the completed output into place: " + ec.message());
+    }
+    UnregisterCleanupPath(staging);
+    fs::remove_all(old, ec);
+  });
 }
 
 std::string CreateStagingDirectory(const std::string& out) {
+  ValidateOutputFolder(out, out);
   const std::string staging = out + ".partial";
   std::error_code ec;
-  std::filesystem::remove_all(staging, ec);
+  std::filesystem::remove_all(staging, ec);  // left by a killed run (SIGKILL)
+  RegisterCleanupPath(staging);
   if (!std::filesystem::create_directories(staging, ec) && ec) {
+    DiscardStaging(staging);
     throw InputError(out, "cannot create the output folder: " + ec.message());
   }
   return staging;
@@ -45,20 +63,27 @@ std::string CreateStagingDirectory(const std::string& out) {
 
 void WriteFileAtomically(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".partial";
+  RegisterCleanupPath(tmp);
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(path, "cannot open for writing");
+    if (!out) {
+      UnregisterCleanupPath(tmp);
+      throw InputError(path, "cannot open for writing");
+    }
     out << text;
     out.flush();
     if (!out) {
-      std::remove(tmp.c_str());
+      DiscardStaging(tmp);
       throw InputError(path, "write failed");
     }
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw InputError(path, "cannot move the written file into place");
-  }
+  WithCleanupHeld([&] {
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+      DiscardStaging(tmp);
+      throw InputError(path, "cannot move the written file into place");
+    }
+    UnregisterCleanupPath(tmp);
+  });
 }
 
 }  // namespace twin

@@ -1,6 +1,7 @@
 #include "bench/io/model_yaml.h"
 
 #include <charconv>
+#include <optional>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -9,6 +10,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "bench/io/plausibility.h"
 #include "bench/io/yaml_util.h"
 #include "calib/common/errors.h"
 #include "calib/common/text_format.h"
@@ -45,12 +47,44 @@ constexpr DhField kDhFields[] = {
 
 constexpr double kRadPerDeg = kPi / 180.0;  // the reader's scale for angle_unit: deg
 
+std::string UnitName(double angle_scale) { return angle_scale == kRadPerDeg ? "deg" : "rad"; }
+
+// Plausibility (bench/io/plausibility.h): each check fails at the field with the limit.
+void CheckPlausible(const Reader& r, const Field& f, const std::optional<std::string>& problem) {
+  if (problem) r.Fail(f, *problem);
+}
+
+double Length(const Reader& r, const Field& f) {
+  const double v = r.Number(f);
+  CheckPlausible(r, f, plausibility::LengthProblem(v));
+  return v;
+}
+
+double Angle(const Reader& r, const Field& f, double angle_scale) {
+  const double v = r.Number(f) * angle_scale;
+  CheckPlausible(r, f, plausibility::AngleProblem(v, UnitName(angle_scale), angle_scale));
+  return v;
+}
+
+Vector3 Lengths(const Reader& r, const Field& f) {
+  const Vector3 v = r.Vector(f);
+  for (int k = 0; k < 3; ++k) {
+    CheckPlausible(r, f.Item(static_cast<std::size_t>(k)), plausibility::LengthProblem(v(k)));
+  }
+  return v;
+}
+
 // Inertia file order [ixx, iyy, izz, ixy, ixz, iyz] as (row, col) of I_Com.
 constexpr std::pair<int, int> kInertiaEntries[] = {{0, 0}, {1, 1}, {2, 2},
                                                    {0, 1}, {0, 2}, {1, 2}};
 
 JointLimits ParseLimits(const Reader& r, const Field& f, double angle_scale) {
   const std::vector<double> v = r.Numbers(f, 2);
+  for (std::size_t k = 0; k < 2; ++k) {
+    CheckPlausible(r, f.Item(k),
+                   plausibility::JointLimitProblem(v[k] * angle_scale, UnitName(angle_scale),
+                                                   angle_scale));
+  }
   if (!(v[0] < v[1])) {
     std::ostringstream os;
     os << "lower limit " << v[0] << " must be below upper limit " << v[1];
@@ -63,15 +97,18 @@ LinkInertia ParseInertia(const Reader& r, const MapFields& m, bool required) {
   LinkInertia in;
   if (const auto f = m.Find("mass", required)) {
     in.mass = r.Number(*f);
-    if (in.mass < 0.0) r.Fail(*f, "mass must be >= 0 kg, got " + DescribeNode(f->node));
+    CheckPlausible(r, *f, plausibility::MassProblem(in.mass));
   }
-  if (const auto f = m.Find("com", required)) in.p_LiCom = r.Vector(*f);
+  if (const auto f = m.Find("com", required)) in.p_LiCom = Lengths(r, *f);
   if (const auto f = m.Find("inertia", required)) {
     const std::vector<double> v = r.Numbers(*f, 6);
     for (std::size_t k = 0; k < v.size(); ++k) {
       const auto [i, j] = kInertiaEntries[k];
       in.I_Com(i, j) = in.I_Com(j, i) = v[k];
     }
+    CheckPlausible(r, *f, plausibility::InertiaProblem(in.mass, in.I_Com));
+  } else if (const auto mass = m.Find("mass", false); mass && in.mass > 0.0) {
+    r.Fail(*mass, "a link with mass needs its inertia [ixx, iyy, izz, ixy, ixz, iyz] (kg m^2)");
   }
   return in;
 }
@@ -81,7 +118,8 @@ Link ParseLink(const Reader& r, const Field& f, double angle_scale, bool is_tool
   Link link;
   link.name = r.String(m.Get("name"));
   for (const DhField& d : kDhFields) {
-    link.dh.*d.member = r.Number(m.Get(d.key)) * (d.is_angle ? angle_scale : 1.0);
+    const Field v = m.Get(d.key);
+    link.dh.*d.member = d.is_angle ? Angle(r, v, angle_scale) : Length(r, v);
   }
   if (!is_tool) link.limits = ParseLimits(r, m.Get("limits"), angle_scale);
   link.inertia = ParseInertia(r, m, !is_tool);
@@ -102,9 +140,14 @@ Vector3 RotationToRpy(const Matrix3& R) {
 Transform ParseTransform(const Reader& r, const Field& f, double angle_scale) {
   const MapFields m(r, f, kTransformKeys);
   Transform X = Transform::Identity();
-  if (const auto xyz = m.Find("xyz", false)) X.translation() = r.Vector(*xyz);
+  if (const auto xyz = m.Find("xyz", false)) X.translation() = Lengths(r, *xyz);
   if (const auto rpy = m.Find("rpy", false)) {
-    X.linear() = RpyToRotation(r.Vector(*rpy) * angle_scale);
+    const Vector3 a = r.Vector(*rpy) * angle_scale;
+    for (int k = 0; k < 3; ++k) {
+      CheckPlausible(r, rpy->Item(static_cast<std::size_t>(k)),
+                     plausibility::AngleProblem(a(k), UnitName(angle_scale), angle_scale));
+    }
+    X.linear() = RpyToRotation(a);
   }
   return X;
 }
@@ -137,7 +180,9 @@ void ParseLinks(const Reader& r, const Field& f, double angle_scale, KinematicMo
 KinematicModel ParseRobot(const Reader& r, const Field& f) {
   const MapFields m(r, f, kRobotKeys);
   KinematicModel model;
-  model.name = r.String(m.Get("name"));
+  const Field name = m.Get("name");
+  model.name = r.String(name);
+  if (model.name.empty()) r.Fail(name, "expected a non-empty robot name");
   const double angle_scale = ParseAngleScale(r, m.Get("angle_unit"));
   ParseLinks(r, m.Get("links"), angle_scale, &model);
   model.tool() = ParseLink(r, m.Get("tool"), angle_scale, true);

@@ -20,8 +20,9 @@ namespace {
 using Keys = YamlKeys;
 
 const Keys kRootKeys = {"scenario"};
-const Keys kScenarioKeys = {"name", "seed",    "seeds",   "robots",      "camera",   "board",
-                            "tips", "physics", "effects", "calibration", "handclasp"};
+const Keys kScenarioKeys = {"name",    "seed",        "seeds",     "robots",
+                            "camera",  "board",       "tips",      "physics",
+                            "effects", "calibration", "handclasp", "acceptance"};
 const Keys kSeedsKeys = {"truth", "estimator"};
 const Keys kRobot1Keys = {"name", "model", "installation", "base", "initial_joints_deg"};
 const Keys kRobot2Keys = {"name", "model", "installation", "base_from_robot1",
@@ -94,6 +95,7 @@ class ScenarioParser {
     // Procedure sections: kept as written, parsed by the procedures that own them.
     if (const auto f = m.Find("calibration", false)) out_.calibration = *f;
     if (const auto f = m.Find("handclasp", false)) out_.handclasp = *f;
+    if (const auto f = m.Find("acceptance", false)) out_.acceptance = *f;
     Validate();
     return out_;
   }

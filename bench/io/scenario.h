@@ -63,6 +63,11 @@
 //     calibration: {...}                   # optional: the optical-axis procedure (see
 //                                          # bench/io/calibration_config.h)
 //     handclasp: {...}                     # optional: the handclasp base-frame procedure
+//                                          # (bench/runs/handclasp_run.h)
+//     acceptance:                          # optional: criteria on report.json figures that
+//       - {figure: robots.r2.truth_position_error_mm.rigid.after.rms, max: 0.3}  # make
+//                                          # `twinbench run` exit 3 when missed
+//                                          # (bench/report/acceptance.h)
 //     effects:                             # optional list, applied on the truth side
 //       - type: transmission_error         # required; one of EffectTypes()
 //         declared: false                  # optional (default true): told to the estimator?
@@ -111,6 +116,8 @@ struct Scenario {
   /// (base-frame calibration by handclasp).
   YamlField calibration;
   YamlField handclasp;
+  /// `acceptance:`, the CI verdict's criteria on report figures (bench/report/acceptance.h).
+  YamlField acceptance;
 };
 
 /// Parses scenario text. `source` names it in messages; relative model paths are resolved

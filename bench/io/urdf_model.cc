@@ -2,15 +2,20 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
 #include <map>
+#include <optional>
 #include <sstream>
 #include <vector>
 
+#include <console_bridge/console.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include "bench/io/plausibility.h"
+#include "bench/io/yaml_util.h"
 #include "calib/common/text_format.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
@@ -70,19 +75,143 @@ std::string ListNames(const std::vector<std::string>& names) {
 
 // ---- Parsing and the chain ------------------------------------------------------------------
 
+// Largest URDF read [bytes]: URDFs reference their meshes, so even a robot with many links
+// and collision shapes is well below 1 MiB; 16 MiB keeps a wrong path from filling memory.
+constexpr std::uintmax_t kMaxUrdfBytes = std::uintmax_t{16} << 20;
+
+// Collects urdfdom's messages, which it prints through console_bridge (its reasons for
+// refusing a file, or for silently dropping an element it could not read), while it parses.
+class UrdfdomMessages : public console_bridge::OutputHandler {
+ public:
+  UrdfdomMessages() : previous_(console_bridge::getOutputHandler()) {
+    console_bridge::useOutputHandler(this);
+  }
+  ~UrdfdomMessages() override { console_bridge::useOutputHandler(previous_); }
+  UrdfdomMessages(const UrdfdomMessages&) = delete;
+  UrdfdomMessages& operator=(const UrdfdomMessages&) = delete;
+
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR) errors_.push_back(text);
+  }
+  const std::vector<std::string>& errors() const { return errors_; }
+
+ private:
+  console_bridge::OutputHandler* previous_;
+  std::vector<std::string> errors_;
+};
+
+// 1-based line of the first `<element ... name="name"` in the text, or 0.
+int ElementLine(const std::string& text, const std::string& element, const std::string& name) {
+  const std::string open = "<" + element;
+  for (std::size_t at = text.find(open); at != std::string::npos; at = text.find(open, at + 1)) {
+    const std::size_t after = at + open.size();
+    if (after >= text.size() || !std::isspace(static_cast<unsigned char>(text[after]))) continue;
+    const std::size_t close = text.find('>', after);
+    const std::string tag = text.substr(after, close == std::string::npos ? std::string::npos
+                                                                          : close - after);
+    for (std::size_t n = tag.find("name"); n != std::string::npos; n = tag.find("name", n + 1)) {
+      if (n > 0 && !std::isspace(static_cast<unsigned char>(tag[n - 1]))) continue;
+      std::size_t k = n + 4;
+      while (k < tag.size() && std::isspace(static_cast<unsigned char>(tag[k]))) ++k;
+      if (k >= tag.size() || tag[k] != '=') continue;
+      ++k;
+      while (k < tag.size() && std::isspace(static_cast<unsigned char>(tag[k]))) ++k;
+      if (k >= tag.size() || (tag[k] != '"' && tag[k] != '\'')) continue;
+      const std::size_t end = tag.find(tag[k], k + 1);
+      if (end != std::string::npos && tag.compare(k + 1, end - k - 1, name) == 0) {
+        return 1 + static_cast<int>(std::count(text.begin(), text.begin() + at, '\n'));
+      }
+    }
+  }
+  return 0;
+}
+
+// "source:line" of an element (just "source" when it cannot be found).
+std::string ElementWhere(const std::string& text, const std::string& source,
+                         const std::string& element, const std::string& name) {
+  const int line = ElementLine(text, element, name);
+  return line > 0 ? source + ":" + std::to_string(line) : source;
+}
+
+// Where urdfdom's messages point: the first link or joint they name ("... for Link [a]",
+// "Joint [j] is ..."), else the file.
+std::string MessageWhere(const std::string& text, const std::string& source,
+                         const std::vector<std::string>& messages) {
+  for (const std::string& message : messages) {
+    std::string lower = message;
+    std::transform(lower.begin(), lower.end(), lower.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    for (const std::string element : {"link", "joint"}) {
+      const std::size_t at = lower.find(element + " [");
+      if (at == std::string::npos) continue;
+      const std::size_t begin = at + element.size() + 2;
+      const std::size_t end = message.find(']', begin);
+      if (end == std::string::npos) continue;
+      return ElementWhere(text, source, element, message.substr(begin, end - begin));
+    }
+  }
+  return source;
+}
+
 urdf::ModelInterfaceSharedPtr ParseText(const std::string& text, const std::string& source) {
   urdf::ModelInterfaceSharedPtr urdf;
+  UrdfdomMessages messages;
   try {
     urdf = urdf::parseURDF(text);
   } catch (const std::exception& e) {
     throw InputError(source, std::string("not a valid URDF: ") + e.what());
   }
+  // urdfdom reports some bad values (a mass that is not a number) and then goes on without
+  // the element: any error it reports refuses the file, with its own words.
+  if (!messages.errors().empty()) {
+    std::string why;
+    for (const std::string& e : messages.errors()) why += (why.empty() ? "" : "; ") + e;
+    throw InputError(MessageWhere(text, source, messages.errors()),
+                     "not a valid URDF: urdfdom: " + why);
+  }
   if (!urdf) {
-    throw InputError(source, "not a valid URDF: urdfdom rejected it (malformed XML, no <robot "
-                             "name=...>, a revolute joint without <limit>, or links that do not "
-                             "form one tree; urdfdom's messages on stderr say which)");
+    throw InputError(source, "not a valid URDF: urdfdom rejected it without a reason (malformed "
+                             "XML, no <robot name=...>, or links that do not form one tree)");
   }
   return urdf;
+}
+
+// Plausibility of every link and joint of the file (bench/io/plausibility.h), before the chain
+// is built: masses (urdfdom accepts negative and NaN ones), inertias, origins and limits.
+void CheckPlausible(const urdf::ModelInterface& urdf, const std::string& text,
+                    const std::string& source) {
+  const auto fail = [&](const std::string& element, const std::string& name,
+                        const std::string& key, const std::string& problem) {
+    throw InputError(ElementWhere(text, source, element, name) + " " + element + " '" + name +
+                         "' " + key,
+                     problem);
+  };
+  const auto position = [&](const std::string& element, const std::string& name,
+                            const std::string& key, const urdf::Vector3& p) {
+    for (double v : {p.x, p.y, p.z}) {
+      if (const auto problem = plausibility::LengthProblem(v)) fail(element, name, key, *problem);
+    }
+  };
+  for (const auto& [name, link] : urdf.links_) {
+    if (!link || !link->inertial) continue;
+    const urdf::Inertial& in = *link->inertial;
+    if (const auto p = plausibility::MassProblem(in.mass)) fail("link", name, "<mass value>", *p);
+    Matrix3 I;
+    I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+    if (const auto p = plausibility::InertiaProblem(in.mass, I)) fail("link", name, "<inertia>", *p);
+    position("link", name, "<inertial><origin xyz>", in.origin.position);
+  }
+  for (const auto& [name, joint] : urdf.joints_) {
+    if (!joint) continue;
+    position("joint", name, "<origin xyz>", joint->parent_to_joint_origin_transform.position);
+    if (joint->type == urdf::Joint::REVOLUTE && joint->limits) {
+      for (double v : {joint->limits->lower, joint->limits->upper}) {
+        if (const auto p = plausibility::JointLimitProblem(v, "rad", 1.0)) {
+          fail("joint", name, "<limit>", *p);
+        }
+      }
+    }
+  }
 }
 
 urdf::LinkConstSharedPtr RequireLink(const urdf::ModelInterface& urdf, const std::string& name,
@@ -414,6 +543,7 @@ Transform RotZTransform(double angle) {
 KinematicModel ParseUrdf(const std::string& text, const std::string& source,
                          const UrdfImportOptions& options) {
   const urdf::ModelInterfaceSharedPtr urdf = ParseText(text, source);
+  CheckPlausible(*urdf, text, source);
   const std::string base_name =
       options.base_link.empty() ? urdf->getRoot()->name : options.base_link;
   const urdf::LinkConstSharedPtr base = RequireLink(*urdf, base_name, "base_link", source);
@@ -438,11 +568,7 @@ KinematicModel ParseUrdf(const std::string& text, const std::string& source,
 }
 
 KinematicModel LoadUrdf(const std::string& path, const UrdfImportOptions& options) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "cannot open URDF file (missing or unreadable)");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return ParseUrdf(text.str(), path, options);
+  return ParseUrdf(ReadTextFile(path, kMaxUrdfBytes), path, options);
 }
 
 std::string ModelToUrdf(const KinematicModel& model) {

@@ -32,8 +32,19 @@ std::string YamlWhere(const std::string& source, const YAML::Mark& mark, const s
 /// Parses YAML text; malformed YAML is an InputError naming source and line.
 YAML::Node LoadYamlText(const std::string& text, const std::string& source);
 
-/// The whole content of a file; a missing or unreadable file is an InputError naming it.
-std::string ReadTextFile(const std::string& path);
+/// Largest text input read whole (models, scenarios): a 12-joint model is about 10 KB, a
+/// scenario about 5 KB; 4 MiB leaves room for comments and generated files while keeping a
+/// mistaken path (a log, an image, a device) from being read into memory [bytes].
+constexpr std::uintmax_t kMaxTextFileBytes = std::uintmax_t{4} << 20;
+
+/// Refuses, without opening it, a path that is missing, not a regular file (a folder, a FIFO,
+/// a device: reading those could block forever or never end) or larger than max_bytes.
+/// Throws InputError naming the path.
+void RequireRegularFile(const std::string& path, std::uintmax_t max_bytes);
+
+/// The whole content of a regular file of at most max_bytes (RequireRegularFile); a missing
+/// or unreadable file is an InputError naming it.
+std::string ReadTextFile(const std::string& path, std::uintmax_t max_bytes = kMaxTextFileBytes);
 
 /// A YAML node with its key path (e.g. "robot.links[2].alpha") for messages.
 struct YamlField {
@@ -106,8 +117,14 @@ class YamlMap {
 };
 
 /// A pose from the xyz_mm entry and exactly one of rpy_deg (R = Rz(y) Ry(p) Rx(r)) or zyz_deg
-/// (R = Rz(a) Ry(b) Rz(c)) of a map; the caller checked the map's keys.
+/// (R = Rz(a) Ry(b) Rz(c)) of a map; the caller checked the map's keys. Angles must be within
+/// +-360 deg (periodic: a larger value is a unit mistake).
 Transform ReadPose(const YamlReader& r, const YamlMap& m);
+
+/// The pose map at `f` (keys xyz_mm and one of rpy_deg, zyz_deg; ReadPose) whose translation
+/// is at most max_translation_m long; `why` is the limit's reason in the message.
+Transform ReadPoseWithin(const YamlReader& r, const YamlField& f, double max_translation_m,
+                         const std::string& why);
 
 /// R = Rz(y) Ry(p) Rx(r) for rpy = (r, p, y) [rad]: roll-pitch-yaw about fixed axes, as URDF.
 Matrix3 RpyToRotation(const Vector3& rpy);

@@ -23,6 +23,8 @@
 #include "bench/runs/workflow_run.h"
 #include "bench/io/model_loader.h"
 #include "bench/io/model_yaml.h"
+#include "bench/io/output_files.h"
+#include "bench/report/acceptance.h"
 #include "bench/report/report_html.h"
 #include "bench/io/scenario.h"
 #include "bench/io/yaml_util.h"
@@ -121,8 +123,16 @@ void AppendRows(const RobotCalibration& rc, const std::string& robot, const std:
 
 void WritePng(const fs::path& path, const cv::Mat& image) {
   if (!cv::imwrite(path.string(), image)) {
-    throw std::runtime_error("cannot write " + path.string());
+    throw InputError(path.string(), "cannot write the image (output folder not writable?)");
   }
+}
+
+// Writes a whole text file of the staging folder; a failure (disk full, permissions) names it.
+void WriteText(const fs::path& path, const std::string& text) {
+  std::ofstream f(path, std::ios::binary);
+  f << text;
+  f.flush();
+  if (!f) throw InputError(path.string(), "writing the file failed (output folder not writable?)");
 }
 
 // The servo image with the principal point (red circle) and the detected feature point (green
@@ -403,10 +413,10 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
     robots[name] = r;
     AppendRows(rc, name, camera, csv_joints, &csv);
     // The identified model, ready to load (tool link = board mount, as identified).
-    std::ofstream(staging / ("identified_" + name + ".yaml")) << ModelToYaml(rc.identified);
+    WriteText(staging / ("identified_" + name + ".yaml"), ModelToYaml(rc.identified));
   }
   (*report)["robots"] = robots;
-  std::ofstream(staging / "measurements.csv") << csv.str();
+  WriteText(staging / "measurements.csv", csv.str());
   const double scoring = Seconds(t_score);
   (*report)["timing_s"] = {{"total", Seconds(t_start)}, {"intrinsics", result.intrinsics_s},
                         {"planning", planning},      {"planning_compute", planning_compute},
@@ -424,34 +434,61 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
   return result;
 }
 
+namespace {
+
+// A refusal at run time (too few aligned poses, the board not in view, ...) names the step;
+// the message also names the scenario file so the user knows which input to fix.
+[[noreturn]] void RethrowNamingScenario(const InputError& e, const std::string& scenario) {
+  if (e.where().rfind(scenario, 0) == 0) throw e;
+  throw InputError(scenario, e.what());
+}
+
+}  // namespace
+
 int RunCalibrationScenario(const RunOptions& o) {
   const auto t_start = Clock::now();
   Scenario sc = LoadScenario(o.scenario);
   ApplyTrial(o.trial, &sc);
   if (IsPresent(sc.handclasp) && !IsPresent(sc.calibration)) {
     // base-frame calibration alone
-    return RunHandclaspScenario(o.scenario, o.out_dir, std::cerr, o.trial);
+    return RunHandclaspScenario(o.scenario, o.out_dir, std::cerr, o.trial, o.junit);
   }
   if (IsPresent(sc.handclasp) && IsPresent(sc.calibration)) return RunWorkflowScenario(o);
+  // Everything is validated before anything is written: the sections, the output paths and
+  // the cell itself (its initial pose must settle without collisions).
   CalibrationConfig config = ParseCalibrationConfig(sc);
   if (!o.plan_cache.empty()) {
     config.options.plan_store = std::make_shared<FilePlanStore>(o.plan_cache);
   }
   if (!o.images) config.options.kept_images = 0;
+  const Acceptance acceptance = ParseAcceptance(sc);
+  ValidateOutputFolder(o.out_dir, "--out");
+  if (!o.junit.empty()) ValidateOutputFile(o.junit, "--junit");
+  InstallMujocoErrorHandlers();
+  TwinCell cell(sc.twin, sc.path);
   const fs::path out(o.out_dir);
   const fs::path staging = CreateStagingDirectory(o.out_dir);
-  std::error_code ec;
+  json report;
+  AcceptanceVerdict verdict;
   try {
-    InstallMujocoErrorHandlers();
     std::printf("twinbench run: scenario %s (%s)\n", sc.name.c_str(), sc.path.c_str());
-    TwinCell cell(sc.twin, sc.path);
-    json report;
     RunCalibrationStage(cell, sc, config, staging, o.quiet, t_start, &report);
-    std::ofstream(staging / "report.json") << report.dump(2) << '\n';
-    if (o.images) std::ofstream(staging / "report.html") << RenderReportHtml(report);
+    verdict = EvaluateAcceptance(acceptance, &report);
+    WriteText(staging / "report.json", report.dump(2) + "\n");
+    if (o.images) WriteText(staging / "report.html", RenderReportHtml(report));
     PublishDirectory(staging.string(), out.string());
-
-    // Summary.
+  } catch (const InputError& e) {
+    DiscardStaging(staging.string());
+    RethrowNamingScenario(e, sc.path);
+  } catch (...) {
+    DiscardStaging(staging.string());
+    throw;
+  }
+  {
+    // Summary (a figure the report holds as null, not computed, prints as nan).
+    const auto D = [](const json& v) {
+      return v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN();
+    };
     std::printf("\n%-6s %-22s %10s %10s %9s\n", "robot", "metric [mm]", "before", "after",
                 "decrease");
     for (const auto& [name, r] : report["robots"].items()) {
@@ -459,31 +496,29 @@ int RunCalibrationScenario(const RunOptions& o) {
         const json& m = r["misaligned_error_mm"][set];
         if (m["before"].is_null()) continue;
         std::printf("%-6s %-22s %10.4f %10.4f %8.1f%%\n", name.c_str(),
-                    (std::string("misaligned ") + set).c_str(), m["before"].get<double>(),
-                    m["after"].get<double>(), m["decrease_percent"].get<double>());
+                    (std::string("misaligned ") + set).c_str(), D(m["before"]),
+                    D(m["after"]), D(m["decrease_percent"]));
       }
       for (const char* gauge : {"raw", "rigid", "similarity"}) {
         const json& g = r["truth_position_error_mm"][gauge];
         std::printf("%-6s %-22s %10.4f %10.4f   (max %.4f -> %.4f)\n", name.c_str(),
-                    (std::string("truth RMS ") + gauge).c_str(), g["before"]["rms"].get<double>(),
-                    g["after"]["rms"].get<double>(), g["before"]["max"].get<double>(),
-                    g["after"]["max"].get<double>());
+                    (std::string("truth RMS ") + gauge).c_str(), D(g["before"]["rms"]),
+                    D(g["after"]["rms"]), D(g["before"]["max"]),
+                    D(g["after"]["max"]));
       }
       if (r.contains("truth_position_error_mm_calibration_set_model")) {
         const json& h = r["truth_position_error_mm_calibration_set_model"];
         std::printf("%-6s delivered model refit on all axes; the calibration-set model alone: "
                     "truth RMS rigid %.4f, similarity %.4f\n",
-                    name.c_str(), h["rigid"]["after"]["rms"].get<double>(),
-                    h["similarity"]["after"]["rms"].get<double>());
+                    name.c_str(), D(h["rigid"]["after"]["rms"]),
+                    D(h["similarity"]["after"]["rms"]));
       }
       std::printf("%-6s scale estimated %.6f, true %.6f; servo %d aligned, %d failed, %.2f "
                   "frames/pose\n",
-                  name.c_str(), r["scale"]["estimated"].get<double>(),
-                  r["scale"]["true"].get<double>(), r["servo"]["aligned_poses"].get<int>(),
+                  name.c_str(), D(r["scale"]["estimated"]),
+                  D(r["scale"]["true"]), r["servo"]["aligned_poses"].get<int>(),
                   r["servo"]["failed_poses"].get<int>(),
-                  r["servo"]["mean_frames_per_pose"].is_null()
-                      ? 0.0
-                      : r["servo"]["mean_frames_per_pose"].get<double>());
+                  D(r["servo"]["mean_frames_per_pose"]));
     }
     const json& t = report["timing_s"];
     std::printf("timing [s]: total %.1f = intrinsics %.1f + waiting for the plans %.1f + "
@@ -499,10 +534,34 @@ int RunCalibrationScenario(const RunOptions& o) {
                 cell_t["moves"].get<int>(), cell_t["move_to"].get<double>());
     std::printf("wrote %s/{report.json, report.html, measurements.csv, servo_*.png}\n",
                 out.string().c_str());
-  } catch (...) {
-    fs::remove_all(staging, ec);
-    throw;
   }
+  if (!o.junit.empty()) WriteJunit(o.junit, sc.name, verdict, Seconds(t_start));
+  PrintVerdict(verdict);
+  return VerdictExitCode(verdict);
+}
+
+int CheckScenario(const std::string& scenario_path) {
+  const Scenario sc = LoadScenario(scenario_path);
+  const bool calibration = IsPresent(sc.calibration), handclasp = IsPresent(sc.handclasp);
+  if (calibration) ParseCalibrationConfig(sc);
+  if (handclasp) {
+    const HandclaspConfig h = ParseHandclaspConfig(sc);
+    if (calibration && h.trials != 1) {
+      throw InputError(sc.path + " scenario.handclasp.trials",
+                       "the dual-arm workflow runs one trial; trials must be 1, got " +
+                           std::to_string(h.trials));
+    }
+  }
+  const Acceptance acceptance = ParseAcceptance(sc);
+  InstallMujocoErrorHandlers();
+  const TwinCell cell(sc.twin, sc.path);  // the cell settles at its initial pose
+  const char* what = calibration && handclasp ? "the dual-arm workflow"
+                     : calibration            ? "the optical-axis calibration"
+                     : handclasp              ? "the handclasp base-frame calibration"
+                                              : "no procedure (no calibration: or handclasp: "
+                                                "section; `render` shows the cell)";
+  std::printf("%s: valid; `twinbench run` would run %s with %zu acceptance criteria\n",
+              sc.path.c_str(), what, acceptance.criteria.size());
   return 0;
 }
 
@@ -540,8 +599,11 @@ int CsvInteger(const std::string& text, const std::string& where) {
 }  // namespace
 
 int RunIdentify(const IdentifyOptions& o) {
+  // Everything is validated before anything is written.
+  ValidateOutputFolder(o.out_dir, "--out");
+  if (!o.robot.empty()) RequireSafeName(o.robot, "--robot", "robot name");
   KinematicModel model = LoadRobotModel(o.model);
-  Transform X_FT = Transform::Identity();
+  Transform X_FT = Transform::Identity();  // documented nominal: the board at the flange
   if (!o.board_mount.empty()) {
     std::vector<double> v;
     for (const std::string& item : SplitCsv(o.board_mount)) {
@@ -551,16 +613,38 @@ int RunIdentify(const IdentifyOptions& o) {
       throw InputError("--board-mount", "expected x,y,z,roll,pitch,yaw (mm, deg), got '" +
                                             o.board_mount + "'");
     }
+    // Plausibility: a board bracket is shorter than a metre; angles are periodic.
+    if (Vector3(v[0], v[1], v[2]).norm() > 1000.0) {
+      throw InputError("--board-mount", "the board must sit within 1000 mm of the flange (a "
+                                        "flange tool's bracket), got '" + o.board_mount + "'");
+    }
+    for (int k = 3; k < 6; ++k) {
+      if (std::abs(v[k]) > 360.0) {
+        throw InputError("--board-mount", "angles must be within +-360 deg, got '" +
+                                              o.board_mount + "'");
+      }
+    }
     X_FT.translation() = Vector3(v[0], v[1], v[2]) / 1000.0;
     X_FT.linear() = RpyToRotation(Vector3(DegToRad(v[3]), DegToRad(v[4]), DegToRad(v[5])));
   }
+  RequireRegularFile(o.measurements, kMaxMeasurementBytes);
   std::ifstream in(o.measurements);
   if (!in) throw InputError(o.measurements, "cannot read the measurements file");
   std::string line;
   if (!std::getline(in, line)) throw InputError(o.measurements, "empty file");
+  if (!line.empty() && line.back() == '\r') line.pop_back();  // CRLF files
+  if (line.size() > kMaxMeasurementLine) {
+    throw InputError(o.measurements + ":1", "header line longer than " +
+                                                std::to_string(kMaxMeasurementLine) +
+                                                " characters");
+  }
   const std::vector<std::string> header = SplitCsv(line);
   std::map<std::string, size_t> col;
-  for (size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
+  for (size_t i = 0; i < header.size(); ++i) {
+    if (!col.emplace(header[i], i).second) {
+      throw InputError(o.measurements + ":1", "column '" + header[i] + "' appears twice");
+    }
+  }
   std::vector<std::string> needed = {"robot", "axis", "index", "set"};
   for (int i = 1; i <= model.num_joints(); ++i) needed.push_back("q" + std::to_string(i) + "_deg");
   for (const std::string& need : needed) {
@@ -577,32 +661,69 @@ int RunIdentify(const IdentifyOptions& o) {
   std::string robot = o.robot;
   std::set<int> cal_axes, val_axes;
   int line_number = 1;
+  int rows = 0;
   while (std::getline(in, line)) {
     ++line_number;
+    if (line.size() > kMaxMeasurementLine) {
+      throw InputError(o.measurements + ":" + std::to_string(line_number),
+                       "line longer than " + std::to_string(kMaxMeasurementLine) + " characters");
+    }
+    if (!line.empty() && line.back() == '\r') line.pop_back();  // CRLF files
     if (line.empty()) continue;
     const std::string where = o.measurements + ":" + std::to_string(line_number);
+    if (++rows > kMaxMeasurementRows) {
+      throw InputError(where, "more than " + std::to_string(kMaxMeasurementRows) +
+                                  " measurement rows (a session records 50 to a few hundred "
+                                  "aligned poses; the identification's memory grows with them)");
+    }
     const std::vector<std::string> f = SplitCsv(line);
     if (f.size() != header.size()) {
       throw InputError(where, "expected " + std::to_string(header.size()) + " fields, got " +
                                   std::to_string(f.size()));
     }
-    if (robot.empty()) robot = f[col["robot"]];
+    if (robot.empty()) {
+      robot = f[col["robot"]];
+      RequireSafeName(robot, where + " robot", "robot name");
+    }
     if (f[col["robot"]] != robot) continue;
     AxisSample s;
     s.axis = CsvInteger(f[col["axis"]], where + " axis");
+    if (s.axis >= kMaxMeasurementAxes) {
+      throw InputError(where + " axis", "expected an axis index below " +
+                                            std::to_string(kMaxMeasurementAxes) +
+                                            " (each axis adds unknowns to the identification), "
+                                            "got " + f[col["axis"]]);
+    }
+    CsvInteger(f[col["index"]], where + " index");
     s.q = ZeroJoints(model);
     for (int i = 0; i < model.num_joints(); ++i) {
       const std::string key = "q" + std::to_string(i + 1) + "_deg";
-      s.q(i) = DegToRad(CsvNumber(f[col[key]], where + " " + key));
+      const double deg = CsvNumber(f[col[key]], where + " " + key);
+      if (std::abs(deg) > 720.0) {
+        throw InputError(where + " " + key, "expected a joint angle within +-720 deg (two turns), "
+                                            "got '" + f[col[key]] + "'");
+      }
+      s.q(i) = DegToRad(deg);
     }
     if (has_depth && !f[col["depth_mm"]].empty()) {
-      s.depth = CsvNumber(f[col["depth_mm"]], where + " depth_mm") / 1000.0;  // empty: none
+      const double depth_mm = CsvNumber(f[col["depth_mm"]], where + " depth_mm");  // empty: none
+      if (!(depth_mm > 0.0 && depth_mm <= 10000.0)) {
+        throw InputError(where + " depth_mm", "expected a camera depth in (0, 10000] mm, got '" +
+                                                  f[col["depth_mm"]] + "'");
+      }
+      s.depth = depth_mm / 1000.0;
     }
     if (has_offset) {
       s.offset = Vector3(CsvNumber(f[col["offset_x_mm"]], where + " offset_x_mm"),
                          CsvNumber(f[col["offset_y_mm"]], where + " offset_y_mm"),
                          CsvNumber(f[col["offset_z_mm"]], where + " offset_z_mm")) /
                  1000.0;
+      if (s.offset.norm() > 1.0) {
+        throw InputError(where + " offset_x_mm", "the residual offset from the axis must be "
+                                                 "below 1000 mm (the servo aligns to a pixel), "
+                                                 "got " + std::to_string(1e3 * s.offset.norm()) +
+                                                 " mm");
+      }
     }
     const std::string set = f[col["set"]];
     if (set == "calibration") {
@@ -628,8 +749,12 @@ int RunIdentify(const IdentifyOptions& o) {
   rc.nominal.name = robot;
   model.name = robot;
   OpticalAxisOptions options;
-  IdentifyRobot({cal_axes.begin(), cal_axes.end()}, {val_axes.begin(), val_axes.end()}, options,
-                &rc);
+  try {
+    IdentifyRobot({cal_axes.begin(), cal_axes.end()}, {val_axes.begin(), val_axes.end()},
+                  options, &rc);
+  } catch (const InputError& e) {
+    throw InputError(o.measurements, e.what());  // refused: name the data that was refused
+  }
   json j;
   j["robot"] = robot;
   j["method"] = rc.method;
@@ -648,11 +773,15 @@ int RunIdentify(const IdentifyOptions& o) {
   }
   j["correction_mm_or_deg"] = corr;
   const fs::path out(o.out_dir);
-  std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) throw InputError(o.out_dir, "cannot create the output folder: " + ec.message());
-  WriteFileAtomically((out / "identification.json").string(), j.dump(2) + "\n");
-  WriteFileAtomically((out / ("identified_" + robot + ".yaml")).string(), ModelToYaml(rc.identified));
+  const fs::path staging = CreateStagingDirectory(o.out_dir);
+  try {
+    WriteText(staging / "identification.json", j.dump(2) + "\n");
+    WriteText(staging / ("identified_" + robot + ".yaml"), ModelToYaml(rc.identified));
+    PublishDirectory(staging.string(), out.string());
+  } catch (...) {
+    DiscardStaging(staging.string());
+    throw;
+  }
   std::printf("%s: %zu samples, method %s\n", robot.c_str(), rc.samples.size(), rc.method.c_str());
   std::printf("misaligned error (eq. 46): calibration %.4f -> %.4f mm", 1000 * rc.calibration_error.before,
               1000 * rc.calibration_error.after);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 
@@ -26,6 +27,7 @@ struct RunOptions {
   /// every time.
   std::string plan_cache;
   bool images = true;    ///< write servo_*.png and report.html (studies leave them out)
+  std::string junit;     ///< JUnit XML of the acceptance criteria to write (empty: none)
 };
 
 /// The report's `scenario` key: name, file, seed (the truth seed, as before the split),
@@ -33,8 +35,9 @@ struct RunOptions {
 nlohmann::json ScenarioJson(const Scenario& scenario);
 
 /// Runs the scenario and writes out_dir/report.json, measurements.csv, servo_*.png and
-/// report.html; prints progress and a summary. Returns the exit code. Throws InputError for bad
-/// input (nothing is written then).
+/// report.html; prints progress and a summary. Returns the exit code: 0, or 3 when the
+/// scenario's acceptance criteria are missed (bench/report/acceptance.h). Throws InputError for
+/// bad input and for a refused procedure, naming the scenario file (nothing is written then).
 int RunCalibrationScenario(const RunOptions& options);
 
 /// One optical-axis stage on an existing cell (also a step of the dual-arm workflow): runs the
@@ -55,6 +58,19 @@ struct IdentifyOptions {
   std::string board_mount;    ///< "x,y,z,roll,pitch,yaw" in mm and deg (X_FT); default 0s
   std::string out_dir;        ///< output folder (identification.json, identified model)
 };
+
+/// Limits of a measurements file (plausibility, issue 14): a hardware session records 50 to a
+/// few hundred aligned poses; 10,000 rows, 1,000 axes and 16 MiB keep the identification's
+/// memory and time bounded (its matrices grow with rows and axes), 4096 characters a line.
+constexpr int kMaxMeasurementRows = 10000;
+constexpr int kMaxMeasurementAxes = 1000;
+constexpr std::uintmax_t kMaxMeasurementBytes = std::uintmax_t{16} << 20;
+constexpr std::size_t kMaxMeasurementLine = 4096;
+
+/// Validates a scenario as `twinbench run` would before running (the scenario, its procedure
+/// sections, acceptance, and the twin cell built at its initial pose), runs nothing and
+/// writes nothing. Prints what it would run. Returns 0; throws InputError.
+int CheckScenario(const std::string& scenario_path);
 
 /// Identifies the robot from recorded rows (calibration / validation sets from the CSV's set
 /// column) with both methods; writes the identified model and a JSON summary. Returns the exit

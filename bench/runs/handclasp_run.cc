@@ -1,12 +1,16 @@
 #include "bench/runs/handclasp_run.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
 
+#include "bench/io/model_loader.h"
+#include "bench/io/output_files.h"
+#include "bench/report/acceptance.h"
 #include "bench/scoring/calibration_scoring.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
@@ -16,9 +20,30 @@
 namespace twin {
 namespace {
 
-const YamlKeys kHandclaspKeys = {"points", "operator_error_mm", "constraint", "trials",
+const YamlKeys kHandclaspKeys = {"rough_base_from_robot1", "tips", "points",
+                                 "operator_error_mm", "constraint", "trials",
                                  "coupled_motion", "calibrated_operator_error_mm",
                                  "calibrated_tip_identification"};
+
+// Plausibility limits of the section (header): point count and distance, operator error, the
+// told layout and tips (the twin's own limits, sim/world/twin_spec.cc).
+constexpr std::size_t kMaxPoints = 100;        // Gan et al. teach 4-8; 100 is hours of jogging
+constexpr double kMaxPointDistanceM = 5.0;     // the arms reach 1-4 m from their bases
+constexpr double kMaxOperatorErrorM = 0.01;    // a 10 mm miss is no contact
+constexpr double kMaxToldBaseDistanceM = 20.0;
+constexpr double kMaxToldTipOffsetM = 1.0;
+
+// A non-negative operator error in mm within kMaxOperatorErrorM.
+double OperatorError(const YamlReader& r, const YamlField& f) {
+  const double v = r.Number(f);
+  if (v < 0) r.Fail(f, "must be >= 0 mm");
+  if (v > 1e3 * kMaxOperatorErrorM) {
+    r.Fail(f, "must be at most " + std::to_string(int(1e3 * kMaxOperatorErrorM)) +
+                  " mm (an operator who misses by more has not made a contact), got " +
+                  DescribeNode(f.node));
+  }
+  return 1e-3 * v;
+}
 
 // Coupled-motion path of robot 1's tip: offsets from the first contact point in B1 [m], a
 // 50 mm square and a rise, so that the deviation is sampled along all three axes.
@@ -146,23 +171,6 @@ nlohmann::json PendantTipError(const KinematicModel& true_tip, const KinematicMo
           {"configurations", kConfigurations}};
 }
 
-void WriteAtomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::trunc);
-    if (!f) throw InputError(path, "cannot write the report (folder missing or not writable)");
-    f << text;
-    f.flush();
-    if (!f) throw InputError(path, "writing the report failed");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw InputError(path, "cannot move the finished report into place");
-  }
-}
-
 }  // namespace
 
 Transform KinematicBaseOffset(const KinematicModel& true_model,
@@ -209,9 +217,31 @@ BaseConstraint ImpliedConstraint(const TwinSpec& twin) {
 HandclaspConfig ParseHandclaspConfig(const Scenario& scenario) {
   HandclaspConfig c;
   c.constraint = ImpliedConstraint(scenario.twin);
-  if (!IsPresent(scenario.handclasp)) return c;
   const YamlReader r(scenario.path);
+  if (!IsPresent(scenario.handclasp)) {
+    throw InputError(scenario.path + " scenario.handclasp",
+                     "missing: the handclasp needs a handclasp section with the told "
+                     "rough_base_from_robot1 and tips (see scenarios/gan2014_floor_floor.yaml)");
+  }
   const YamlMap m(r, scenario.handclasp, kHandclaspKeys);
+  // Told values: from this section only, never from the twin's truth.
+  c.rough_X_B1B2 = ReadPoseWithin(r, m.Get("rough_base_from_robot1"), kMaxToldBaseDistanceM,
+                                  "two arms that touch each other stand within a few metres");
+  {
+    const YamlField tips = m.Get("tips");
+    const std::vector<std::string> names(scenario.robot_names.begin(),
+                                         scenario.robot_names.end());
+    const YamlMap t(r, tips, names);
+    for (int k = 0; k < 2; ++k) {
+      const std::optional<YamlField> tip = t.Find(scenario.robot_names[k], false);
+      if (!tip) {
+        r.Fail(tips, "missing the told tip of robot '" + scenario.robot_names[k] +
+                         "' ({xyz_mm: [..], rpy_deg: [..]}, its frame in the flange by drawing)");
+      }
+      c.told_X_FTip[k] = ReadPoseWithin(r, *tip, kMaxToldTipOffsetM,
+                                        "a measuring tip is shorter than a metre");
+    }
+  }
   if (const auto f = m.Find("points", false)) {
     if (f->node.IsScalar()) {
       if (r.String(*f) != "auto") r.Fail(*f, "must be 'auto' or a list of [x, y, z] points in mm");
@@ -221,16 +251,23 @@ HandclaspConfig ParseHandclaspConfig(const Scenario& scenario) {
         r.Fail(*f, "needs at least 4 contact points (paper section 3), got " +
                        std::to_string(f->node.size()));
       }
-      for (std::size_t i = 0; i < f->node.size(); ++i) c.points_B1.push_back(1e-3 * r.Vector(f->Item(i)));
+      if (f->node.size() > kMaxPoints) {
+        r.Fail(*f, "at most " + std::to_string(kMaxPoints) + " contact points (the paper teaches "
+                   "4 to 8; each is a jogged contact), got " + std::to_string(f->node.size()));
+      }
+      for (std::size_t i = 0; i < f->node.size(); ++i) {
+        const Vector3 p = 1e-3 * r.Vector(f->Item(i));
+        if (p.norm() > kMaxPointDistanceM) {
+          r.Fail(f->Item(i), "a contact point must lie within 5000 mm of robot 1's base (the arms "
+                             "reach 1-4 m), got " + std::to_string(1e3 * p.norm()) + " mm");
+        }
+        c.points_B1.push_back(p);
+      }
     } else {
       r.Fail(*f, "must be 'auto' or a list of [x, y, z] points in mm, got " + DescribeNode(f->node));
     }
   }
-  if (const auto f = m.Find("operator_error_mm", false)) {
-    const double v = r.Number(*f);
-    if (v < 0) r.Fail(*f, "must be >= 0 mm");
-    c.operator_error_m = 1e-3 * v;
-  }
+  if (const auto f = m.Find("operator_error_mm", false)) c.operator_error_m = OperatorError(r, *f);
   if (const auto f = m.Find("constraint", false)) {
     const std::string v = r.String(*f);
     if (v == "auto") {
@@ -256,9 +293,7 @@ HandclaspConfig ParseHandclaspConfig(const Scenario& scenario) {
     c.calibrated_tip_identification = r.Bool(*f);
   }
   if (const auto f = m.Find("calibrated_operator_error_mm", false)) {
-    const double v = r.Number(*f);
-    if (v < 0) r.Fail(*f, "must be >= 0 mm");
-    c.calibrated_operator_error_m = 1e-3 * v;
+    c.calibrated_operator_error_m = OperatorError(r, *f);
   }
   return c;
 }
@@ -270,13 +305,13 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
   HandclaspConfig config = ParseHandclaspConfig(scenario);
   if (stage_options.operator_error_m) config.operator_error_m = *stage_options.operator_error_m;
   cell.SetOperatorAlignmentError(config.operator_error_m);
+  // The pendants' tips are the told ones (by drawing), never the twin's true tips.
   std::array<KinematicModel, 2> tip_models;
   for (int k = 0; k < 2; ++k) {
-    tip_models[k] = WithTipTool(pendant_models_flange[k], scenario.twin.tips[k].X_FTip);
+    tip_models[k] = WithTipTool(pendant_models_flange[k], config.told_X_FTip[k]);
   }
-  // The operator teaches from the cell layout as drawn (scenario), not from any estimate.
-  const Transform X_B1B2_layout =
-      scenario.twin.robots[0].X_WB.inverse() * scenario.twin.robots[1].X_WB;
+  // The operator teaches from the cell layout as drawn (told), not from the truth.
+  const Transform X_B1B2_layout = config.rough_X_B1B2;
   const std::array<JointVector, 2> seeds = {cell.ReadEncoders(0), cell.ReadEncoders(1)};
   TeachOptions teach;
   teach.seed = scenario.seeds.estimator;
@@ -360,6 +395,7 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
   if (!result.ok()) {
     rep["status"] = "failed";
     rep["reason"] = result.reason;
+    out.reason = result.reason;
     progress << "handclasp: " << result.reason << "\n";
     return out;
   }
@@ -369,12 +405,20 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
   rep["status"] = "ok";
   rep["general"] = Scored(cal.X_B1B2_general, truth, cal.rms_residual_general_m);
   rep["constrained"] = Scored(cal.X_B1B2_constrained, truth, cal.rms_residual_constrained_m);
-  for (const char* which : {"general", "constrained"}) {
-    const Transform& X = std::string(which) == "general" ? cal.X_B1B2_general
-                                                         : cal.X_B1B2_constrained;
-    const BaseFrameError e = CompareBaseFrames(X, physical);  // eq. 33-34
-    rep["physical_truth"][which] = {{"e_tran_mm", e.e_tran_mm}, {"e_rot_deg", e.e_rot_deg}};
-  }
+  const auto score = [&](const Transform& X) {
+    ScoredBaseFrame f;
+    f.present = true;
+    f.kinematic = CompareBaseFrames(X, truth);  // eq. 33-34
+    f.physical = CompareBaseFrames(X, physical);
+    return f;
+  };
+  const auto errors = [](const BaseFrameError& e) {
+    return nlohmann::json{{"e_tran_mm", e.e_tran_mm}, {"e_rot_deg", e.e_rot_deg}};
+  };
+  out.general = score(cal.X_B1B2_general);
+  out.constrained = score(cal.X_B1B2_constrained);
+  rep["physical_truth"]["general"] = errors(out.general.physical);
+  rep["physical_truth"]["constrained"] = errors(out.constrained.physical);
   if (stage_options.identify_tips) {
     nlohmann::json& t = rep["tips_identified"];
     t["status"] = result.tips.ok ? "ok" : "failed";
@@ -384,9 +428,8 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
       t["rms_residual_before_mm"] = 1e3 * result.tips.rms_residual_before_m;
       t["dt_flange_mm"] = {Xyz(result.tips.dt1_F1), Xyz(result.tips.dt2_F2)};
       t["sigma_dt_flange_mm"] = {Xyz(result.tips.sigma_dt1_F1), Xyz(result.tips.sigma_dt2_F2)};
-      const BaseFrameError e = CompareBaseFrames(result.tips.X_B1B2, physical);
-      rep["physical_truth"]["tips_identified"] = {{"e_tran_mm", e.e_tran_mm},
-                                                  {"e_rot_deg", e.e_rot_deg}};
+      out.tips = score(result.tips.X_B1B2);
+      rep["physical_truth"]["tips_identified"] = errors(out.tips.physical);
       out.X_B1B2_tips = result.tips.X_B1B2;
     } else {
       t["reason"] = result.tips.reason;
@@ -400,31 +443,33 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
         CoupledMotion(cell, used, result.contacts.front(),
                       tips_ok ? result.tips.X_B1B2 : cal.X_B1B2_constrained);
     rep["coupled_motion"]["estimate"] = tips_ok ? "tips_identified" : "constrained";
+    if (rep["coupled_motion"].value("status", "") == "ok") {
+      out.coupled_motion_max_deviation_mm = rep["coupled_motion"]["max_deviation_mm"];
+    }
   }
   progress << "handclasp: " << ToString(config.constraint) << " general e_tran "
-           << rep["general"]["e_tran_mm"].get<double>() << " mm, e_rot "
-           << rep["general"]["e_rot_deg"].get<double>() << " deg; constrained e_tran "
-           << rep["constrained"]["e_tran_mm"].get<double>() << " mm, e_rot "
-           << rep["constrained"]["e_rot_deg"].get<double>() << " deg\n";
+           << out.general.kinematic.e_tran_mm << " mm, e_rot " << out.general.kinematic.e_rot_deg
+           << " deg; constrained e_tran " << out.constrained.kinematic.e_tran_mm << " mm, e_rot "
+           << out.constrained.kinematic.e_rot_deg << " deg\n";
   return out;
 }
 
 int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir,
-                         std::ostream& progress, int trial) {
+                         std::ostream& progress, int trial, const std::string& junit) {
+  const auto t_start = std::chrono::steady_clock::now();
+  // Everything is validated before anything runs or is written (exit-code contract, README).
   Scenario scenario = LoadScenario(scenario_path);
   ApplyTrial(trial, &scenario);
   const HandclaspConfig config = ParseHandclaspConfig(scenario);
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) throw InputError(out_dir, "cannot create the output folder: " + ec.message());
+  const Acceptance acceptance = ParseAcceptance(scenario);
+  ValidateOutputFolder(out_dir, "--out");
+  if (!junit.empty()) ValidateOutputFile(junit, "--junit");
   const std::array<KinematicModel, 2> nominal = {scenario.twin.robots[0].model,
                                                  scenario.twin.robots[1].model};
   nlohmann::json trials = nlohmann::json::array();
   nlohmann::json first;
   int failures = 0;
-  double sum[2][2] = {{0, 0}, {0, 0}};  // [general, constrained][e_tran, e_rot]
-  double sum_physical[2][2] = {{0, 0}, {0, 0}};  // the same against the physical X_B1B2
-  int worse[2] = {0, 0};                // trials where constrained was worse [tran, rot]
+  std::vector<HandclaspStageResult> done;  // the trials' typed results, for the batch means
   for (int t = 0; t < config.trials; ++t) {
     TwinSpec spec = scenario.twin;
     spec.seed = scenario.twin.seed + static_cast<std::uint64_t>(t);
@@ -434,25 +479,16 @@ int RunHandclaspScenario(const std::string& scenario_path, const std::string& ou
     HandclaspStageResult stage = RunHandclaspStage(cell, scenario, nominal, progress);
     stage.report["seed"] = spec.seed;
     if (!stage.ok) {
+      // A refused procedure is exit 2 with its reason (README, exit codes); nothing is written.
       ++failures;
-    } else {
-      const auto& g = stage.report["general"];
-      const auto& c = stage.report["constrained"];
-      sum[0][0] += g["e_tran_mm"].get<double>();
-      sum[0][1] += g["e_rot_deg"].get<double>();
-      sum[1][0] += c["e_tran_mm"].get<double>();
-      sum[1][1] += c["e_rot_deg"].get<double>();
-      const auto& pg = stage.report["physical_truth"]["general"];
-      const auto& pc = stage.report["physical_truth"]["constrained"];
-      sum_physical[0][0] += pg["e_tran_mm"].get<double>();
-      sum_physical[0][1] += pg["e_rot_deg"].get<double>();
-      sum_physical[1][0] += pc["e_tran_mm"].get<double>();
-      sum_physical[1][1] += pc["e_rot_deg"].get<double>();
-      if (c["e_tran_mm"].get<double>() > g["e_tran_mm"].get<double>()) ++worse[0];
-      if (c["e_rot_deg"].get<double>() > g["e_rot_deg"].get<double>()) ++worse[1];
+      throw InputError(scenario.path + " scenario.handclasp",
+                       "the handclasp procedure refused in trial " + std::to_string(t + 1) + "/" +
+                           std::to_string(config.trials) + " (seed " + std::to_string(spec.seed) +
+                           "): " + stage.report.value("reason", std::string("no reason given")));
     }
     if (t == 0) first = stage.report;
     trials.push_back(std::move(stage.report));
+    done.push_back(std::move(stage));
   }
   nlohmann::json report;
   report["scenario"] = scenario.name;
@@ -463,29 +499,53 @@ int RunHandclaspScenario(const std::string& scenario_path, const std::string& ou
     const int n = config.trials - failures;
     nlohmann::json batch = {{"trials", config.trials}, {"failed", failures}};
     if (n > 0) {
-      batch["general"] = {{"mean_e_tran_mm", sum[0][0] / n}, {"mean_e_rot_deg", sum[0][1] / n}};
-      batch["constrained"] = {{"mean_e_tran_mm", sum[1][0] / n},
-                              {"mean_e_rot_deg", sum[1][1] / n}};
-      batch["physical_truth"] = {
-          {"general",
-           {{"mean_e_tran_mm", sum_physical[0][0] / n},
-            {"mean_e_rot_deg", sum_physical[0][1] / n}}},
-          {"constrained",
-           {{"mean_e_tran_mm", sum_physical[1][0] / n},
-            {"mean_e_rot_deg", sum_physical[1][1] / n}}}};
-      batch["constrained_worse_e_tran_trials"] = worse[0];
-      batch["constrained_worse_e_rot_trials"] = worse[1];
+      // Means over the trials of one estimate's errors, kinematic or physical.
+      const auto mean = [&](ScoredBaseFrame HandclaspStageResult::*which, bool physical) {
+        double tran = 0, rot = 0;
+        for (const HandclaspStageResult& r : done) {
+          const BaseFrameError& e = physical ? (r.*which).physical : (r.*which).kinematic;
+          tran += e.e_tran_mm;
+          rot += e.e_rot_deg;
+        }
+        return nlohmann::json{{"mean_e_tran_mm", tran / n}, {"mean_e_rot_deg", rot / n}};
+      };
+      int worse_tran = 0, worse_rot = 0;  // trials where the constrained one was worse
+      for (const HandclaspStageResult& r : done) {
+        worse_tran += r.constrained.kinematic.e_tran_mm > r.general.kinematic.e_tran_mm;
+        worse_rot += r.constrained.kinematic.e_rot_deg > r.general.kinematic.e_rot_deg;
+      }
+      batch["general"] = mean(&HandclaspStageResult::general, false);
+      batch["constrained"] = mean(&HandclaspStageResult::constrained, false);
+      batch["physical_truth"] = {{"general", mean(&HandclaspStageResult::general, true)},
+                                 {"constrained", mean(&HandclaspStageResult::constrained, true)}};
+      batch["constrained_worse_e_tran_trials"] = worse_tran;
+      batch["constrained_worse_e_rot_trials"] = worse_rot;
     }
     batch["trials_detail"] = trials;
     report["base_frame"]["batch"] = batch;
   }
-  WriteAtomically((std::filesystem::path(out_dir) / "report.json").string(),
-                  report.dump(2) + "\n");
-  return failures == 0 ? 0 : 1;
+  const AcceptanceVerdict verdict = EvaluateAcceptance(acceptance, &report);
+  const std::string staging = CreateStagingDirectory(out_dir);
+  try {
+    {
+      std::ofstream f(std::filesystem::path(staging) / "report.json");
+      f << report.dump(2) << "\n";
+      if (!f) throw InputError(out_dir + "/report.json", "writing the report failed");
+    }
+    PublishDirectory(staging, out_dir);
+  } catch (...) {
+    DiscardStaging(staging);
+    throw;
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  if (!junit.empty()) WriteJunit(junit, scenario.name, verdict, seconds);
+  PrintVerdict(verdict, progress);
+  return VerdictExitCode(verdict);
 }
 
 int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir) {
-  return RunHandclaspScenario(scenario_path, out_dir, std::cerr);
+  return RunHandclaspScenario(scenario_path, out_dir, std::cerr, 0, "");
 }
 
 }  // namespace twin

@@ -21,12 +21,19 @@
 //                                  # point and identifies both tips on their flanges jointly
 //                                  # with X_B1B2 (calib/identification/tip_refinement.h; default true)
 //
-// Taught points are the operator's choice: the planner uses the scenario's layout of the bases
-// (where the operator sees the robots stand) only to pick reachable points; the estimator gets
-// contact joint readings alone.
+// Taught points are the operator's choice: the planner uses the layout as drawn
+// (rough_base_from_robot1) only to pick reachable points; the estimator gets contact joint
+// readings alone. What is told (rough_base_from_robot1, tips, points, constraint) and what
+// only the twin knows (scenario.robots[*].base*, scenario.tips, operator_error_mm: the
+// simulated operator's accuracy) are kept apart: tests/bench/told_versus_true_test.cc changes
+// every truth-only value and requires the told inputs unchanged.
+// Plausibility limits: at most 100 points, each within 5 m of robot 1's base (the arms reach
+// 1-4 m); operator errors at most 10 mm per axis (beyond it the tips do not touch); the told
+// layout within 20 m, the told tips within 1 m of their flanges (as the twin's).
 #pragma once
 
 #include <array>
+#include <limits>
 #include <iosfwd>
 #include <optional>
 #include <string>
@@ -43,9 +50,14 @@ namespace twin {
 
 /// The `handclasp:` section, in SI units.
 struct HandclaspConfig {
+  /// Told: the layout as drawn, X_B1B2 the operator plans the taught points from.
+  Transform rough_X_B1B2 = Transform::Identity();
+  /// Told: each pendant's tip frame in its flange by drawing (X_FTip).
+  std::array<Transform, 2> told_X_FTip = {Transform::Identity(), Transform::Identity()};
   bool auto_points = true;             ///< plan the points (else points_B1)
   std::vector<Vector3> points_B1;      ///< contact points in B1 [m] when !auto_points
-  double operator_error_m = 0.0;       ///< alignment error sigma per axis [m]
+  double operator_error_m = 0.0;       ///< alignment error sigma per axis [m] (the twin's
+                                       ///< simulated operator: truth side)
   BaseConstraint constraint = BaseConstraint::kGeneral;  ///< resolved (never "auto")
   int trials = 1;                      ///< seeded batch size (>= 1)
   bool coupled_motion = true;          ///< run the coupled-motion check
@@ -69,8 +81,8 @@ struct HandclaspStageOptions {
 /// a wall or the ceiling give floor-floor, floor-wall, floor-ceiling; anything else general.
 BaseConstraint ImpliedConstraint(const TwinSpec& twin);
 
-/// Parses scenario.handclasp (an absent section gives the defaults). Throws InputError naming
-/// "file:line scenario.handclasp.key" for unknown keys and bad values.
+/// Parses scenario.handclasp. Throws InputError naming "file:line scenario.handclasp.key" for
+/// an absent section or told value, unknown keys and bad values.
 HandclaspConfig ParseHandclaspConfig(const Scenario& scenario);
 
 /// The scoring frame (bench only). A robot's geometry errors in link 1's theta and d are a
@@ -106,9 +118,26 @@ Transform BestFitBaseOffset(const KinematicModel& true_tip_model,
 Transform KinematicFrameTruth(const TwinTruth& truth,
                               const std::array<KinematicModel, 2>& pendant_models);
 
-/// Estimates of one handclasp stage and its report (bench scoring included).
+/// One X_B1B2 estimate scored (eq. 33-34) against the frames the kinematic models use
+/// (KinematicFrameTruth) and against the physical X_B1B2.
+struct ScoredBaseFrame {
+  bool present = false;  ///< the estimate exists (its procedure step succeeded)
+  BaseFrameError kinematic;
+  BaseFrameError physical;
+};
+
+/// Estimates of one handclasp stage, typed, and its report (bench scoring included; written
+/// into report.json by the run, read by nothing).
 struct HandclaspStageResult {
   bool ok = false;                                       ///< the procedure calibrated
+  std::string reason;                                    ///< why not (ok = false)
+  ScoredBaseFrame general, constrained;                  ///< eq. 3 and 12; the refined one
+  ScoredBaseFrame tips;                                  ///< jointly with the tips, if identified
+  /// Largest tip-to-tip deviation of the coupled-motion check [mm]; NaN when not run or failed.
+  double coupled_motion_max_deviation_mm = std::numeric_limits<double>::quiet_NaN();
+  /// The estimate the stage delivers: with the tips when identified, else the constrained one.
+  const ScoredBaseFrame& delivered() const { return tips.present ? tips : constrained; }
+  const char* delivered_name() const { return tips.present ? "tips_identified" : "constrained"; }
   Transform X_B1B2_general = Transform::Identity();      ///< general estimate (eq. 3, 12)
   Transform X_B1B2_constrained = Transform::Identity();  ///< installation-refined estimate
   /// With HandclaspStageOptions::identify_tips and report.tips_identified.status "ok": the
@@ -120,8 +149,8 @@ struct HandclaspStageResult {
 };
 
 /// Runs one handclasp stage on `cell` with the section of `scenario` and the controllers'
-/// flange models `pendant_models_flange` (nominal or calibrated; the scenario's tips are added
-/// as tools), then scores it against cell.Truth(). Progress lines go to `progress`. Throws
+/// flange models `pendant_models_flange` (nominal or calibrated; the section's told tips are
+/// added as tools), then scores it against cell.Truth(). Progress lines go to `progress`. Throws
 /// InputError for a bad section; procedure failures are reported (ok = false, report.status).
 HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
                                        const std::array<KinematicModel, 2>& pendant_models_flange,
@@ -129,11 +158,14 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
                                        const HandclaspStageOptions& stage_options = {});
 
 /// Loads the scenario, runs its handclasp section with the nominal models for each trial of
-/// the batch and writes out_dir/report.json atomically (temporary file, then rename). Returns
-/// 0 when every trial calibrated, 1 otherwise (the report says why). Throws InputError for bad
-/// input (the CLI maps it to exit code 2). `trial` offsets both seeds (ApplyTrial).
+/// the batch and writes out_dir/report.json through a staging folder (renamed onto out_dir
+/// when complete). Returns 0, or 3 when the scenario's acceptance criteria are missed
+/// (bench/report/acceptance.h; `junit` names the JUnit file to write, empty for none). Throws
+/// InputError for bad input and when a trial's procedure refused (which trial and why; the
+/// CLI maps it to exit code 2, nothing is written then). `trial` offsets both seeds
+/// (ApplyTrial).
 int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir,
-                         std::ostream& progress, int trial = 0);
+                         std::ostream& progress, int trial = 0, const std::string& junit = "");
 /// As above, with progress on std::cerr.
 int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir);
 

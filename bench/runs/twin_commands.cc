@@ -1,5 +1,7 @@
 #include "bench/runs/twin_commands.h"
 
+#include <pthread.h>
+#include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -10,6 +12,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "bench/io/model_loader.h"
+#include "bench/io/output_files.h"
 #include "bench/io/scenario.h"
 #include "calib/common/errors.h"
 #include "sim/cell/twin_cell.h"
@@ -47,37 +51,33 @@ int RunRender(const RenderOptions& o) {
   const JointVector q0 = scenario.twin.robots[board_robot].q_initial;
 
   // Everything goes to a staging folder first, so a failure leaves no half-written output.
+  ValidateOutputFolder(o.out_dir, "--out");
   const fs::path out(o.out_dir);
-  const fs::path staging = out.string() + ".partial";
-  std::error_code ec;
-  fs::remove_all(staging, ec);
-  if (!fs::create_directories(staging, ec) && ec) {
-    throw InputError(o.out_dir, "cannot create the output folder: " + ec.message());
-  }
+  const fs::path staging = CreateStagingDirectory(o.out_dir);
   int written = 0;
-  for (int k = 0; k < o.poses; ++k) {
-    const MoveResult m = cell.MoveTo(board_robot, ViewPose(q0, k));
-    if (m.status != MoveStatus::kSettled) {
-      std::printf("pose %d skipped: %s: %s\n", k, ToString(m.status), m.reason.c_str());
-      continue;
+  try {
+    for (int k = 0; k < o.poses; ++k) {
+      const MoveResult m = cell.MoveTo(board_robot, ViewPose(q0, k));
+      if (m.status != MoveStatus::kSettled) {
+        std::printf("pose %d skipped: %s: %s\n", k, ToString(m.status), m.reason.c_str());
+        continue;
+      }
+      char name[64];
+      std::snprintf(name, sizeof(name), "hand_camera_%02d.png", k);
+      WritePng(staging / name, cell.GrabImage());
+      std::snprintf(name, sizeof(name), "overview_%02d.png", k);
+      WritePng(staging / name, cell.RenderOverview(o.overview_width, o.overview_height, 135, -25));
+      std::printf("pose %d: wrote hand_camera_%02d.png and overview_%02d.png\n", k, k, k);
+      ++written;
     }
-    char name[64];
-    std::snprintf(name, sizeof(name), "hand_camera_%02d.png", k);
-    WritePng(staging / name, cell.GrabImage());
-    std::snprintf(name, sizeof(name), "overview_%02d.png", k);
-    WritePng(staging / name, cell.RenderOverview(o.overview_width, o.overview_height, 135, -25));
-    std::printf("pose %d: wrote hand_camera_%02d.png and overview_%02d.png\n", k, k, k);
-    ++written;
+    if (written == 0) {
+      throw InputError(o.scenario, "no pose of the board robot could be reached; nothing written");
+    }
+    PublishDirectory(staging.string(), out.string());
+  } catch (...) {
+    DiscardStaging(staging.string());
+    throw;
   }
-  if (written == 0) {
-    fs::remove_all(staging, ec);
-    throw InputError(o.scenario, "no pose of the board robot could be reached; nothing written");
-  }
-  fs::create_directories(out, ec);
-  for (const auto& entry : fs::directory_iterator(staging)) {
-    fs::rename(entry.path(), out / entry.path().filename());
-  }
-  fs::remove_all(staging, ec);
   std::printf("%d pose(s) rendered into %s\n", written, o.out_dir.c_str());
   return 0;
 }
@@ -95,6 +95,11 @@ double WorkerFps(const TwinSpec& spec, int workers, int frames) {
     const pid_t pid = fork();
     if (pid < 0) throw std::runtime_error("fork failed");
     if (pid == 0) {
+      // The parent blocks interrupts for its clean-up thread (bench/io/output_files.h); a
+      // worker has no such thread and ends on them.
+      sigset_t none;
+      sigemptyset(&none);
+      pthread_sigmask(SIG_SETMASK, &none, nullptr);
       TwinCell cell(spec);
       cell.GrabImage();
       char c = 1;

@@ -1,14 +1,17 @@
 #include "bench/runs/workflow_run.h"
 
-#include "bench/io/model_loader.h"
-
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
-#include "bench/runs/handclasp_run.h"
+#include "bench/io/model_loader.h"
+#include "bench/io/output_files.h"
+#include "bench/report/acceptance.h"
 #include "bench/report/report_html.h"
+#include "bench/runs/handclasp_run.h"
 #include "calib/common/errors.h"
 #include "calib/procedures/handclasp_procedure.h"
 #include "sim/world/mujoco_handles.h"
@@ -50,18 +53,13 @@ nlohmann::json StageSummary(const HandclaspStageResult& r, const std::string& ki
   nlohmann::json j;
   j["kinematics"] = kinematics;
   j["status"] = r.ok ? "ok" : "failed";
-  const nlohmann::json& tips = r.report.contains("tips_identified") ? r.report["tips_identified"]
-                                                                     : nlohmann::json();
-  if (r.ok && tips.is_object() && tips.value("status", "") == "ok") {
-    j["estimate"] = "tips_identified";
-    j["e_tran_mm"] = tips["e_tran_mm"];
-    j["e_rot_deg"] = tips["e_rot_deg"];
-    j["physical_truth"] = r.report["physical_truth"]["tips_identified"];
-  } else if (r.ok) {
-    j["estimate"] = "constrained";
-    j["e_tran_mm"] = r.report["constrained"]["e_tran_mm"];
-    j["e_rot_deg"] = r.report["constrained"]["e_rot_deg"];
-    j["physical_truth"] = r.report["physical_truth"]["constrained"];
+  if (r.ok) {
+    const ScoredBaseFrame& d = r.delivered();
+    j["estimate"] = r.delivered_name();
+    j["e_tran_mm"] = d.kinematic.e_tran_mm;
+    j["e_rot_deg"] = d.kinematic.e_rot_deg;
+    j["physical_truth"] = {{"e_tran_mm", d.physical.e_tran_mm},
+                           {"e_rot_deg", d.physical.e_rot_deg}};
   }
   j["stage"] = r.report;
   return j;
@@ -87,27 +85,31 @@ int RunWorkflowScenario(const RunOptions& o) {
                          std::to_string(handclasp.trials));
   }
   CalibrationConfig config = ParseCalibrationConfig(sc);
+  const Acceptance acceptance = ParseAcceptance(sc);
+  ValidateOutputFolder(o.out_dir, "--out");
+  if (!o.junit.empty()) ValidateOutputFile(o.junit, "--junit");
+  InstallMujocoErrorHandlers();
+  TwinCell cell(sc.twin, sc.path);  // a cell that does not settle at its start is bad input
 
   const fs::path out(o.out_dir);
   const fs::path staging = CreateStagingDirectory(o.out_dir);
-  std::error_code ec;
   std::ostringstream discard;
   std::ostream& progress = o.quiet ? static_cast<std::ostream&>(discard) : std::cout;
-  int rc = 0;
+  AcceptanceVerdict verdict;
   try {
-    InstallMujocoErrorHandlers();
     progress << "twinbench run: dual-arm workflow, scenario " << sc.name << " (" << sc.path
              << ")\n";
-    TwinCell cell(sc.twin, sc.path);
     const int initial_camera_robot = cell.CameraRobot();
     nlohmann::json report;
     nlohmann::json workflow;
+    std::optional<HandclaspStageResult> stage_a, stage_c;  // (a) and (c), typed
 
     // (a) Handclasp with the controllers' nominal kinematics.
     const std::array<KinematicModel, 2> nominal = {sc.twin.robots[0].model,
                                                    sc.twin.robots[1].model};
     progress << "[" << Seconds(t_start) << " s] (a) handclasp with nominal kinematics\n";
-    const HandclaspStageResult a = RunHandclaspStage(cell, sc, nominal, progress);
+    stage_a = RunHandclaspStage(cell, sc, nominal, progress);
+    const HandclaspStageResult& a = *stage_a;
     workflow["nominal_kinematics"] = StageSummary(a, "nominal");
     std::string failure;
     if (!a.ok) failure = "handclasp with nominal kinematics failed";
@@ -154,7 +156,8 @@ int RunWorkflowScenario(const RunOptions& o) {
       stage.operator_error_m = handclasp.calibrated_operator_error_m;
       stage.identify_tips = handclasp.calibrated_tip_identification;
       stage.best_fit_frames = true;
-      const HandclaspStageResult c = RunHandclaspStage(cell, sc, calibrated, progress, stage);
+      stage_c = RunHandclaspStage(cell, sc, calibrated, progress, stage);
+      const HandclaspStageResult& c = *stage_c;
       workflow["calibrated_kinematics"] = StageSummary(c, "calibrated (optical-axis)");
       if (!c.ok) failure = "handclasp with calibrated kinematics failed";
       if (c.report.contains("coupled_motion")) {
@@ -172,48 +175,63 @@ int RunWorkflowScenario(const RunOptions& o) {
     report["base_frame"]["installation"] = ToString(handclasp.constraint);
     report["base_frame"]["workflow"] = workflow;
     if (report.contains("timing_s")) report["timing_s"]["workflow_total"] = Seconds(t_start);
+    if (!failure.empty()) {
+      // A refused stage is exit 2 with its reason (README, exit codes); nothing is written.
+      std::string detail;
+      for (const std::optional<HandclaspStageResult>* stage : {&stage_c, &stage_a}) {
+        if (*stage && !(*stage)->ok && !(*stage)->reason.empty()) {
+          detail = ": " + (*stage)->reason;
+          break;
+        }
+      }
+      throw InputError(sc.path, "the dual-arm workflow refused: " + failure + detail);
+    }
+    verdict = EvaluateAcceptance(acceptance, &report);
 
     {
       std::ofstream f(staging / "report.json");
       f << report.dump(2) << '\n';
       if (!f) throw InputError((staging / "report.json").string(), "writing the report failed");
     }
-    std::ofstream(staging / "report.html") << RenderReportHtml(report);
+    {
+      std::ofstream f(staging / "report.html");
+      f << RenderReportHtml(report);
+      if (!f) throw InputError((staging / "report.html").string(), "writing the report failed");
+    }
     PublishDirectory(staging.string(), out.string());
 
-    const auto line = [&](const char* key, const char* label) {
-      const nlohmann::json& s = workflow[key];
-      if (!s.contains("e_tran_mm")) {
+    const auto line = [&](const HandclaspStageResult& r, const char* label) {
+      if (!r.ok) {
         std::printf("%-34s failed\n", label);
         return;
       }
+      const ScoredBaseFrame& d = r.delivered();
       std::printf("%-34s e_tran %8.3f mm  e_rot %7.4f deg  (%s; physical %.3f mm, %.4f deg)\n",
-                  label, s["e_tran_mm"].get<double>(), s["e_rot_deg"].get<double>(),
-                  s["estimate"].get<std::string>().c_str(),
-                  s["physical_truth"]["e_tran_mm"].get<double>(),
-                  s["physical_truth"]["e_rot_deg"].get<double>());
-      const nlohmann::json& cm = s["stage"]["coupled_motion"];
-      if (cm.is_object() && cm.value("status", "") == "ok") {
+                  label, d.kinematic.e_tran_mm, d.kinematic.e_rot_deg, r.delivered_name(),
+                  d.physical.e_tran_mm, d.physical.e_rot_deg);
+      if (std::isfinite(r.coupled_motion_max_deviation_mm)) {
         std::printf("%-34s coupled motion: largest tip-to-tip deviation %.3f mm\n", "",
-                    cm["max_deviation_mm"].get<double>());
+                    r.coupled_motion_max_deviation_mm);
       }
     };
     if (!o.quiet) {
       std::printf("\nbase frame (%s installation):\n", ToString(handclasp.constraint));
-      line("nominal_kinematics", "  handclasp, nominal kinematics");
-      if (workflow.contains("calibrated_kinematics")) {
-        line("calibrated_kinematics", "  handclasp, calibrated kinematics");
-      }
-      if (!failure.empty()) std::printf("workflow failed: %s\n", failure.c_str());
+      line(*stage_a, "  handclasp, nominal kinematics");
+      if (stage_c) line(*stage_c, "  handclasp, calibrated kinematics");
       std::printf("wrote %s/{report.json, report.html, measurements.csv, servo_*.png}\n",
                   out.string().c_str());
     }
-    rc = failure.empty() ? 0 : 1;
+  } catch (const InputError& e) {
+    DiscardStaging(staging.string());
+    if (e.where().rfind(sc.path, 0) == 0) throw;
+    throw InputError(sc.path, e.what());  // a run-time refusal names the scenario too
   } catch (...) {
-    fs::remove_all(staging, ec);
+    DiscardStaging(staging.string());
     throw;
   }
-  return rc;
+  if (!o.junit.empty()) WriteJunit(o.junit, sc.name, verdict, Seconds(t_start));
+  PrintVerdict(verdict);
+  return VerdictExitCode(verdict);
 }
 
 }  // namespace twin

@@ -17,6 +17,8 @@
 // base gauge also holds link 1's beta); the physical transform is reported beside. One
 // report.json (and report.html, measurements.csv, servo_*.png, identified_<robot>.yaml) is
 // written to a staging folder out_dir + ".partial" and renamed onto out_dir at the end.
+// Both handclasp stages teach from the told layout (handclasp.rough_base_from_robot1) with the
+// told tips (handclasp.tips); stage (b) is told stage (a)'s estimate as its rough base.
 //
 // report.json: the calibration keys (scenario, intrinsics, robots, timing_s) plus
 //   base_frame.installation
@@ -33,9 +35,10 @@
 namespace twin {
 
 /// Runs the workflow of a scenario with both a `calibration:` and a `handclasp:` section.
-/// Returns 0 when every stage succeeded, 1 when a handclasp stage failed (the report says
-/// why). Throws InputError for bad input (trials other than 1, a missing section, a bad key;
-/// nothing is written then) and for calibration failures RunCalibrationStage throws.
+/// Returns 0 when every stage succeeded, 3 when the acceptance criteria are missed. Throws
+/// InputError (nothing is written then) for bad input (trials other than 1, a missing
+/// section, a bad key), for calibration failures RunCalibrationStage throws and when a
+/// handclasp stage refused (naming the scenario, the stage and the reason).
 int RunWorkflowScenario(const RunOptions& options);
 
 }  // namespace twin

@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <utility>
 
 #include <mujoco/mujoco.h>
@@ -358,8 +359,23 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
     for (const auto& e : s.effects) e->ApplyToMount(k, &s.mounts[k]);
   }
   if (spec.camera.distortion.Any()) {
-    s.distortion.emplace(spec.camera.intrinsics, spec.camera.distortion);
+    try {
+      s.distortion.emplace(spec.camera.intrinsics, spec.camera.distortion);
+    } catch (const std::invalid_argument& e) {
+      throw InputError(where, std::string("camera.distortion: ") + e.what());
+    }
     s.canvas = s.distortion->canvas();
+    // The ideal canvas must stay renderable (plausibility): a lens that needs more than 3 times
+    // the image, or 8192 px, per side is not described by this model.
+    const Intrinsics& k = spec.camera.intrinsics;
+    if (s.canvas.width > std::min(8192, 3 * k.width) ||
+        s.canvas.height > std::min(8192, 3 * k.height)) {
+      throw InputError(where, "camera.distortion: this lens needs an ideal canvas of " +
+                                  std::to_string(s.canvas.width) + " x " +
+                                  std::to_string(s.canvas.height) + " px to render a " +
+                                  std::to_string(k.width) + " x " + std::to_string(k.height) +
+                                  " image; at most 3 times the image and 8192 px per side");
+    }
   } else {
     s.canvas = spec.camera.intrinsics;
   }

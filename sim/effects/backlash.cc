@@ -29,7 +29,8 @@ class Backlash : public Effect {
 }  // namespace
 
 std::unique_ptr<Effect> MakeBacklash(const EffectSpec& spec) {
-  const Params params(spec, {Required("width_deg", kDegree, Positive())});
+  // At most 5 deg: worn gearboxes show a few tenths of a degree (plausibility limit).
+  const Params params(spec, {Required("width_deg", kDegree, PositiveUpTo(5.0))});
   return std::make_unique<Backlash>(spec, params.Get("width_deg"));
 }
 

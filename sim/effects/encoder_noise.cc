@@ -28,7 +28,9 @@ class EncoderNoise : public Effect {
 }  // namespace
 
 std::unique_ptr<Effect> MakeEncoderNoise(const EffectSpec& spec) {
-  const Params params(spec, {Required("sigma_deg", kDegree, Positive())});
+  // At most 1 deg per reading: industrial encoders jitter by 1e-4 deg; beyond a degree no
+  // calibration result means anything (plausibility limit).
+  const Params params(spec, {Required("sigma_deg", kDegree, PositiveUpTo(1.0))});
   return std::make_unique<EncoderNoise>(spec, params.Get("sigma_deg"));
 }
 

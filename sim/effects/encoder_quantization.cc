@@ -31,7 +31,10 @@ class EncoderQuantization : public Effect {
 std::unique_ptr<Effect> MakeEncoderQuantization(const EffectSpec& spec) {
   // At least 2^10 counts: coarser encoders do not exist on industrial arms, and a smaller
   // number is most likely bits written as counts.
-  const Params params(spec, {Required("counts_per_rev", kUnitless, IntegerAtLeast(1024))});
+  // At most 2^32 counts per turn: finer than the servo's settling floor (plausibility limit).
+  Range counts = IntegerAtLeast(1024);
+  counts.upper = 4294967296.0;
+  const Params params(spec, {Required("counts_per_rev", kUnitless, counts)});
   return std::make_unique<EncoderQuantization>(spec, params.Get("counts_per_rev"));
 }
 

@@ -57,11 +57,14 @@ class GeometryErrors : public Effect {
 
 std::unique_ptr<Effect> MakeGeometryErrors(const EffectSpec& spec) {
   RequireAllJoints(spec, "geometry errors act on every link of a robot");
-  std::vector<ParamDef> defs = {Optional("sigma_length_mm", kMillimetre, 0.0, NonNegative()),
-                                Optional("sigma_angle_deg", kDegree, 0.0, NonNegative())};
+  // Plausibility limits: uncalibrated arms are off by a few millimetres and tenths of a degree
+  // (Zhu et al. 2019, Table 3: up to ~6 mm, ~0.6 deg); beyond 50 mm / 5 deg per parameter (or
+  // 100 mm / 10 deg for one explicit error) the nominal model does not describe the arm.
+  std::vector<ParamDef> defs = {Optional("sigma_length_mm", kMillimetre, 0.0, Between(0.0, 50.0)),
+                                Optional("sigma_angle_deg", kDegree, 0.0, Between(0.0, 5.0))};
   for (int i = 0; i < kMaxDeltas; ++i) {
     defs.push_back(Optional(DeltaKey(i), IsLengthParameter(i) ? kMillimetre : kDegree, 0.0,
-                            AnyFinite()));
+                            IsLengthParameter(i) ? Between(-100.0, 100.0) : Between(-10.0, 10.0)));
   }
   const Params params(spec, defs,
                       "sigma_length_mm, sigma_angle_deg, link<i>.<theta|alpha|beta>_deg, "

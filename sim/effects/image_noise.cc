@@ -27,7 +27,9 @@ class ImageNoise : public Effect {
 std::unique_ptr<Effect> MakeImageNoise(const EffectSpec& spec) {
   RequireAllRobots(spec, "image noise acts on the camera image, not on a robot");
   RequireAllJoints(spec, "image noise acts on the camera image, not on a joint");
-  const Params params(spec, {Required("sigma_levels", kUnitless, PositiveUpTo(255.0))});
+  // At most 64 grey levels: beyond it the noise drowns the board's black-white contrast and
+  // nothing can be detected (plausibility limit).
+  const Params params(spec, {Required("sigma_levels", kUnitless, PositiveUpTo(64.0))});
   return std::make_unique<ImageNoise>(spec, params.Get("sigma_levels"));
 }
 

@@ -29,7 +29,9 @@ class JointCompliance : public Effect {
 }  // namespace
 
 std::unique_ptr<Effect> MakeJointCompliance(const EffectSpec& spec) {
-  const Params params(spec, {Required("stiffness_Nm_per_rad", kUnitless, Positive())});
+  // Plausibility limits: below 100 N m/rad an arm of this size sags by tens of degrees; above
+  // 1e9 N m/rad the joint is rigid for any purpose.
+  const Params params(spec, {Required("stiffness_Nm_per_rad", kUnitless, Between(100.0, 1e9))});
   return std::make_unique<JointCompliance>(spec, params.Get("stiffness_Nm_per_rad"));
 }
 

@@ -33,9 +33,14 @@ class TransmissionError : public Effect {
 }  // namespace
 
 std::unique_ptr<Effect> MakeTransmissionError(const EffectSpec& spec) {
-  const Params params(spec, {Required("amplitude_deg", kDegree, AnyFinite()),
-                             Required("harmonic", kUnitless, IntegerAtLeast(1)),
-                             Optional("phase_deg", kDegree, 0.0, AnyFinite())});
+  // Plausibility limits: harmonic-drive transmission errors are arc minutes (5 deg is a
+  // broken gear); harmonics above 1000 per turn are finer than the settling; a phase is
+  // periodic.
+  Range harmonic = IntegerAtLeast(1);
+  harmonic.upper = 1000.0;
+  const Params params(spec, {Required("amplitude_deg", kDegree, Between(-5.0, 5.0)),
+                             Required("harmonic", kUnitless, harmonic),
+                             Optional("phase_deg", kDegree, 0.0, Between(-360.0, 360.0))});
   return std::make_unique<TransmissionError>(spec, params.Get("amplitude_deg"),
                                              params.Get("harmonic"), params.Get("phase_deg"));
 }

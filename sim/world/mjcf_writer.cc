@@ -23,7 +23,7 @@ constexpr double kBaseHeight = 0.06;            // [m]
 constexpr double kExcludeClearance = 0.01;      // [m], see NecessarilyTouch
 constexpr double kTipDensity = 7800.0;          // steel measuring tip [kg/m^3]
 constexpr double kMinSegment = 1e-6;            // shorter link segments get no capsule [m]
-constexpr double kFlangeThickness = 0.012;      // flange disc at the end of link 6 [m]
+constexpr double kFlangeThickness = kFlangeThicknessM;  // flange disc at the end of link 6
 constexpr int kOverviewWidth = 1600;            // largest overview render [px]
 constexpr int kOverviewHeight = 1200;
 constexpr double kOverviewFar = 10.0;           // far plane of overview renders [m]
@@ -324,6 +324,8 @@ std::string Robot(const TwinSpec& spec, const Intrinsics& canvas, const Kinemati
 }
 
 }  // namespace
+
+double FlangeRadius(int num_joints) { return LinkRadius(num_joints - 1, num_joints); }
 
 double CriticalDamping(double kp, double inertia) { return 2.0 * std::sqrt(kp * inertia); }
 

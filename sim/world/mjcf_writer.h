@@ -30,6 +30,11 @@ namespace twin {
 /// Name of the MJCF camera on the active robot's flange.
 constexpr const char* kHandCameraName = "hand_camera";
 
+/// Radius of the flange disc (and of the last link's capsule) of an n-joint arm [m]; the disc
+/// is kFlangeThicknessM thick, behind the flange face (frame L_N) [m].
+double FlangeRadius(int num_joints);
+constexpr double kFlangeThicknessM = 0.012;
+
 /// Joint damping [N m s/rad] for near-critical damping of a position servo of stiffness `kp`
 /// [N m/rad] on a joint of effective inertia `inertia` [kg m^2]: 2 sqrt(kp * inertia).
 double CriticalDamping(double kp, double inertia);

@@ -123,10 +123,15 @@ TEST(ModelYamlTest, LoadsReinovoR2) {
 }
 
 TEST(ModelYamlTest, RadiansAreTakenAsIs) {
-  const std::string text = Replaced(R1Text(), "angle_unit: deg", "angle_unit: rad");
+  const std::string text =
+      "robot:\n  name: r\n  angle_unit: rad\n  links:\n"
+      "    - {name: l1, theta_offset: 1.5, d: 0.1, a: 0, alpha: 0.5, beta: 0, limits: [-3, 3],\n"
+      "       mass: 1, com: [0, 0, 0], inertia: [0.01, 0.01, 0.01, 0, 0, 0]}\n"
+      "  tool: {name: tool, theta_offset: 0, d: 0, a: 0, alpha: 0, beta: 0}\n";
   const KinematicModel m = ParseModelYaml(text, kSource);
-  EXPECT_NEAR(m.links[1].dh.theta_offset, 90.0, kExact);
-  EXPECT_NEAR(m.links[0].limits.upper, 170.0, kExact);
+  EXPECT_NEAR(m.links[0].dh.theta_offset, 1.5, kExact);
+  EXPECT_NEAR(m.links[0].dh.alpha, 0.5, kExact);
+  EXPECT_NEAR(m.links[0].limits.upper, 3.0, kExact);
 }
 
 TEST(ModelYamlTest, BaseAndEndUseUrdfRollPitchYaw) {
@@ -317,16 +322,68 @@ TEST(ModelYamlErrorTest, NegativeMass) {
   const std::string text = Replaced(R1Text(), "mass: 4.5", "mass: -4.5");
   const std::string msg = ParseError(text);
   EXPECT_TRUE(Contains(msg, At(LineOf(text, "-4.5")) + " robot.links[2].mass"));
-  EXPECT_TRUE(Contains(msg, "mass must be >= 0 kg, got '-4.5'"));
+  EXPECT_TRUE(Contains(msg, "mass must be in [0, 10000] kg"));
+  EXPECT_TRUE(Contains(msg, "got -4.5 kg"));
 }
 
-TEST(ModelYamlErrorTest, InconsistentModelIsCaughtByValidateModel) {
+TEST(ModelYamlErrorTest, UnphysicalInertiaNamesLineAndKey) {
   const std::string text = Replaced(R1Text(), "[0.02598, 0.02432, 0.0279,",
                                     "[1.0, 0.02432, 0.0279,");
   const std::string msg = ParseError(text);
-  EXPECT_TRUE(Contains(msg, kSource));
-  EXPECT_TRUE(Contains(msg, "link 1 (link1)"));
+  EXPECT_TRUE(Contains(msg, At(LineOf(text, "[1.0, 0.02432")) + " robot.links[0].inertia"));
   EXPECT_TRUE(Contains(msg, "inertia tensor is not physical"));
+  EXPECT_TRUE(Contains(msg, "triangle inequality"));
+}
+
+// Plausibility limits (bench/io/plausibility.h): finite but absurd values are refused at the
+// line and key with the limit.
+TEST(ModelYamlErrorTest, AbsurdFiniteValuesAreRefusedWithTheLimit) {
+  struct Case {
+    std::string from, to, key, expected;
+  };
+  const Case cases[] = {
+      {"a: 0.290", "a: 1e308", "robot.links[1].a", "within +-10 m"},
+      {"a: 0.290", "a: 1000000", "robot.links[1].a", "millimetres read as metres"},
+      {"d: 0.310", "d: -12", "robot.links[3].d", "within +-10 m"},
+      {"alpha: -90", "alpha: -900", "robot.links[3].alpha", "within one turn, +-360 deg"},
+      {"limits: [-270, 270]", "limits: [-270, 7200]", "robot.links[5].limits[1]",
+       "within two turns, +-720 deg"},
+      {"mass: 7.5", "mass: 1e6", "robot.links[1].mass", "[0, 10000] kg"},
+      {"com: [-0.145, 0.0, 0.0]", "com: [-14.5, 0.0, 0.0]", "robot.links[1].com[0]",
+       "within +-10 m"},
+      {"inertia: [0.01838, 0.06175, 0.06175, 0.0, 0.0, 0.0]",
+       "inertia: [18380, 61750, 61750, 0.0, 0.0, 0.0]", "robot.links[1].inertia",
+       "not plausible"},
+      {"inertia: [0.01838, 0.06175, 0.06175, 0.0, 0.0, 0.0]",
+       "inertia: [-0.01838, 0.06175, 0.06175, 0.0, 0.0, 0.0]", "robot.links[1].inertia",
+       "principal moments must be > 0"},
+  };
+  for (const Case& c : cases) {
+    const std::string text = Replaced(R1Text(), c.from, c.to);
+    const std::string msg = ParseError(text);
+    EXPECT_TRUE(Contains(msg, At(LineOf(text, c.to)) + " " + c.key)) << c.to;
+    EXPECT_TRUE(Contains(msg, c.expected)) << c.to;
+  }
+  // Radians: 90 in a rad file is 14 turns, degrees written as radians.
+  const std::string rad = Replaced(R1Text(), "angle_unit: deg", "angle_unit: rad");
+  EXPECT_TRUE(Contains(ParseError(rad), "degrees written as radians"));
+  // NaN is refused as a non-finite number wherever it appears.
+  EXPECT_TRUE(Contains(ParseError(Replaced(R1Text(), "mass: 7.5", "mass: .nan")),
+                       "expected a finite number"));
+}
+
+TEST(ModelYaml, SevenJointArmIsPlausible) {
+  // A redundant arm: link 4 repeated (lengths within the limits); the limits allow 1..12 joints.
+  const std::string text = R1Text();
+  const std::size_t from = text.find("    - name: link4");
+  const std::size_t to = text.find("    - name: link5");
+  ASSERT_NE(from, std::string::npos);
+  std::string seven = text;
+  std::string link = text.substr(from, to - from);
+  link.replace(link.find("link4"), 5, "link4b");
+  seven.insert(to, link);
+  const KinematicModel m = ParseModelYaml(seven, kSource);
+  EXPECT_EQ(m.num_joints(), 7);
 }
 
 TEST(ModelYamlErrorTest, MissingFileNamesPath) {

@@ -16,8 +16,13 @@
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
 
+#include "tests/bench/text_edit.h"
+
 namespace twin {
 namespace {
+
+using testing::LineOf;
+using testing::Replaced;
 
 // ---- Independent reference: compose urdfdom's parsed joints directly -------------------------
 
@@ -667,6 +672,74 @@ TEST(UrdfModelErrors, CoincidentAndZeroAxesAreNamed) {
   joints[4].axis = Vector3::Zero();
   const std::string zero = ErrorOf([&] { ParseUrdf(UrdfText(links, {}, joints), "z.urdf"); });
   EXPECT_NE(zero.find("'j5' has a zero axis"), std::string::npos) << zero;
+}
+
+// Plausibility (bench/io/plausibility.h): URDFs get the checks of YAML models, at the element's
+// line, and urdfdom's own reason when it refuses or drops an element.
+TEST(UrdfModelErrors, AbsurdValuesAreRefusedAtTheElementWithTheLimit) {
+  const std::string ur5 = kUr5Like;
+  struct Case {
+    std::string from, to, where, expected;
+  };
+  const Case cases[] = {
+      {"<mass value=\"3.7\"/>", "<mass value=\"-3.7\"/>", "link 'shoulder_link' <mass value>",
+       "[0, 10000] kg"},
+      {"<mass value=\"3.7\"/>", "<mass value=\"1e9\"/>", "link 'shoulder_link' <mass value>",
+       "[0, 10000] kg"},
+      {"<mass value=\"3.7\"/>", "<mass value=\"nan\"/>", "Link [shoulder_link]",
+       "urdfdom: Inertial: mass [nan] is not a float"},
+      {"<mass value=\"3.7\"/>", "<mass value=\"heavy\"/>", "Link [shoulder_link]",
+       "urdfdom: Inertial: mass [heavy] is not a float"},
+      {"ixx=\"0.010267\"", "ixx=\"-5\"", "link 'shoulder_link' <inertia>", "not physical"},
+  };
+  for (const Case& c : cases) {
+    const std::string text = Replaced(ur5, c.from, c.to);
+    const std::string msg = ErrorOf([&] { ParseUrdf(text, "arm.urdf"); });
+    const std::string at =
+        "arm.urdf:" + std::to_string(LineOf(text, "<link name=\"shoulder_link\""));
+    EXPECT_TRUE(msg.find(at + " ") != std::string::npos || msg.find(at + ":") != std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find(c.where), std::string::npos) << msg;
+    EXPECT_NE(msg.find(c.expected), std::string::npos) << msg;
+  }
+  // Joint origins and limits: a 1000 km offset, a limit of 100 turns.
+  std::vector<std::string> links = {"base_link"};
+  std::vector<JointSpec> joints;
+  for (int i = 1; i <= 6; ++i) {
+    links.push_back("l" + std::to_string(i));
+    JointSpec j{"j" + std::to_string(i), "revolute", links[i - 1], links[i]};
+    j.xyz = Vector3(0.1, 0.0, 0.05);
+    j.axis = i % 2 ? Vector3::UnitZ() : Vector3::UnitY();
+    joints.push_back(j);
+  }
+  std::vector<JointSpec> far = joints;
+  far[2].xyz = Vector3(1e6, 0, 0);
+  const std::string far_msg = ErrorOf([&] { ParseUrdf(UrdfText(links, {}, far), "far.urdf"); });
+  EXPECT_NE(far_msg.find("joint 'j3' <origin xyz>"), std::string::npos) << far_msg;
+  EXPECT_NE(far_msg.find("within +-10 m"), std::string::npos) << far_msg;
+  std::vector<JointSpec> turns = joints;
+  turns[4].upper = 628.0;
+  const std::string turn_msg =
+      ErrorOf([&] { ParseUrdf(UrdfText(links, {}, turns), "turns.urdf"); });
+  EXPECT_NE(turn_msg.find("joint 'j5' <limit>"), std::string::npos) << turn_msg;
+  EXPECT_NE(turn_msg.find("two turns"), std::string::npos) << turn_msg;
+  // A seven-joint arm stays plausible (chains of 1..12 joints).
+  EXPECT_EQ(ParseUrdf(SimpleChain(std::vector<std::string>(7, "revolute")), "seven.urdf")
+                .num_joints(),
+            7);
+}
+
+TEST(UrdfModelErrors, UrdfdomsReasonIsInTheMessage) {
+  // A revolute joint without <limit>: urdfdom refuses the file and says why (through
+  // console_bridge); that reason must be in our message, not only on stderr.
+  std::string text = SimpleChain(std::vector<std::string>(6, "revolute"));
+  const std::size_t at = text.find("<limit");
+  ASSERT_NE(at, std::string::npos);
+  text.erase(at, text.find("/>", at) + 2 - at);
+  const std::string msg = ErrorOf([&] { ParseUrdf(text, "nolimit.urdf"); });
+  EXPECT_NE(msg.find("urdfdom: "), std::string::npos) << msg;
+  EXPECT_NE(msg.find("does not specify limits"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("nolimit.urdf:"), std::string::npos) << msg;  // the joint's line
 }
 
 }  // namespace

@@ -33,6 +33,18 @@ Transform FromZyzMm(double x, double y, double z, double a, double b, double c) 
   return X;
 }
 
+// The told values of a set-up's handclasp section (its layout as drawn and the tips by
+// drawing, as in scenarios/gan2014_<name>.yaml), as the start of a flow map without its '}'.
+std::string ToldSection(const std::string& name) {
+  const std::string layout =
+      name == "floor_floor"     ? "{xyz_mm: [40, 1475, 50], zyz_deg: [0, 0, -45]}"
+      : name == "floor_ceiling" ? "{xyz_mm: [1500, 500, 1500], zyz_deg: [0, 180, 0]}"
+                                : "{xyz_mm: [1300, -100, 1390], zyz_deg: [180, 90, -180]}";
+  const std::string tip = name == "floor_floor" ? "200" : name == "floor_ceiling" ? "400" : "300";
+  return "{rough_base_from_robot1: " + layout + ", tips: {r1: {xyz_mm: [0, 0, " + tip +
+         "], rpy_deg: [0, 0, 0]}, r2: {xyz_mm: [0, 0, " + tip + "], rpy_deg: [0, 0, 0]}}";
+}
+
 // The paper's set-up with its installation made exact (Table 1's truth rounded onto the
 // constraint), so that the constrained solution can be exact too.
 Scenario IdealSetup(const std::string& name) {
@@ -42,7 +54,8 @@ Scenario IdealSetup(const std::string& name) {
   if (name == "floor_ceiling") X_B1B2 = FromZyzMm(1500.1, 500.0, 1499.9, 0, 180, 0.001);
   if (name == "floor_wall") X_B1B2 = FromZyzMm(1303.3, -102.3, 1386.3, 180, 90, -179.997);
   sc.twin.robots[1].X_WB = sc.twin.robots[0].X_WB * X_B1B2;
-  sc.handclasp = YamlField{YAML::Load("{operator_error_mm: 0, coupled_motion: true}"),
+  sc.handclasp = YamlField{YAML::Load(ToldSection(name) + ", operator_error_mm: 0, "
+                                      "coupled_motion: true}"),
                            "scenario.handclasp"};
   return sc;
 }
@@ -185,10 +198,14 @@ TEST_F(HandclaspRunTest, ConstrainedIsNotWorseThanGeneralOverASeededBatch) {
   }
 }
 
+// `section` holds the keys after the told ones ("{pointz: auto}").
 void ExpectSectionError(const std::string& section, const std::string& where_part,
                         const std::string& message_part) {
   Scenario sc = LoadScenario(kDir + "gan2014_floor_floor.yaml");
-  sc.handclasp = YamlField{YAML::Load(section), "scenario.handclasp"};
+  const std::string text =
+      section == "{}" ? ToldSection("floor_floor") + "}"
+                      : ToldSection("floor_floor") + ", " + section.substr(1);
+  sc.handclasp = YamlField{YAML::Load(text), "scenario.handclasp"};
   try {
     ParseHandclaspConfig(sc);
     ADD_FAILURE() << "no InputError for " << section;
@@ -206,12 +223,23 @@ TEST_F(HandclaspRunTest, SectionErrorsNameTheKey) {
   ExpectSectionError("{operator_error_mm: -1}", "scenario.handclasp.operator_error_mm", ">= 0");
   ExpectSectionError("{constraint: floor_roof}", "scenario.handclasp.constraint", "floor_wall");
   ExpectSectionError("{trials: 0}", "scenario.handclasp.trials", "1..1000");
+  // Plausibility limits.
+  ExpectSectionError("{operator_error_mm: 1e6}", "scenario.handclasp.operator_error_mm",
+                     "at most 10 mm");
+  ExpectSectionError("{points: [[0, 0, 500], [100, 0, 500], [0, 100, 500], [1e9, 0, 0]]}",
+                     "scenario.handclasp.points[3]", "within 5000 mm");
+  // The told values are required: the truth is never used in their place.
+  Scenario sc = LoadScenario(kDir + "gan2014_floor_floor.yaml");
+  sc.handclasp = YamlField{YAML::Load("{points: auto}"), "scenario.handclasp"};
+  EXPECT_THROW(ParseHandclaspConfig(sc), InputError);
+  sc.handclasp = YamlField{};
+  EXPECT_THROW(ParseHandclaspConfig(sc), InputError);
 }
 
 TEST_F(HandclaspRunTest, SectionDefaultsFollowTheInstallations) {
   for (const char* name : kSetups) {
     Scenario sc = LoadScenario(kDir + "gan2014_" + name + ".yaml");
-    sc.handclasp = YamlField{};
+    sc.handclasp = YamlField{YAML::Load(ToldSection(name) + "}"), "scenario.handclasp"};
     const HandclaspConfig c = ParseHandclaspConfig(sc);
     EXPECT_TRUE(c.auto_points);
     EXPECT_EQ(c.trials, 1);

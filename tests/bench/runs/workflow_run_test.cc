@@ -102,7 +102,9 @@ TEST(WorkflowRun, AReducedRunReportsBothStagesAndTheCalibratedOneIsBetter) {
   // The whole workflow on the real twin with a small calibration (12 intrinsics views, 4 axes
   // x 5 positions planned by a short PSO, 3 calibrating): both handclasp stages, the
   // optical-axis calibration of both robots and the tip identification run end to end.
+  // The scenario's acceptance section is the full run's target, not this reduced one's.
   std::string s = Workflow();
+  s = s.substr(0, s.find("  # The CI verdict"));
   s = Replaced(s, "intrinsics_views: 40", "intrinsics_views: 12");
   s = Replaced(s, "axes: 5", "axes: 4");
   s = Replaced(s, "positions_per_axis: 10", "positions_per_axis: 5");

@@ -125,11 +125,11 @@ TEST(EffectRegistry, MissingRequiredParameterIsNamed) {
 TEST(EffectRegistry, OutOfRangeValuesAreNamed) {
   ExpectInputError(Spec("backlash", {{"width_deg", -0.1}}), {"width_deg = -0.1", "> 0"});
   ExpectInputError(Spec("transmission_error", {{"amplitude_deg", 0.01}, {"harmonic", 0}}),
-                   {"harmonic = 0", "a whole number >= 1"});
+                   {"harmonic = 0", "a whole number in [1, 1000]"});
   ExpectInputError(Spec("transmission_error", {{"amplitude_deg", 0.01}, {"harmonic", 1.5}}),
                    {"harmonic = 1.5", "whole number"});
   ExpectInputError(Spec("encoder_quantization", {{"counts_per_rev", 1000}}),
-                   {"counts_per_rev = 1000", ">= 1024"});
+                   {"counts_per_rev = 1000", "[1024, 4294967296]"});
   ExpectInputError(Spec("encoder_noise", {{"sigma_deg", std::nan("")}}), {"sigma_deg = nan"});
   ExpectInputError(Spec("thermal_growth", {{"delta_T_K", 293.15}}),
                    {"delta_T_K = 293.15", "[-100, 100]"});

@@ -109,9 +109,9 @@ TEST(TwinSpecErrorTest, NonFiniteSquareSize) {
 
 TEST(TwinSpecErrorTest, BoardNeedsTwoSquaresEachWay) {
   EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.squares_y = 1; }),
-                       "board.squares_y must be >= 2, got 1"));
+                       "board.squares_y must be from 2 to 30, got 1"));
   EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.squares_x = 0; }),
-                       "board.squares_x must be >= 2, got 0"));
+                       "board.squares_x must be from 2 to 30, got 0"));
 }
 
 TEST(TwinSpecErrorTest, BoardMarginThicknessMass) {
@@ -148,9 +148,9 @@ TEST(TwinSpecErrorTest, ZeroFocalLength) {
 
 TEST(TwinSpecErrorTest, ImageSize) {
   EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.intrinsics.width = 0; }),
-                       "camera.intrinsics.width must be from 1 to 4096, got 0"));
+                       "camera.intrinsics.width must be from 16 to 4096, got 0"));
   EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.intrinsics.height = 5000; }),
-                       "camera.intrinsics.height must be from 1 to 4096, got 5000"));
+                       "camera.intrinsics.height must be from 16 to 4096, got 5000"));
 }
 
 TEST(TwinSpecErrorTest, PrincipalPointOutsideImage) {
@@ -311,6 +311,93 @@ TEST(TwinSpecErrorTest, PhysicsValues) {
                        "physics.settle_steps must be >= 1, got 0"));
   EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->physics.max_steps = 10; }),
                        "physics.max_steps must be >= physics.settle_steps = 20"));
+}
+
+// ---- Plausibility limits (issue 14): finite but absurd values, each refused with the limit.
+
+TEST(TwinSpecPlausibilityTest, CameraIntrinsicsAndLens) {
+  // fx of 1e-9 or 1e12 px: fields of view of 180 deg or nothing.
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.intrinsics.fx = 1e-9; }),
+                       "camera.intrinsics.fx must be in [51.2, 51200] px (0.05 to 50 times"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.intrinsics.fx = 1e12; }),
+                       "fields of view from 175 to 1.1 deg"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.intrinsics.fy = 2000; }),
+                       "camera.intrinsics.fy must be in [0.5, 2] x fx"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.distortion.k1 = 50; }),
+                       "camera.distortion.k1 must be in [-10, 10]"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.distortion.p1 = 0.5; }),
+                       "camera.distortion.p1 must be in [-0.1, 0.1]"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.near_m = 1e-6; }),
+                       "camera.near_m must be in [0.001, 100] m"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->camera.far_m = 1000; }),
+                       "camera.far_m must be in [0.001, 100] m"));
+}
+
+TEST(TwinSpecPlausibilityTest, BoardSquaresMustBeVisible) {
+  // Squares of 1 m never fit the view at 2 m; squares of 1 um image to less than a pixel.
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.square_m = 1.0; }),
+                       "larger than the camera's view at 2 m"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.square_m = 1e-6; }),
+                       "must image to at least one pixel"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.squares_x = 40; }),
+                       "board.squares_x must be from 2 to 30"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.mass_kg = 500; }),
+                       "board.mass_kg must be in [0, 20] kg"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->board.thickness_m = 2; }),
+                       "board.thickness_m must be in [0, 0.1] m"));
+}
+
+TEST(TwinSpecPlausibilityTest, FlangeToolsAreOnTheFlangeAndNotInsideIt) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) {
+                         s->camera.X_FC.translation() = Vector3(0.0, 0.01, -0.005);
+                       }),
+                       "camera.X_FC puts the camera's optical centre at (0, 10, -5) mm in the "
+                       "flange frame, inside the flange (radius 35 mm"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) {
+                         s->board.X_FT.translation() = Vector3(0.0, 0.0, -0.02);
+                       }),
+                       "board.X_FT puts the board's feature point"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) {
+                         s->tips[1].X_FTip.translation() = Vector3(0.01, 0.0, -0.03);
+                       }),
+                       "tips[1].X_FTip puts the tip point"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) {
+                         s->camera.X_FC.translation() = Vector3(1000, 0, 0);
+                       }),
+                       "camera.X_FC translation must be at most 1 m long"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->tips[0].length_m = 5; }),
+                       "tips[0].length_m must be in [0, 1] m"));
+  // On the face, beside the flange, or in front of it: fine.
+  EXPECT_TRUE(Valid([](TwinSpec* s) { s->camera.X_FC.translation() = Vector3(0.0, 0.0, 0.0); }));
+  EXPECT_TRUE(Valid([](TwinSpec* s) { s->camera.X_FC.translation() = Vector3(0.085, 0, -0.03); }));
+}
+
+TEST(TwinSpecPlausibilityTest, BasesWithinACell) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) {
+                         s->robots[0].X_WB.translation() = Vector3(1e6, 0, 0);
+                       }),
+                       "robots[0].X_WB translation must be at most 100 m long"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) {
+                         s->robots[1].X_WB.translation() = Vector3(50, 0, 0);
+                       }),
+                       "puts robot 2's base 50 m from robot 1's"));
+}
+
+TEST(TwinSpecPlausibilityTest, PhysicsRunsEnd) {
+  // max_steps: 1e9 with a tiny settle speed never ends: both are bounded.
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->physics.max_steps = 1000000000; }),
+                       "physics.max_steps must be from 1 to 1000000"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->physics.settle_speed = 1e-300; }),
+                       "physics.settle_speed must be in [1e-12, 1] rad/s"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) {
+                         s->physics.max_steps = 1000000;
+                         s->physics.timestep_s = 0.005;
+                       }),
+                       "at most 600 s of simulated time per move"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->physics.timestep_s = 0.5; }),
+                       "physics.timestep_s must be in [1e-05, 0.01] s"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->physics.stiffness = 1e12; }),
+                       "physics.stiffness must be in [10, 1e+08] N m/rad"));
 }
 
 TEST(TwinSpecErrorTest, EffectIndices) {
