@@ -20,6 +20,8 @@
 #include "bench/runs/study_merge.h"
 #include "bench/runs/study_run.h"
 #include "bench/runs/synthetic_measurements.h"
+#include "bench/runs/tracker_identify_run.h"
+#include "bench/io/tracker_file.h"
 #include "bench/io/model_loader.h"
 #include "bench/io/output_files.h"
 #include "bench/runs/twin_commands.h"
@@ -309,6 +311,16 @@ int main(int argc, char** argv) {
   identify->add_option("--board-mount", identify_options.board_mount,
                        "board frame in the flange: x,y,z,roll,pitch,yaw [mm, deg] (default 0)");
   identify->add_option("--out", identify_options.out_dir, "output folder")->required();
+  TrackerIdentifyOptions tracker_options;
+  identify->add_option("--ignore-column", tracker_options.ignore_columns,
+                       "tracker file: a column to drop (e.g. a constant torso axis merged into "
+                       "the model's base); repeatable");
+  identify->add_option("--validate", tracker_options.validate,
+                       "tracker file: a second file held out as the region split");
+  identify->add_option("--holdout", tracker_options.holdout_fraction,
+                       "tracker file: the part of the points each split holds out (default 0.2)");
+  identify->add_option("--seed", tracker_options.seed,
+                       "tracker file: seed of the random split (default 1)");
 
   SynthesizeOptions synth_options;
   auto* synth = app.add_subcommand(
@@ -359,7 +371,26 @@ int main(int argc, char** argv) {
     }
     if (*merge) return RunStudyMerge(merge_options);
     if (*bench_planning) return RunPlanningBenchmark(planning_options);
-    if (*identify) return RunIdentify(identify_options);
+    if (*identify) {
+      // A tracker file (x_m / x_mm columns) goes to the tracker identification.
+      if (IsTrackerFile(identify_options.measurements)) {
+        tracker_options.model = identify_options.model;
+        tracker_options.measurements = identify_options.measurements;
+        tracker_options.out_dir = identify_options.out_dir;
+        if (!identify_options.board_mount.empty() || !identify_options.robot.empty()) {
+          throw InputError("--board-mount/--robot", "options of optical-axis measurements; " +
+                                                        identify_options.measurements +
+                                                        " is a tracker file");
+        }
+        return RunTrackerIdentify(tracker_options);
+      }
+      if (!tracker_options.ignore_columns.empty() || !tracker_options.validate.empty()) {
+        throw InputError("--ignore-column/--validate",
+                         "options of tracker files; " + identify_options.measurements +
+                             " has no x_m/x_mm column");
+      }
+      return RunIdentify(identify_options);
+    }
     if (*synth) return RunSynthesizeMeasurements(synth_options);
     if (*kbench) return RunKinematicsBenchmark(kb_options);
   } catch (const InputError& e) {

@@ -12,6 +12,7 @@ PACKAGES=(
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev
   slurmctld slurmd slurm-client munge
+  time
 )
 
 missing=()

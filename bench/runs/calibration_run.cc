@@ -17,6 +17,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "bench/io/calibration_config.h"
+#include "bench/io/csv.h"
 #include "bench/scoring/calibration_scoring.h"
 #include "bench/runs/handclasp_run.h"
 #include "bench/runs/plan_cache.h"
@@ -565,38 +566,6 @@ int CheckScenario(const std::string& scenario_path) {
   return 0;
 }
 
-namespace {
-
-// Splits one CSV line at commas (the file has no quoted fields).
-std::vector<std::string> SplitCsv(const std::string& line) {
-  std::vector<std::string> out;
-  std::stringstream ss(line);
-  std::string item;
-  while (std::getline(ss, item, ',')) out.push_back(item);
-  if (!line.empty() && line.back() == ',') out.emplace_back();
-  return out;
-}
-
-double CsvNumber(const std::string& text, const std::string& where) {
-  try {
-    size_t used = 0;
-    const double v = std::stod(text, &used);
-    if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument("");
-    return v;
-  } catch (const std::exception&) {
-    throw InputError(where, "expected a finite number, got '" + text + "'");
-  }
-}
-
-int CsvInteger(const std::string& text, const std::string& where) {
-  const double v = CsvNumber(text, where);
-  if (v != std::floor(v) || v < 0 || v > 1e6) {
-    throw InputError(where, "expected a whole number >= 0, got '" + text + "'");
-  }
-  return static_cast<int>(v);
-}
-
-}  // namespace
 
 int RunIdentify(const IdentifyOptions& o) {
   // Everything is validated before anything is written.

@@ -60,11 +60,13 @@ struct IdentifyOptions {
 };
 
 /// Limits of a measurements file (plausibility, issue 14): a hardware session records 50 to a
-/// few hundred aligned poses; 10,000 rows, 1,000 axes and 16 MiB keep the identification's
-/// memory and time bounded (its matrices grow with rows and axes), 4096 characters a line.
-constexpr int kMaxMeasurementRows = 10000;
+/// few hundred aligned poses, a Monte Carlo or accumulated data set tens of thousands; 100,000
+/// rows, 1,000 axes and 64 MiB keep the identification's memory and time bounded (linear in
+/// the rows, measured: README "Speed"; its dense Jacobian has a column per unknown, so it grows
+/// with rows times axes), 4096 characters a line.
+constexpr int kMaxMeasurementRows = 100000;
 constexpr int kMaxMeasurementAxes = 1000;
-constexpr std::uintmax_t kMaxMeasurementBytes = std::uintmax_t{16} << 20;
+constexpr std::uintmax_t kMaxMeasurementBytes = std::uintmax_t{64} << 20;
 constexpr std::size_t kMaxMeasurementLine = 4096;
 
 /// Validates a scenario as `twinbench run` would before running (the scenario, its procedure

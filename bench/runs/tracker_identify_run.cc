@@ -1,0 +1,150 @@
+#include "bench/runs/tracker_identify_run.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/io/model_loader.h"
+#include "bench/io/model_yaml.h"
+#include "bench/io/output_files.h"
+#include "bench/io/tracker_file.h"
+#include "calib/common/errors.h"
+#include "calib/model/robot_model.h"
+#include "calib/procedures/tracker_calibration.h"
+
+namespace twin {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+json Errors(const PointErrors& e) {
+  return {{"rms_mm", 1e3 * e.rms}, {"mean_mm", 1e3 * e.mean}, {"max_mm", 1e3 * e.max},
+          {"poses", e.poses}};
+}
+
+// A value in report units: m -> mm, rad -> deg, others as they are.
+std::pair<double, std::string> ReportUnit(double v, const std::string& unit) {
+  if (unit == "m") return {1e3 * v, "mm"};
+  if (unit == "rad") return {v * 180.0 / 3.14159265358979323846, "deg"};
+  return {v, unit};
+}
+
+void WriteFile(const fs::path& path, const std::string& text) {
+  std::ofstream f(path, std::ios::binary);
+  f << text;
+  f.flush();
+  if (!f) throw InputError(path.string(), "writing the file failed (output folder not writable?)");
+}
+
+}  // namespace
+
+int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
+  // Everything is validated before anything is written.
+  ValidateOutputFolder(o.out_dir, "--out");
+  if (!(o.holdout_fraction > 0.0 && o.holdout_fraction <= 0.5)) {
+    throw InputError("--holdout", "expected a fraction in (0, 0.5], got " +
+                                      std::to_string(o.holdout_fraction));
+  }
+  const KinematicModel chain = LoadRobotModel(o.model);
+  const TrackerFile file = ReadTrackerFile(o.measurements, chain, o.ignore_columns);
+  TrackerFile validation;
+  if (!o.validate.empty()) validation = ReadTrackerFile(o.validate, chain, o.ignore_columns);
+  const RobotModel nominal = MakeRobotModel(chain);
+
+  TrackerCalibrationOptions options;
+  options.holdout_fraction = o.holdout_fraction;
+  options.seed = o.seed;
+  options.set.source = o.measurements;
+  TrackerCalibrationResult r;
+  try {
+    r = CalibrateFromTracker(nominal, file.points, validation.points, options);
+  } catch (const InputError& e) {
+    if (e.where().rfind(o.measurements, 0) == 0) throw;
+    throw InputError(o.measurements, e.what());
+  }
+
+  const IdentificationResult& id = r.identified;
+  json j;
+  j["file"] = o.measurements;
+  j["model"] = o.model;
+  j["robot"] = chain.name;
+  j["points"] = file.points.size();
+  j["columns"] = {{"joints", file.joint_columns},
+                  {"sigma", file.has_sigma},
+                  {"time", file.has_time},
+                  {"temperature", file.has_temperature}};
+  j["columns"]["ignored"] = json::array();
+  for (const TrackerFileColumn& c : file.ignored) {
+    j["columns"]["ignored"].push_back({{"name", c.name}, {"min", c.min}, {"max", c.max}});
+  }
+  for (const HeldOutSplit& s : r.splits) {
+    j["heldout"][s.name] = {{"rule", s.rule},
+                            {"training_poses", s.training},
+                            {"before", Errors(s.before)},
+                            {"after", Errors(s.after)},
+                            {"training_after", Errors(s.training_after)},
+                            {"worse", s.worse}};
+  }
+  j["all_points"] = {{"before", Errors(r.all_before)}, {"after", Errors(r.all_after)}};
+  j["parameters"] = json::array();
+  for (const IdentifiedParameter& p : id.parameters) {
+    const auto [est, unit] = ReportUnit(p.estimated, p.unit);
+    const auto [start, unit0] = ReportUnit(p.start, p.unit);
+    const auto [sigma, unit1] = ReportUnit(p.sigma, p.unit);
+    j["parameters"].push_back({{"name", p.name}, {"unit", unit}, {"nominal", start},
+                               {"estimated", est}, {"correction", est - start},
+                               {"sigma", sigma}});
+  }
+  j["unidentifiable"] = id.observability.unidentifiable;
+  j["condition_number"] = id.condition_number();
+  j["rank"] = id.observability.rank;
+  j["sigma0"] = id.sigma0;
+  j["correlations"] = json::array();
+  for (const ParameterCorrelation& c : id.correlations) {
+    j["correlations"].push_back({{"a", c.a}, {"b", c.b}, {"rho", c.rho}});
+  }
+  const Eigen::AngleAxisd aa(r.X_TB.linear());
+  j["tracker_pose"] = {{"xyz_mm", {1e3 * r.X_TB.translation().x(), 1e3 * r.X_TB.translation().y(),
+                                   1e3 * r.X_TB.translation().z()}},
+                       {"rotation_deg", aa.angle() * 180.0 / 3.14159265358979323846},
+                       {"rotation_axis", {aa.axis().x(), aa.axis().y(), aa.axis().z()}}};
+  j["warnings"] = r.warnings;
+
+  const fs::path out(o.out_dir);
+  const std::string staging = CreateStagingDirectory(o.out_dir);
+  try {
+    WriteFile(fs::path(staging) / "report.json", j.dump(2) + "\n");
+    WriteFile(fs::path(staging) / ("identified_" + chain.name + ".yaml"),
+              ModelToYaml(id.model.chain));
+    PublishDirectory(staging, out.string());
+  } catch (...) {
+    DiscardStaging(staging);
+    throw;
+  }
+
+  std::printf("%s: %zu tracker points, %d identifiable combinations (condition %.3g), %zu "
+              "unidentifiable\n",
+              chain.name.c_str(), file.points.size(), id.observability.rank,
+              id.condition_number(), id.observability.unidentifiable.size());
+  std::printf("%-8s %-10s %28s %28s\n", "split", "held out", "before RMS / max [mm]",
+              "after RMS / max [mm]");
+  for (const HeldOutSplit& s : r.splits) {
+    std::printf("%-8s %-10d %18.4f / %7.4f %18.4f / %7.4f%s\n", s.name.c_str(), s.after.poses,
+                1e3 * s.before.rms, 1e3 * s.before.max, 1e3 * s.after.rms, 1e3 * s.after.max,
+                s.worse ? "   WORSE" : "");
+  }
+  std::printf("%-8s %-10zu %18.4f / %7.4f %18.4f / %7.4f   (fitted, not held out)\n", "all",
+              file.points.size(), 1e3 * r.all_before.rms, 1e3 * r.all_before.max,
+              1e3 * r.all_after.rms, 1e3 * r.all_after.max);
+  for (const std::string& w : r.warnings) std::fprintf(stderr, "WARNING: %s\n", w.c_str());
+  std::printf("wrote %s/report.json and identified_%s.yaml\n", out.string().c_str(),
+              chain.name.c_str());
+  return 0;
+}
+
+}  // namespace twin

@@ -1,0 +1,25 @@
+// `twinbench identify` on a laser-tracker file (bench/io/tracker_file.h): the identification
+// with held-out scoring of calib/procedures/tracker_calibration.h, written as report.json and
+// the identified model (README, "Calibrating from a laser tracker file").
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace twin {
+
+struct TrackerIdentifyOptions {
+  std::string model;                        ///< nominal model (.yaml / .urdf), any joint count
+  std::string measurements;                 ///< the tracker file
+  std::vector<std::string> ignore_columns;  ///< columns to drop (e.g. a constant torso axis)
+  std::string validate;                     ///< optional second file: the region split's part
+  double holdout_fraction = 0.2;            ///< of each split
+  std::uint64_t seed = 1;                   ///< of the random split
+  std::string out_dir;                      ///< report.json, identified_<robot>.yaml
+};
+
+/// Runs it; returns 0. Throws InputError for bad input (nothing is written then).
+int RunTrackerIdentify(const TrackerIdentifyOptions& options);
+
+}  // namespace twin

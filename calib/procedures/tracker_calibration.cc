@@ -1,0 +1,214 @@
+#include "calib/procedures/tracker_calibration.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+
+#include "calib/common/errors.h"
+#include "calib/model/parameter_layout.h"
+#include "calib/model/robot_model.h"
+
+namespace twin {
+namespace {
+
+struct Solved {
+  IdentificationResult result;
+  Transform X_TB = Transform::Identity();
+};
+
+Solved Solve(const RobotModel& start, const std::vector<TrackerPoint>& points,
+             const TrackerSetOptions& set_options, const IdentificationOptions& options) {
+  TrackerSet set(points, set_options);
+  Solved s;
+  s.result = Identify(start, {&set}, options);
+  if (s.result.status == IdentificationStatus::kFailed) {
+    throw InputError(set_options.source, "the identification failed: " + s.result.reason);
+  }
+  s.X_TB = set.X_TB();
+  return s;
+}
+
+// Everything held but the reflector offset: the "before" of held-out scoring.
+IdentificationOptions BaselineOptions(const RobotModel& model, IdentificationOptions options) {
+  const std::vector<std::string> keep = ReflectorParameterNames(model);
+  for (const std::string& name : ParameterLayout(model).names()) {
+    if (std::find(keep.begin(), keep.end(), name) == keep.end()) options.fixed.push_back(name);
+  }
+  return options;
+}
+
+// Enough coordinates for the unknowns: 3 per point against the geometry and the tracker pose.
+void RequireEnoughPoints(const RobotModel& model, int points, const std::string& what,
+                         const std::string& source) {
+  const int unknowns = model.chain.num_parameters() + 6;
+  if (3 * points <= unknowns) {
+    throw InputError(source, what + ": " + std::to_string(points) + " points give " +
+                                 std::to_string(3 * points) + " coordinates, not more than the " +
+                                 std::to_string(model.chain.num_parameters()) +
+                                 " geometric parameters + 6 of the tracker pose (at least " +
+                                 std::to_string(unknowns / 3 + 1) + " points needed)");
+  }
+}
+
+std::vector<TrackerPoint> Pick(const std::vector<TrackerPoint>& points,
+                               const std::vector<int>& index) {
+  std::vector<TrackerPoint> out;
+  out.reserve(index.size());
+  for (int i : index) out.push_back(points[i]);
+  return out;
+}
+
+std::string Mm(double m) {
+  std::ostringstream os;
+  os.precision(4);
+  os << 1e3 * m << " mm";
+  return os.str();
+}
+
+}  // namespace
+
+std::vector<std::string> ReflectorParameterNames(const RobotModel& model) {
+  const ParameterLayout layout(model);
+  const int tool = 5 * model.chain.num_joints();  // the tool link's block: theta, d, a, ...
+  return {layout[tool].name, layout[tool + 1].name, layout[tool + 2].name};
+}
+
+PointErrors ScorePoints(const RobotModel& model, const Transform& X_TB,
+                        const std::vector<TrackerPoint>& points) {
+  PointErrors e;
+  e.poses = static_cast<int>(points.size());
+  double sum = 0, sum_sq = 0;
+  for (const TrackerPoint& p : points) {
+    const double d = (X_TB * EndPose(model, p.context).translation() - p.p_T).norm();
+    sum += d;
+    sum_sq += d * d;
+    e.max = std::max(e.max, d);
+  }
+  if (e.poses > 0) {
+    e.mean = sum / e.poses;
+    e.rms = std::sqrt(sum_sq / e.poses);
+  }
+  return e;
+}
+
+TrackerCalibrationResult CalibrateFromTracker(const RobotModel& nominal,
+                                              const std::vector<TrackerPoint>& points,
+                                              const std::vector<TrackerPoint>& validation,
+                                              const TrackerCalibrationOptions& options) {
+  if (!(options.holdout_fraction > 0.0 && options.holdout_fraction <= 0.5)) {
+    throw InputError("holdout fraction", "expected a fraction in (0, 0.5], got " +
+                                             std::to_string(options.holdout_fraction));
+  }
+  ValidateIdentificationOptions(options.engine);
+  const std::string& source = options.set.source;
+  RequireEnoughPoints(nominal, static_cast<int>(points.size()), "all points", source);
+  TrackerCalibrationResult out;
+  const IdentificationOptions baseline = BaselineOptions(nominal, options.engine);
+
+  // The delivered model: every point.
+  {
+    const Solved all = Solve(nominal, points, options.set, options.engine);
+    const Solved before = Solve(nominal, points, options.set, baseline);
+    out.identified = all.result;
+    out.X_TB = all.X_TB;
+    out.all_after = ScorePoints(all.result.model, all.X_TB, points);
+    out.all_before = ScorePoints(before.result.model, before.X_TB, points);
+  }
+
+  const int n = static_cast<int>(points.size());
+  const int held = std::max(1, static_cast<int>(std::lround(options.holdout_fraction * n)));
+  // `refit_pose`: the held-out points come from another session (the tracker stood
+  // elsewhere), so each model's tracker pose is refitted to them (rigid least squares, 6 of
+  // their 3 n coordinates) before they are scored; the geometry stays as trained.
+  const auto run_split = [&](const std::string& name, const std::string& rule,
+                             const std::vector<TrackerPoint>& train,
+                             const std::vector<TrackerPoint>& test, bool refit_pose) {
+    HeldOutSplit s;
+    s.name = name;
+    s.rule = rule;
+    s.training = static_cast<int>(train.size());
+    RequireEnoughPoints(nominal, s.training, "the " + name + " split's training part", source);
+    TrackerSetOptions so = options.set;
+    so.source = source + " (" + name + " split, training part)";
+    const Solved after = Solve(nominal, train, so, options.engine);
+    const Solved before = Solve(nominal, train, so, baseline);
+    const auto pose_for_test = [&](const Solved& m) {
+      if (!refit_pose) return m.X_TB;
+      std::vector<Vector3> predicted, measured;
+      for (const TrackerPoint& p : test) {
+        predicted.push_back(EndPose(m.result.model, p.context).translation());
+        measured.push_back(p.p_T);
+      }
+      Transform X = m.X_TB;
+      if (!FitRigid(predicted, measured, &X)) {
+        throw InputError(source, "the held-out file's points are fewer than 3 or collinear: no "
+                                 "tracker pose can be fitted to them");
+      }
+      return X;
+    };
+    s.after = ScorePoints(after.result.model, pose_for_test(after), test);
+    s.before = ScorePoints(before.result.model, pose_for_test(before), test);
+    s.training_after = ScorePoints(after.result.model, after.X_TB, train);
+    s.worse = s.after.rms > s.before.rms;
+    if (s.worse) {
+      out.warnings.push_back("held-out " + name + " split: the calibrated model is WORSE than the "
+                             "nominal one on the points it did not see (RMS " + Mm(s.after.rms) +
+                             " after against " + Mm(s.before.rms) + " before)");
+    }
+    out.splits.push_back(s);
+  };
+
+  // (a) Random: a seeded shuffle.
+  {
+    std::vector<int> index(n);
+    std::iota(index.begin(), index.end(), 0);
+    std::mt19937_64 rng(options.seed);
+    std::shuffle(index.begin(), index.end(), rng);
+    const std::vector<int> test(index.begin(), index.begin() + held);
+    const std::vector<int> train(index.begin() + held, index.end());
+    run_split("random",
+              std::to_string(held) + " of " + std::to_string(n) + " points held out at random "
+              "(seed " + std::to_string(options.seed) + ")",
+              Pick(points, train), Pick(points, test), false);
+  }
+  // (b) Region: a separate file, or the far end along the principal axis of the cloud.
+  if (!validation.empty()) {
+    run_split("region",
+              "trained on all " + std::to_string(n) + " points, held out: the " +
+                  std::to_string(validation.size()) + " points of the validation file (its "
+                  "tracker pose refitted to them, the geometry as trained)",
+              points, validation, true);
+  } else {
+    Vector3 mean = Vector3::Zero();
+    for (const TrackerPoint& p : points) mean += p.p_T;
+    mean /= n;
+    Matrix3 C = Matrix3::Zero();
+    for (const TrackerPoint& p : points) C += (p.p_T - mean) * (p.p_T - mean).transpose();
+    const Eigen::SelfAdjointEigenSolver<Matrix3> eig(C);
+    Vector3 axis = eig.eigenvectors().col(2);  // largest spread
+    if (axis(std::abs(axis(0)) >= std::abs(axis(1)) ? (std::abs(axis(0)) >= std::abs(axis(2)) ? 0 : 2)
+                                                     : (std::abs(axis(1)) >= std::abs(axis(2)) ? 1 : 2)) < 0) {
+      axis = -axis;  // a fixed sign: the far end along the dominant positive direction
+    }
+    std::vector<int> index(n);
+    std::iota(index.begin(), index.end(), 0);
+    std::stable_sort(index.begin(), index.end(), [&](int a, int b) {
+      return axis.dot(points[a].p_T) > axis.dot(points[b].p_T);
+    });
+    const std::vector<int> test(index.begin(), index.begin() + held);
+    const std::vector<int> train(index.begin() + held, index.end());
+    std::ostringstream rule;
+    rule.precision(3);
+    rule << held << " of " << n << " points farthest along the measured cloud's principal axis ("
+         << axis(0) << ", " << axis(1) << ", " << axis(2) << ") in the tracker frame, beyond "
+         << 1e3 * (axis.dot(points[test.back()].p_T - mean)) << " mm from its centre";
+    run_split("region", rule.str(), Pick(points, train), Pick(points, test), false);
+  }
+  return out;
+}
+
+}  // namespace twin

@@ -1,0 +1,73 @@
+// Identification from laser-tracker points with honest held-out scoring (no ground truth
+// needed): the model is identified on a training part of the points and scored on the part it
+// never saw, before (the nominal model with only the tracker pose and the reflector offset
+// fitted) and after (the whole identifiable geometry). Two splits:
+//   random: a seeded random fraction of the points is held out;
+//   region: the held-out points are those farthest along the measured cloud's principal axis
+//           (a workspace region the training points do not cover), or a separate file (from
+//           another session: each model's tracker pose is refitted to its points, 6 of their
+//           3 n coordinates, before they are scored).
+// A calibrated model worse than the nominal one on a held-out part is flagged (worse = true)
+// and said in the result's warnings, never averaged away. Estimator side: points and the
+// nominal model only.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "calib/identification/engine.h"
+#include "calib/measurements/tracker_set.h"
+
+namespace twin {
+
+struct TrackerCalibrationOptions {
+  double holdout_fraction = 0.2;   ///< part of the points held out by each split, in (0, 0.5]
+  std::uint64_t seed = 1;          ///< of the random split
+  IdentificationOptions engine;    ///< of every identification
+  TrackerSetOptions set;           ///< default sigma, told tracker pose
+};
+
+/// Distance statistics of predicted vs measured points [m].
+struct PointErrors {
+  int poses = 0;
+  double rms = 0, mean = 0, max = 0;
+};
+
+/// One split's scores.
+struct HeldOutSplit {
+  std::string name;        ///< "random" or "region"
+  std::string rule;        ///< how the held-out points were chosen, for the report
+  int training = 0;        ///< points identified on
+  PointErrors before;      ///< held-out, nominal model (tracker pose and reflector fitted)
+  PointErrors after;       ///< held-out, identified model
+  PointErrors training_after;  ///< the training points, identified model
+  bool worse = false;      ///< after.rms > before.rms: the calibration hurts on this part
+};
+
+struct TrackerCalibrationResult {
+  IdentificationResult identified;  ///< on every point: the delivered model
+  Transform X_TB = Transform::Identity();  ///< the tracker pose identified with it
+  PointErrors all_before, all_after;  ///< every point, nominal (pose + reflector) and delivered
+  std::vector<HeldOutSplit> splits;   ///< random, region
+  std::vector<std::string> warnings;  ///< e.g. a held-out part where the calibration is worse
+};
+
+/// The parameters "before" keeps free: the reflector offset (the tool link's theta, d, a),
+/// the tracker pose being the set's nuisance.
+std::vector<std::string> ReflectorParameterNames(const RobotModel& model);
+
+/// Distances between the model's predicted points (through X_TB) and the measured ones.
+PointErrors ScorePoints(const RobotModel& model, const Transform& X_TB,
+                        const std::vector<TrackerPoint>& points);
+
+/// Identifies `nominal` from `points`, with the random and the region split (the region's
+/// held-out points are `validation` when it is not empty). Throws InputError for bad options,
+/// too few points for the unknowns (3 coordinates a point against the geometry and the
+/// tracker pose) or a failed identification.
+TrackerCalibrationResult CalibrateFromTracker(const RobotModel& nominal,
+                                              const std::vector<TrackerPoint>& points,
+                                              const std::vector<TrackerPoint>& validation,
+                                              const TrackerCalibrationOptions& options = {});
+
+}  // namespace twin

@@ -1,0 +1,85 @@
+// The real laser-tracker data of ../shared/data/motoman_leica/ (not in the repository: the
+// public ctu-vras/multirobot-calibration repository has it; README, "Calibrating from a laser
+// tracker file"). Skipped with a message when the files are absent.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "cli_run.h"
+
+namespace twin {
+namespace {
+namespace fs = std::filesystem;
+
+const fs::path kData = fs::path(TWIN_SOURCE_DIR) / ".." / "shared" / "data" / "motoman_leica";
+const std::string kModel = std::string(TWIN_SOURCE_DIR) + "/models/motoman_sda10_right.yaml";
+
+nlohmann::json Identify(const std::string& file, int seed, const std::string& validate = "") {
+  const fs::path out = fs::path(::testing::TempDir()) / ("real_tracker_" + std::to_string(seed) +
+                                                         fs::path(file).stem().string());
+  fs::remove_all(out);
+  std::vector<std::string> args = {"identify", "--model", kModel, "--measurements",
+                                   (kData / file).string(), "--ignore-column", "q_E_rad",
+                                   "--seed", std::to_string(seed), "--out", out.string()};
+  if (!validate.empty()) {
+    args.push_back("--validate");
+    args.push_back((kData / validate).string());
+  }
+  const testing::ProcessRun r = testing::TwinbenchArgs(args, 120);
+  EXPECT_EQ(r.code, 0) << r.output;
+  std::ifstream in(out / "report.json");
+  return nlohmann::json::parse(in, nullptr, false);
+}
+
+// Target of issue 11: the cube file's held-out random RMS <= 0.08 mm with the geometric model,
+// on several random splits (seeds 1-3; 1-7 measured 0.0715-0.0761 mm), and far below the
+// nominal model's (the tracker pose and reflector fitted: ~0.25 mm).
+TEST(RealTrackerData, MotomanCubeHeldOutRandomRmsIsWithinTarget) {
+  if (!fs::exists(kData / "right_arm_cube.csv")) {
+    GTEST_SKIP() << "real tracker data absent: " << kData.string()
+                 << " (get it from github.com/ctu-vras/multirobot-calibration)";
+  }
+  for (int seed = 1; seed <= 3; ++seed) {
+    const nlohmann::json j = Identify("right_arm_cube.csv", seed);
+    ASSERT_TRUE(j.is_object());
+    const auto& random = j["heldout"]["random"];
+    const double after = random["after"]["rms_mm"], before = random["before"]["rms_mm"];
+    std::printf("[ measured ] cube, seed %d: held-out random RMS %.4f -> %.4f mm, region %.4f -> "
+                "%.4f mm\n", seed, before, after,
+                j["heldout"]["region"]["before"]["rms_mm"].get<double>(),
+                j["heldout"]["region"]["after"]["rms_mm"].get<double>());
+    EXPECT_LE(after, 0.08);
+    EXPECT_GT(before, 2 * after);
+    EXPECT_EQ(random["after"]["poses"], 42);
+    EXPECT_FALSE(j["unidentifiable"].empty());
+    EXPECT_GT(j["condition_number"].get<double>(), 1.0);
+    EXPECT_EQ(j["parameters"].size(), 35u);
+  }
+}
+
+// The wide file is reported the same way; its figures (README) show what the geometric model
+// misses there. The cube file trained and the wide one held out across sessions: a calibrated
+// model that is worse on a held-out part must carry the flag and the warning.
+TEST(RealTrackerData, MotomanWideIsReportedAndWorseHeldOutPartsAreFlagged) {
+  if (!fs::exists(kData / "right_arm_wide.csv")) {
+    GTEST_SKIP() << "real tracker data absent: " << kData.string();
+  }
+  const nlohmann::json j = Identify("right_arm_wide.csv", 1, "right_arm_cube.csv");
+  ASSERT_TRUE(j.is_object());
+  for (const char* split : {"random", "region"}) {
+    const auto& s = j["heldout"][split];
+    const bool worse = s["worse"];
+    EXPECT_EQ(worse, s["after"]["rms_mm"].get<double>() > s["before"]["rms_mm"].get<double>());
+    bool warned = false;
+    for (const auto& w : j["warnings"]) {
+      warned = warned || w.get<std::string>().find(std::string("held-out ") + split) == 0;
+    }
+    EXPECT_EQ(worse, warned) << split;
+  }
+}
+
+}  // namespace
+}  // namespace twin
