@@ -22,7 +22,10 @@ using Keys = YamlKeys;
 const Keys kRootKeys = {"scenario"};
 const Keys kScenarioKeys = {"name",    "seed",        "seeds",     "robots",
                             "camera",  "board",       "tips",      "physics",
-                            "effects", "calibration", "handclasp", "acceptance"};
+                            "effects", "calibration", "handclasp", "acceptance",
+                            "tracker", "tracker_calibration"};
+const Keys kTrackerKeys = {"robot",    "pose",           "reflector_mm",  "sigma_mm",
+                           "sigma_um_per_m", "drift_mm_per_h", "max_range_m"};
 const Keys kSeedsKeys = {"truth", "estimator"};
 const Keys kRobot1Keys = {"name", "model", "installation", "base", "initial_joints_deg"};
 const Keys kRobot2Keys = {"name", "model", "installation", "base_from_robot1",
@@ -92,10 +95,12 @@ class ScenarioParser {
     if (const auto f = m.Find("tips", false)) ParseTips(*f);
     if (const auto f = m.Find("physics", false)) ParsePhysics(*f);
     if (const auto f = m.Find("effects", false)) ParseEffects(*f);
+    if (const auto f = m.Find("tracker", false)) ParseTracker(*f);
     // Procedure sections: kept as written, parsed by the procedures that own them.
     if (const auto f = m.Find("calibration", false)) out_.calibration = *f;
     if (const auto f = m.Find("handclasp", false)) out_.handclasp = *f;
     if (const auto f = m.Find("acceptance", false)) out_.acceptance = *f;
+    if (const auto f = m.Find("tracker_calibration", false)) out_.tracker_calibration = *f;
     Validate();
     return out_;
   }
@@ -301,6 +306,41 @@ class ScenarioParser {
     const YamlField mount = m.Get("mount");
     b.X_FT = Pose(mount);
     Locate("board.X_FT", mount);
+  }
+
+  // The laser tracker (truth): sim/world/twin_spec.h, TrackerSpec.
+  void ParseTracker(const YamlField& f) {
+    Locate("tracker", f);
+    const YamlMap m(r_, f, kTrackerKeys);
+    TrackerSpec& t = out_.twin.tracker;
+    t.present = true;
+    const YamlField robot = m.Get("robot");
+    t.robot = RobotIndex(robot);
+    Locate("tracker.robot", robot);
+    const YamlField pose = m.Get("pose");
+    t.X_WT = Pose(pose);
+    Locate("tracker.X_WT", pose);
+    const YamlField reflector = m.Get("reflector_mm");
+    const std::vector<double> p = r_.Numbers(reflector, 3);
+    t.p_FR = Vector3(MmToM(p[0]), MmToM(p[1]), MmToM(p[2]));
+    Locate("tracker.reflector", reflector);
+    if (const auto v = m.Find("sigma_mm", false)) {
+      t.sigma_m = MmToM(r_.Number(*v));
+      Locate("tracker.sigma", *v);
+    }
+    if (const auto v = m.Find("sigma_um_per_m", false)) {
+      t.sigma_per_m = r_.Number(*v) * 1e-6;
+      Locate("tracker.sigma_per_m", *v);
+    }
+    if (const auto v = m.Find("drift_mm_per_h", false)) {
+      const std::vector<double> d = r_.Numbers(*v, 3);
+      t.drift_m_per_s = Vector3(d[0], d[1], d[2]) * 1e-3 / 3600.0;
+      Locate("tracker.drift", *v);
+    }
+    if (const auto v = m.Find("max_range_m", false)) {
+      t.max_range_m = r_.Number(*v);
+      Locate("tracker.max_range", *v);
+    }
   }
 
   void ParseTips(const YamlField& f) {

@@ -64,6 +64,16 @@
 //                                          # bench/io/calibration_config.h)
 //     handclasp: {...}                     # optional: the handclasp base-frame procedure
 //                                          # (bench/runs/handclasp_run.h)
+//     tracker:                             # optional: a laser tracker (truth; TrackerSpec)
+//       robot: r2                          # the robot carrying the reflector
+//       pose: {xyz_mm: [..], rpy_deg: [..]}  # the tracker frame in the world
+//       reflector_mm: [30, -20, 60]        # the reflector in that robot's flange frame
+//       sigma_mm: 0.01                     # optional (0.01): noise per axis
+//       sigma_um_per_m: 0                  # optional: range-proportional noise
+//       drift_mm_per_h: [0, 0, 0]          # optional: drift of the readings
+//       max_range_m: 30                    # optional: range
+//     tracker_calibration: {...}           # optional: the tracker procedure (told values;
+//                                          # bench/runs/tracker_run.h)
 //     acceptance:                          # optional: criteria on report.json figures that
 //       - {figure: robots.r2.truth_position_error_mm.rigid.after.rms, max: 0.3}  # make
 //                                          # `twinbench run` exit 3 when missed
@@ -116,6 +126,9 @@ struct Scenario {
   /// (base-frame calibration by handclasp).
   YamlField calibration;
   YamlField handclasp;
+  /// `tracker_calibration:` (the tracker procedure, bench/runs/tracker_run.h); the tracker
+  /// itself (`tracker:`, truth) is parsed into twin.tracker.
+  YamlField tracker_calibration;
   /// `acceptance:`, the CI verdict's criteria on report figures (bench/report/acceptance.h).
   YamlField acceptance;
 };

@@ -17,7 +17,9 @@ namespace {
 const YamlKeys kCriterionKeys = {"figure", "max", "min", "name"};
 // Top-level keys of the reports `twinbench run` writes (calibration, handclasp, workflow).
 const std::vector<std::string> kTopLevel = {"scenario", "intrinsics", "robots", "timing_s",
-                                            "base_frame", "status", "procedure"};
+                                            "base_frame", "status", "procedure",
+    "truth_position_error_mm", "heldout", "identifiable_combinations", "tracker",
+    "condition_number"};
 // More criteria than this are no longer a CI verdict but a second report.
 constexpr std::size_t kMaxCriteria = 100;
 

@@ -21,6 +21,7 @@
 #include "bench/scoring/calibration_scoring.h"
 #include "bench/runs/handclasp_run.h"
 #include "bench/runs/plan_cache.h"
+#include "bench/runs/tracker_run.h"
 #include "bench/runs/workflow_run.h"
 #include "bench/io/model_loader.h"
 #include "bench/io/model_yaml.h"
@@ -455,6 +456,14 @@ int RunCalibrationScenario(const RunOptions& o) {
     return RunHandclaspScenario(o.scenario, o.out_dir, std::cerr, o.trial, o.junit);
   }
   if (IsPresent(sc.handclasp) && IsPresent(sc.calibration)) return RunWorkflowScenario(o);
+  if (IsPresent(sc.tracker_calibration)) {
+    if (IsPresent(sc.calibration) || IsPresent(sc.handclasp)) {
+      throw InputError(sc.path + " scenario.tracker_calibration",
+                       "a tracker scenario has no calibration or handclasp section (one "
+                       "procedure a scenario)");
+    }
+    return RunTrackerScenario(o);
+  }
   // Everything is validated before anything is written: the sections, the output paths and
   // the cell itself (its initial pose must settle without collisions).
   CalibrationConfig config = ParseCalibrationConfig(sc);

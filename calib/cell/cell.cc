@@ -13,6 +13,16 @@ const char* ToString(MoveStatus status) {
   return "unknown";
 }
 
+const char* ToString(TrackerStatus status) {
+  switch (status) {
+    case TrackerStatus::kOk: return "ok";
+    case TrackerStatus::kNoTracker: return "no_tracker";
+    case TrackerStatus::kOutOfRange: return "out_of_range";
+    case TrackerStatus::kOccluded: return "occluded";
+  }
+  return "unknown";
+}
+
 cv::Mat Cell::GrabImageRegion(const cv::Rect& roi) {
   const cv::Mat frame = GrabImage();
   const cv::Rect r = roi & cv::Rect(0, 0, frame.cols, frame.rows);

@@ -30,6 +30,25 @@ struct MoveResult {
   double duration_s = 0;   ///< motion time of the move (simulated time on the twin) [s]
 };
 
+/// Outcome of Cell::MeasureTracker.
+enum class TrackerStatus {
+  kOk,          ///< the reflector was measured
+  kNoTracker,   ///< the cell has no laser tracker, or none on this robot
+  kOutOfRange,  ///< the reflector is beyond the tracker's range
+  kOccluded,    ///< something stands between the tracker and the reflector (reason names it)
+};
+
+/// Name of a status for messages ("ok", "no_tracker", "out_of_range", "occluded").
+const char* ToString(TrackerStatus status);
+
+/// One laser-tracker reading of the reflector on a robot's flange, in the tracker's frame.
+struct TrackerReading {
+  TrackerStatus status = TrackerStatus::kNoTracker;
+  std::string reason;              ///< what went wrong, empty when kOk
+  Vector3 p_T = Vector3::Zero();   ///< the reflector's measured position [m]
+  double time_s = 0;               ///< when it was measured (the cell's clock) [s]
+};
+
 /// A cell with two robots (indices 0 and 1) and one hand camera.
 class Cell {
  public:
@@ -65,6 +84,13 @@ class Cell {
     result.reason = "this cell has no handclasp (robot " + std::to_string(jogged_robot) +
                     " cannot be jogged onto the other tip)";
     return result;
+  }
+  /// Measures the reflector (SMR) on robot `robot`'s flange with the laser tracker, the robot
+  /// standing still. The default is a cell without a tracker.
+  virtual TrackerReading MeasureTracker(int robot) {
+    TrackerReading r;
+    r.reason = "this cell has no laser tracker (robot " + std::to_string(robot) + ")";
+    return r;
   }
 };
 

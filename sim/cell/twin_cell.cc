@@ -96,7 +96,7 @@ struct TwinCell::Impl {
   std::string mjcf;
   MjModelPtr m;
   MjDataPtr d;
-  std::mt19937_64 encoder_rng, image_rng, operator_rng;
+  std::mt19937_64 encoder_rng, image_rng, operator_rng, tracker_rng;
   double operator_sigma = 0.0;   // operator alignment error per axis [m]
   double last_gap = 0.0;         // jogged tip to aim point after the last contact [m]
   std::array<JointVector, kNumRobots> motor;      // commanded motor angles [rad]
@@ -351,6 +351,7 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
   s.encoder_rng = Stream(spec.seed, 1);
   s.image_rng = Stream(spec.seed, 2);
   s.operator_rng = Stream(spec.seed, 3);
+  s.tracker_rng = Stream(spec.seed, 4);
   for (int k = 0; k < kNumRobots; ++k) {
     s.models[k] = spec.robots[k].model;
     for (const auto& e : s.effects) e->ApplyToGeometry(k, &s.models[k], &geometry_rng);
@@ -662,12 +663,58 @@ cv::Mat TwinCell::GrabImageRegion(const cv::Rect& roi) {
   return image;
 }
 
+TrackerReading TwinCell::MeasureTracker(int robot) {
+  Impl& s = *impl_;
+  const TrackerSpec& t = s.spec.tracker;
+  TrackerReading r;
+  r.time_s = s.d->time;
+  if (!t.present || robot != t.robot) {
+    r.status = TrackerStatus::kNoTracker;
+    r.reason = t.present ? "the tracker's reflector is on robot " + std::to_string(t.robot + 1) +
+                               ", not on robot " + std::to_string(robot + 1)
+                         : "this cell has no laser tracker";
+    return r;
+  }
+  const int flange_site = s.site_L[robot][s.Joints(robot)];
+  const Transform X_WF = FromMj(s.d->site_xpos + 3 * flange_site, s.d->site_xmat + 9 * flange_site);
+  const Vector3 p_W = X_WF * t.p_FR;
+  const Vector3 origin = t.X_WT.translation();
+  const Vector3 ray = p_W - origin;
+  const double range = ray.norm();
+  if (range > t.max_range_m) {
+    r.status = TrackerStatus::kOutOfRange;
+    r.reason = "the reflector is " + std::to_string(range) + " m from the tracker, beyond its " +
+               std::to_string(t.max_range_m) + " m";
+    return r;
+  }
+  // Line of sight: the first geom along the beam, the reflector's own flange body excepted.
+  const mjtNum pnt[3] = {origin.x(), origin.y(), origin.z()};
+  const mjtNum vec[3] = {ray.x() / range, ray.y() / range, ray.z() / range};
+  int geom = -1;
+  const int flange_body = s.m->site_bodyid[flange_site];
+  const mjtNum hit = mj_ray(s.m.get(), s.d.get(), pnt, vec, nullptr, 1, flange_body, &geom);
+  if (geom >= 0 && hit >= 0 && hit < range - 1e-6) {
+    r.status = TrackerStatus::kOccluded;
+    r.reason = "the beam to the reflector is blocked by " + s.BodyName(geom) + " " +
+               std::to_string(hit) + " m from the tracker";
+    return r;
+  }
+  std::normal_distribution<double> noise(0.0, 1.0);
+  const double sigma = t.sigma_m + t.sigma_per_m * range;
+  Vector3 p_T = t.X_WT.inverse() * p_W + t.drift_m_per_s * s.d->time;
+  for (int k = 0; k < 3; ++k) p_T(k) += sigma * noise(s.tracker_rng);
+  r.status = TrackerStatus::kOk;
+  r.p_T = p_T;
+  return r;
+}
+
 TwinTruth TwinCell::Truth() const {
   const Impl& s = *impl_;
   TwinTruth t;
   t.models = s.models;
   t.camera = s.spec.camera;
   t.board = s.spec.board;
+  t.tracker = s.spec.tracker;
   for (int k = 0; k < kNumRobots; ++k) {
     t.X_WB[k] = s.spec.robots[k].X_WB;
     t.q_link[k] = s.LinkAngles(k);

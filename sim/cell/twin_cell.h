@@ -25,6 +25,7 @@ struct TwinTruth {
   std::array<Vector3, kNumRobots> p_WTip;          ///< measuring tip points in the world now
   CameraSpec camera;                               ///< true intrinsics, distortion, hand-eye
   BoardSpec board;                                 ///< true board geometry and mount
+  TrackerSpec tracker;                             ///< true tracker pose, reflector, noise
 };
 
 class TwinCell : public Cell {
@@ -51,6 +52,11 @@ class TwinCell : public Cell {
   /// axis). Tips do not collide with each other in the MJCF, so contact is decided from the
   /// MuJoCo site positions.
   MoveResult JogTipToContact(int jogged_robot) override;
+  /// The tracker of the spec (TrackerSpec): the reflector's true position from MuJoCo's flange
+  /// frame (sag included), out of range beyond max_range, occluded when a ray from the tracker
+  /// hits a geom before the reflector (the reflector's own flange body excepted), else the
+  /// position in the tracker frame with its noise and drift.
+  TrackerReading MeasureTracker(int robot) override;
 
   /// Standard deviation of the operator's alignment error per world axis [m] (default 0).
   /// Throws InputError for a negative or non-finite value.

@@ -383,9 +383,31 @@ const char* ToString(Installation installation) {
   return "unknown";
 }
 
+// The tracker (plausibility): a laser tracker measures to about 80 m with micrometres of noise;
+// a reflector sits on a short bracket; a drift beyond 1 um/s would be a broken instrument.
+static void CheckTracker(const Checker& c, const TrackerSpec& t) {
+  if (!t.present) return;
+  c.IntRange(t.robot, "tracker.robot", 0, kNumRobots - 1);
+  c.Rigid(t.X_WT, "tracker.X_WT");
+  c.Offset(t.X_WT, "tracker.X_WT", kMaxWorldOffsetM, "a tracker stands in the cell");
+  if (!(t.p_FR.allFinite() && t.p_FR.norm() <= 0.5)) {
+    c.Fail("tracker.reflector", "must lie within 500 mm of the flange (a reflector's bracket), "
+                                "got " + Checker::Num(t.p_FR.norm()) + " m");
+  }
+  c.Within(t.sigma_m, "tracker.sigma", 0.0, 1e-3, " m", "a laser tracker measures to microns");
+  c.Within(t.sigma_per_m, "tracker.sigma_per_m", 0.0, 1e-4, " m/m",
+           "a tracker's range-proportional error is a few um per m");
+  if (!(t.drift_m_per_s.allFinite() && t.drift_m_per_s.norm() <= 1e-6)) {
+    c.Fail("tracker.drift", "must be at most 1 um/s (3.6 mm/h), got " +
+                                Checker::Num(t.drift_m_per_s.norm()) + " m/s");
+  }
+  c.Within(t.max_range_m, "tracker.max_range", 0.1, 80.0, " m", "trackers reach about 80 m");
+}
+
 void ValidateTwinSpec(const TwinSpec& spec, const std::string& where) {
   const Checker c(where);
   for (int i = 0; i < kNumRobots; ++i) CheckRobot(c, spec.robots[i], i, where);
+  CheckTracker(c, spec.tracker);
   CheckCamera(c, spec.camera);
   CheckBoard(c, spec.board, spec.camera);
   const Vector3 p_B1B2 =

@@ -101,6 +101,21 @@ struct EffectSpec {
   std::string where;                      ///< where it was written, for messages
 };
 
+/// A laser tracker watching a reflector (SMR) on one robot's flange: the truth of the tracker
+/// sensor (the estimator is told neither the tracker's pose nor the true reflector offset).
+/// A reading is the reflector's position in the tracker frame plus Gaussian noise of sigma
+/// sigma_m + sigma_per_m * range per axis, plus drift_m_per_s times the cell's clock.
+struct TrackerSpec {
+  bool present = false;
+  int robot = 1;                               ///< the robot carrying the reflector
+  Transform X_WT = Transform::Identity();      ///< the tracker frame in the world
+  Vector3 p_FR = Vector3::Zero();              ///< the reflector in the flange frame [m]
+  double sigma_m = 1e-5;                       ///< noise per axis [m]
+  double sigma_per_m = 0.0;                    ///< range-proportional noise [m per m of range]
+  Vector3 drift_m_per_s = Vector3::Zero();     ///< drift of the readings [m/s]
+  double max_range_m = 30.0;                   ///< beyond it: out of range [m]
+};
+
 /// A whole twin cell.
 struct TwinSpec {
   std::array<RobotSpec, kNumRobots> robots;
@@ -109,6 +124,7 @@ struct TwinSpec {
   std::array<TipSpec, kNumRobots> tips;
   PhysicsSpec physics;
   std::vector<EffectSpec> effects;
+  TrackerSpec tracker;                    ///< a laser tracker, if present
   std::uint64_t seed = 1;                 ///< seed of every random effect
 };
 

@@ -1,0 +1,305 @@
+#include "bench/runs/tracker_run.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#include <Eigen/Cholesky>
+#include <nlohmann/json.hpp>
+
+#include "bench/io/model_loader.h"
+#include "bench/io/model_yaml.h"
+#include "bench/io/output_files.h"
+#include "bench/io/scenario.h"
+#include "bench/io/yaml_util.h"
+#include "bench/report/acceptance.h"
+#include "bench/scoring/calibration_scoring.h"
+#include "calib/common/errors.h"
+#include "calib/model/parameter_layout.h"
+#include "calib/model/robot_model.h"
+#include "calib/identification/engine.h"
+#include "calib/procedures/tracker_procedure.h"
+#include "sim/cell/twin_cell.h"
+#include "sim/world/mujoco_handles.h"
+
+namespace twin {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+const YamlKeys kTrackerCalibrationKeys = {"robot", "told_reflector_mm", "poses", "max_attempts",
+                                          "joint_margin_deg", "holdout"};
+
+struct TrackerRunConfig {
+  int robot = 1;
+  Vector3 told_p_F = Vector3::Zero();
+  TrackerProcedureOptions procedure;
+};
+
+TrackerRunConfig ParseTrackerRunConfig(const Scenario& sc) {
+  const YamlReader r(sc.path);
+  const YamlMap m(r, sc.tracker_calibration, kTrackerCalibrationKeys);
+  TrackerRunConfig c;
+  const YamlField robot = m.Get("robot");
+  const std::string name = r.String(robot);
+  c.robot = -1;
+  for (int k = 0; k < kNumRobots; ++k) {
+    if (sc.robot_names[k] == name) c.robot = k;
+  }
+  if (c.robot < 0) r.Fail(robot, "names no robot of the scenario: '" + name + "'");
+  const YamlField told = m.Get("told_reflector_mm");
+  c.told_p_F = r.Vector(told) / 1000.0;
+  if (!(c.told_p_F.norm() <= 0.5)) {
+    r.Fail(told, "must lie within 500 mm of the flange (a reflector's bracket)");
+  }
+  const YamlField poses = m.Get("poses");
+  c.procedure.poses = r.Integer(poses);
+  if (c.procedure.poses < 1 || c.procedure.poses > 100000) r.Fail(poses, "expected 1 to 100000");
+  if (const auto f = m.Find("max_attempts", false)) {
+    c.procedure.max_attempts = r.Integer(*f);
+    if (c.procedure.max_attempts < c.procedure.poses || c.procedure.max_attempts > 1000000) {
+      r.Fail(*f, "expected poses to 1000000 attempts");
+    }
+  }
+  if (const auto f = m.Find("joint_margin_deg", false)) {
+    const double v = r.Number(*f);
+    if (!(v >= 0.0 && v <= 45.0)) r.Fail(*f, "expected 0 to 45 deg");
+    c.procedure.joint_margin_rad = DegToRad(v);
+  }
+  if (const auto f = m.Find("holdout", false)) {
+    const double v = r.Number(*f);
+    if (!(v > 0.0 && v <= 0.5)) r.Fail(*f, "expected a fraction in (0, 0.5]");
+    c.procedure.calibration.holdout_fraction = v;
+  }
+  c.procedure.seed = sc.seeds.estimator;
+  c.procedure.calibration.seed = sc.seeds.estimator;
+  return c;
+}
+
+json Errors(const PointErrors& e) {
+  return {{"rms_mm", 1e3 * e.rms}, {"mean_mm", 1e3 * e.mean}, {"max_mm", 1e3 * e.max},
+          {"poses", e.poses}};
+}
+
+json Stats(const PositionErrorStats& s) { return {{"rms", 1e3 * s.rms}, {"max", 1e3 * s.max}}; }
+
+double ReportValue(double v, const std::string& unit) {
+  return unit == "m" ? 1e3 * v : unit == "rad" ? RadToDeg(v) : v;
+}
+std::string ReportUnit(const std::string& unit) {
+  return unit == "m" ? "mm" : unit == "rad" ? "deg" : unit;
+}
+
+void WriteFile(const fs::path& path, const std::string& text) {
+  std::ofstream f(path, std::ios::binary);
+  f << text;
+  f.flush();
+  if (!f) throw InputError(path.string(), "writing the file failed (output folder not writable?)");
+}
+
+std::string Html(const json& j) {
+  std::ostringstream os;
+  os << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>tracker calibration "
+     << j["scenario"]["name"].get<std::string>() << "</title><style>body{font-family:sans-serif}"
+     << "td,th{padding:2px 8px;text-align:right}</style></head><body><h1>Laser-tracker "
+        "calibration: "
+     << j["scenario"]["name"].get<std::string>() << "</h1>";
+  os << "<h2>Truth position error (200 random configurations) [mm]</h2><table><tr><th>gauge"
+        "</th><th>before RMS</th><th>after RMS</th><th>after max</th></tr>";
+  for (const char* g : {"raw", "rigid"}) {
+    const json& t = j["truth_position_error_mm"][g];
+    os << "<tr><td>" << g << "</td><td>" << t["before"]["rms"] << "</td><td>" << t["after"]["rms"]
+       << "</td><td>" << t["after"]["max"] << "</td></tr>";
+  }
+  os << "</table><h2>Held-out points [mm]</h2><table><tr><th>split</th><th>poses</th><th>"
+        "before RMS</th><th>after RMS</th><th>after max</th><th></th></tr>";
+  for (const auto& [name, s] : j["heldout"].items()) {
+    os << "<tr><td>" << name << "</td><td>" << s["after"]["poses"] << "</td><td>"
+       << s["before"]["rms_mm"] << "</td><td>" << s["after"]["rms_mm"] << "</td><td>"
+       << s["after"]["max_mm"] << "</td><td>" << (s["worse"].get<bool>() ? "WORSE" : "")
+       << "</td></tr>";
+  }
+  os << "</table><h2>Parameters (deviation from nominal)</h2><table><tr><th>name</th><th>unit"
+        "</th><th>estimated</th><th>true</th><th>sigma</th></tr>";
+  for (const json& p : j["parameters"]) {
+    os << "<tr><td>" << p["name"].get<std::string>() << "</td><td>" << p["unit"].get<std::string>()
+       << "</td><td>" << p["estimated"] << "</td><td>" << p["true"] << "</td><td>" << p["sigma"]
+       << "</td></tr>";
+  }
+  os << "</table><h2>Unidentifiable</h2><ul>";
+  for (const json& u : j["unidentifiable"]) os << "<li>" << u.get<std::string>() << "</li>";
+  os << "</ul></body></html>\n";
+  return os.str();
+}
+
+}  // namespace
+
+int RunTrackerScenario(const RunOptions& o) {
+  const auto t_start = std::chrono::steady_clock::now();
+  Scenario sc = LoadScenario(o.scenario);
+  ApplyTrial(o.trial, &sc);
+  const TrackerRunConfig config = ParseTrackerRunConfig(sc);
+  if (!sc.twin.tracker.present) {
+    throw InputError(sc.path + " scenario.tracker_calibration",
+                     "the cell has no tracker: add a `tracker:` section (bench/io/scenario.h)");
+  }
+  const Acceptance acceptance = ParseAcceptance(sc);
+  ValidateOutputFolder(o.out_dir, "--out");
+  if (!o.junit.empty()) ValidateOutputFile(o.junit, "--junit");
+  InstallMujocoErrorHandlers();
+  TwinCell cell(sc.twin, sc.path);
+  const int robot = config.robot;
+  const std::string name = sc.robot_names[robot];
+  // Told: the nominal model with the drawn reflector. Never the truth.
+  KinematicModel nominal = WithReflector(sc.twin.robots[robot].model, config.told_p_F);
+  nominal.name = name;
+
+  if (!o.quiet) {
+    std::printf("twinbench run: tracker calibration of %s, scenario %s (%s)\n", name.c_str(),
+                sc.name.c_str(), sc.path.c_str());
+  }
+  TrackerProcedureResult result;
+  try {
+    result = RunTrackerProcedure(cell, robot, nominal, config.procedure);
+  } catch (const InputError& e) {
+    throw InputError(sc.path + " scenario.tracker_calibration", e.what());
+  }
+  const IdentificationResult& id = result.calibration.identified;
+
+  // Scoring against the truth (bench only): the true geometry with the true reflector.
+  const TwinTruth truth = cell.Truth();
+  const KinematicModel true_model = WithReflector(truth.models[robot], truth.tracker.p_FR);
+  const std::vector<JointVector> configs =
+      RandomJointConfigurations(nominal, 200, 1, DegToRad(10.0));
+  std::vector<Vector3> p_true, p_nominal, p_identified;
+  for (const JointVector& q : configs) {
+    p_true.push_back(EndPose(true_model, q).translation());
+    p_nominal.push_back(EndPose(nominal, q).translation());
+    p_identified.push_back(EndPose(id.model.chain, q).translation());
+  }
+  const GaugeErrors before = CompareInGauges(p_nominal, p_true);
+  const GaugeErrors after = CompareInGauges(p_identified, p_true);
+  // The identifiable combinations against their true values. The true value of a combination
+  // is what the same identification finds from noise-free points of the true arm (true
+  // geometry and reflector, the true tracker pose) at the same readings: a linear projection of
+  // the true parameters onto the combinations would differ from it by second-order terms of
+  // the unidentifiable part (millimetre errors: microns), more than the reported sigmas.
+  const Eigen::VectorXd phi0 = GetParameters(nominal);
+  const Eigen::VectorXd phi_true = GetParameters(true_model);
+  Eigen::VectorXd z_true = Eigen::VectorXd::Zero(id.z.size());
+  {
+    const Transform X_TB = truth.tracker.X_WT.inverse() * truth.X_WB[robot];
+    std::vector<TrackerPoint> exact = result.points;
+    for (TrackerPoint& p : exact) {
+      p.p_T = X_TB * EndPose(true_model, p.context.q).translation();
+      p.sigma = 0.0;
+    }
+    TrackerSet set(exact);
+    const IdentificationResult ref = Identify(MakeRobotModel(nominal), {&set});
+    // In the delivered identification's basis (the reference's SVD may order or sign its
+    // directions otherwise): the reference correction's coordinates along id's directions.
+    const Eigen::MatrixXd& B = id.identifiable_directions;
+    if (ref.status != IdentificationStatus::kFailed && ref.correction.size() == B.rows()) {
+      z_true = (B.transpose() * B).ldlt().solve(B.transpose() * ref.correction);
+    }
+  }
+  int within3 = 0;
+  json items = json::array();
+  for (int k = 0; k < id.z.size(); ++k) {
+    const double sigma = std::sqrt(std::max(0.0, id.covariance_z(k, k)));
+    const bool ok = std::abs(id.z(k) - z_true(k)) <= 3.0 * sigma;
+    within3 += ok;
+    items.push_back({{"index", k}, {"estimated", id.z(k)}, {"true", z_true(k)}, {"sigma", sigma},
+                     {"within_3_sigma", ok}});
+  }
+
+  json j;
+  j["scenario"] = ScenarioJson(sc);
+  j["procedure"] = "laser-tracker calibration (geometry, tracker pose, reflector offset)";
+  j["robot"] = name;
+  j["tracker"] = {{"poses", result.points.size()}, {"attempts", result.attempts},
+                  {"sigma_mm", 1e3 * truth.tracker.sigma_m}};
+  j["tracker"]["skipped"] = json::array();
+  for (const TrackerSkip& s : result.skipped) {
+    j["tracker"]["skipped"].push_back({{"attempt", s.attempt}, {"reason", s.reason}});
+  }
+  for (const HeldOutSplit& s : result.calibration.splits) {
+    j["heldout"][s.name] = {{"rule", s.rule}, {"training_poses", s.training},
+                            {"before", Errors(s.before)}, {"after", Errors(s.after)},
+                            {"worse", s.worse}};
+  }
+  j["truth_position_error_mm"] = {
+      {"raw", {{"before", Stats(before.raw)}, {"after", Stats(after.raw)}}},
+      {"rigid", {{"before", Stats(before.rigid)}, {"after", Stats(after.rigid)}}}};
+  j["parameters"] = json::array();
+  const ParameterLayout layout(MakeRobotModel(nominal));
+  for (int i = 0; i < phi0.size(); ++i) {
+    const IdentifiedParameter& p = id.parameters[i];
+    j["parameters"].push_back({{"name", p.name},
+                               {"unit", ReportUnit(p.unit)},
+                               {"estimated", ReportValue(p.estimated - phi0(i), p.unit)},
+                               {"true", ReportValue(phi_true(i) - phi0(i), p.unit)},
+                               {"sigma", ReportValue(p.sigma, p.unit)}});
+  }
+  j["identifiable_combinations"] = {{"count", id.z.size()}, {"within_3_sigma", within3},
+                                    {"items", items}};
+  j["unidentifiable"] = id.observability.unidentifiable;
+  j["condition_number"] = id.condition_number();
+  j["sigma0"] = id.sigma0;
+  j["warnings"] = result.calibration.warnings;
+  j["timing_s"] = {{"total", std::chrono::duration<double>(std::chrono::steady_clock::now() -
+                                                           t_start).count()}};
+  const AcceptanceVerdict verdict = EvaluateAcceptance(acceptance, &j);
+
+  // measurements.csv: the tracker file format, which `twinbench identify` reads back.
+  std::ostringstream csv;
+  csv << std::setprecision(17) << "pose";
+  for (int i = 0; i < nominal.num_joints(); ++i) csv << ",q_" << nominal.links[i].name << "_rad";
+  csv << ",x_m,y_m,z_m,time_s\n";
+  for (const TrackerPoint& p : result.points) {
+    csv << p.row;
+    for (int i = 0; i < p.context.q.size(); ++i) csv << "," << p.context.q(i);
+    csv << "," << p.p_T.x() << "," << p.p_T.y() << "," << p.p_T.z() << "," << p.context.time_s
+        << "\n";
+  }
+  const fs::path out(o.out_dir);
+  const std::string staging = CreateStagingDirectory(o.out_dir);
+  try {
+    WriteFile(fs::path(staging) / "report.json", j.dump(2) + "\n");
+    if (o.images) WriteFile(fs::path(staging) / "report.html", Html(j));
+    WriteFile(fs::path(staging) / "measurements.csv", csv.str());
+    WriteFile(fs::path(staging) / ("identified_" + name + ".yaml"), ModelToYaml(id.model.chain));
+    PublishDirectory(staging, out.string());
+  } catch (...) {
+    DiscardStaging(staging);
+    throw;
+  }
+  if (!o.quiet) {
+    std::printf("%s: %zu poses measured (%zu skipped), %d identifiable combinations, %d within 3 "
+                "sigma of the truth\n",
+                name.c_str(), result.points.size(), result.skipped.size(),
+                static_cast<int>(id.z.size()), within3);
+    std::printf("truth RMS (200 configurations): raw %.4f -> %.4f mm, rigid %.4f -> %.4f mm\n",
+                1e3 * before.raw.rms, 1e3 * after.raw.rms, 1e3 * before.rigid.rms,
+                1e3 * after.rigid.rms);
+    for (const HeldOutSplit& s : result.calibration.splits) {
+      std::printf("held-out %-6s %3d poses: %.4f -> %.4f mm%s\n", s.name.c_str(), s.after.poses,
+                  1e3 * s.before.rms, 1e3 * s.after.rms, s.worse ? "  WORSE" : "");
+    }
+    std::printf("wrote %s/{report.json, report.html, measurements.csv, identified_%s.yaml}\n",
+                out.string().c_str(), name.c_str());
+  }
+  if (!o.junit.empty()) {
+    WriteJunit(o.junit, sc.name, verdict,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count());
+  }
+  PrintVerdict(verdict);
+  return VerdictExitCode(verdict);
+}
+
+}  // namespace twin
