@@ -451,19 +451,12 @@ int RunCalibrationScenario(const RunOptions& o) {
   const auto t_start = Clock::now();
   Scenario sc = LoadScenario(o.scenario);
   ApplyTrial(o.trial, &sc);
+  if (IsPresent(sc.tracker_calibration)) return RunTrackerScenario(o);
   if (IsPresent(sc.handclasp) && !IsPresent(sc.calibration)) {
     // base-frame calibration alone
     return RunHandclaspScenario(o.scenario, o.out_dir, std::cerr, o.trial, o.junit);
   }
   if (IsPresent(sc.handclasp) && IsPresent(sc.calibration)) return RunWorkflowScenario(o);
-  if (IsPresent(sc.tracker_calibration)) {
-    if (IsPresent(sc.calibration) || IsPresent(sc.handclasp)) {
-      throw InputError(sc.path + " scenario.tracker_calibration",
-                       "a tracker scenario has no calibration or handclasp section (one "
-                       "procedure a scenario)");
-    }
-    return RunTrackerScenario(o);
-  }
   // Everything is validated before anything is written: the sections, the output paths and
   // the cell itself (its initial pose must settle without collisions).
   CalibrationConfig config = ParseCalibrationConfig(sc);
@@ -562,14 +555,18 @@ int CheckScenario(const std::string& scenario_path) {
                            std::to_string(h.trials));
     }
   }
+  const bool tracker = IsPresent(sc.tracker_calibration);
+  if (tracker) ValidateTrackerScenario(sc);
   const Acceptance acceptance = ParseAcceptance(sc);
   InstallMujocoErrorHandlers();
   const TwinCell cell(sc.twin, sc.path);  // the cell settles at its initial pose
   const char* what = calibration && handclasp ? "the dual-arm workflow"
                      : calibration            ? "the optical-axis calibration"
                      : handclasp              ? "the handclasp base-frame calibration"
-                                              : "no procedure (no calibration: or handclasp: "
-                                                "section; `render` shows the cell)";
+                     : tracker                ? "the laser-tracker calibration"
+                                              : "no procedure (no calibration:, handclasp: or "
+                                                "tracker_calibration: section; `render` shows "
+                                                "the cell)";
   std::printf("%s: valid; `twinbench run` would run %s with %zu acceptance criteria\n",
               sc.path.c_str(), what, acceptance.criteria.size());
   return 0;

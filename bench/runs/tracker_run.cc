@@ -139,15 +139,31 @@ std::string Html(const json& j) {
 
 }  // namespace
 
-int RunTrackerScenario(const RunOptions& o) {
-  const auto t_start = std::chrono::steady_clock::now();
-  Scenario sc = LoadScenario(o.scenario);
-  ApplyTrial(o.trial, &sc);
+void ValidateTrackerScenario(const Scenario& sc) {
   const TrackerRunConfig config = ParseTrackerRunConfig(sc);
   if (!sc.twin.tracker.present) {
     throw InputError(sc.path + " scenario.tracker_calibration",
                      "the cell has no tracker: add a `tracker:` section (bench/io/scenario.h)");
   }
+  if (IsPresent(sc.calibration) || IsPresent(sc.handclasp)) {
+    throw InputError(sc.path + " scenario.tracker_calibration",
+                     "a tracker scenario has no calibration or handclasp section (one "
+                     "procedure a scenario)");
+  }
+  if (config.robot != sc.twin.tracker.robot) {
+    throw InputError(sc.path + " scenario.tracker_calibration.robot",
+                     "the tracker's reflector is on robot '" +
+                         sc.robot_names[sc.twin.tracker.robot] + "', not on '" +
+                         sc.robot_names[config.robot] + "'");
+  }
+}
+
+int RunTrackerScenario(const RunOptions& o) {
+  const auto t_start = std::chrono::steady_clock::now();
+  Scenario sc = LoadScenario(o.scenario);
+  ApplyTrial(o.trial, &sc);
+  ValidateTrackerScenario(sc);
+  const TrackerRunConfig config = ParseTrackerRunConfig(sc);
   const Acceptance acceptance = ParseAcceptance(sc);
   ValidateOutputFolder(o.out_dir, "--out");
   if (!o.junit.empty()) ValidateOutputFile(o.junit, "--junit");

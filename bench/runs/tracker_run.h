@@ -15,6 +15,10 @@
 
 namespace twin {
 
+/// The checks `run` makes before it runs (the section, a tracker in the cell, one procedure
+/// a scenario); throws InputError naming the scenario and key.
+void ValidateTrackerScenario(const Scenario& scenario);
+
 /// Runs it and writes report.json, report.html, measurements.csv (the tracker file format of
 /// bench/io/tracker_file.h) and identified_<robot>.yaml. Returns 0, or 3 when acceptance
 /// criteria are missed; throws InputError for bad input or a refused procedure.
