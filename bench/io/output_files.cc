@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -154,5 +155,12 @@ namespace internal {
 void LockCleanup() { CleanupMutex().lock(); }
 void UnlockCleanup() { CleanupMutex().unlock(); }
 }  // namespace internal
+
+void WriteTextFile(const std::string& path, const std::string& text) {
+  std::ofstream f(path, std::ios::binary);
+  f << text;
+  f.flush();
+  if (!f) throw InputError(path, "writing the file failed (output folder not writable?)");
+}
 
 }  // namespace twin

@@ -12,6 +12,10 @@
 
 namespace twin {
 
+/// Writes a whole text file (into a staging folder); a failure (disk full, permissions) is an
+/// InputError naming the file.
+void WriteTextFile(const std::string& path, const std::string& text);
+
 /// Refuses an output folder path before anything runs: empty, ".", "..", "/" or ending in
 /// one of them, an existing path that is not a folder, or a parent that exists and is not a
 /// folder. `option` names the flag in the message ("--out"). Throws InputError.

@@ -130,12 +130,7 @@ void WritePng(const fs::path& path, const cv::Mat& image) {
 }
 
 // Writes a whole text file of the staging folder; a failure (disk full, permissions) names it.
-void WriteText(const fs::path& path, const std::string& text) {
-  std::ofstream f(path, std::ios::binary);
-  f << text;
-  f.flush();
-  if (!f) throw InputError(path.string(), "writing the file failed (output folder not writable?)");
-}
+void WriteText(const fs::path& path, const std::string& text) { WriteTextFile(path.string(), text); }
 
 // The servo image with the principal point (red circle) and the detected feature point (green
 // circle), as the paper's Fig. 12 shows them.

@@ -34,12 +34,7 @@ std::pair<double, std::string> ReportUnit(double v, const std::string& unit) {
   return {v, unit};
 }
 
-void WriteFile(const fs::path& path, const std::string& text) {
-  std::ofstream f(path, std::ios::binary);
-  f << text;
-  f.flush();
-  if (!f) throw InputError(path.string(), "writing the file failed (output folder not writable?)");
-}
+void WriteFile(const fs::path& path, const std::string& text) { WriteTextFile(path.string(), text); }
 
 }  // namespace
 

@@ -95,12 +95,7 @@ std::string ReportUnit(const std::string& unit) {
   return unit == "m" ? "mm" : unit == "rad" ? "deg" : unit;
 }
 
-void WriteFile(const fs::path& path, const std::string& text) {
-  std::ofstream f(path, std::ios::binary);
-  f << text;
-  f.flush();
-  if (!f) throw InputError(path.string(), "writing the file failed (output folder not writable?)");
-}
+void WriteFile(const fs::path& path, const std::string& text) { WriteTextFile(path.string(), text); }
 
 std::string Html(const json& j) {
   std::ostringstream os;
