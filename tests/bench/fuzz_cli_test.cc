@@ -24,6 +24,7 @@
 
 #include "../calib/optical_axis_synthetic.h"
 #include "bench/io/model_yaml.h"
+#include "bench/runs/calibration_run.h"
 #include "tests/bench/cli_run.h"
 #include "tests/bench/text_edit.h"
 
@@ -215,10 +216,13 @@ Mutation Mutate(const SeedFile& seed, std::mt19937_64& rng) {
     return {t, "junk bytes inserted at byte " + std::to_string(at)};
   }
   if (op == 8 && seed.kind == Kind::kMeasurements) {
-    // Many rows: a copy of the data rows until the row limit is passed.
+    // Many rows: a copy of the data rows until the row limit (kMaxMeasurementRows) is passed,
+    // which must be refused quickly. (Below the limit a large file is identified, which takes
+    // minutes for 20,000 rows of nonsense: legitimate work, not what the fuzz bounds.)
     const std::string rows = t.substr(line_end(0));
+    const long per_copy = std::max<long>(1, std::count(rows.begin(), rows.end(), '\n'));
     std::string big = t;
-    while (big.size() < 3000000) big += rows;
+    for (long n = 0; n <= kMaxMeasurementRows; n += per_copy) big += rows;
     return {big, "data rows repeated to " + std::to_string(big.size()) + " bytes"};
   }
   const std::size_t s = lines[Pick(rng, lines.size())];
