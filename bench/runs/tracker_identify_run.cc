@@ -12,6 +12,7 @@
 #include "bench/io/model_yaml.h"
 #include "bench/io/output_files.h"
 #include "bench/io/tracker_file.h"
+#include "bench/report/report_units.h"
 #include "calib/common/errors.h"
 #include "calib/model/robot_model.h"
 #include "calib/procedures/tracker_calibration.h"
@@ -21,18 +22,6 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
-
-json Errors(const PointErrors& e) {
-  return {{"rms_mm", 1e3 * e.rms}, {"mean_mm", 1e3 * e.mean}, {"max_mm", 1e3 * e.max},
-          {"poses", e.poses}};
-}
-
-// A value in report units: m -> mm, rad -> deg, others as they are.
-std::pair<double, std::string> ReportUnit(double v, const std::string& unit) {
-  if (unit == "m") return {1e3 * v, "mm"};
-  if (unit == "rad") return {v * 180.0 / 3.14159265358979323846, "deg"};
-  return {v, unit};
-}
 
 void WriteFile(const fs::path& path, const std::string& text) { WriteTextFile(path.string(), text); }
 
@@ -80,17 +69,17 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
   for (const HeldOutSplit& s : r.splits) {
     j["heldout"][s.name] = {{"rule", s.rule},
                             {"training_poses", s.training},
-                            {"before", Errors(s.before)},
-                            {"after", Errors(s.after)},
-                            {"training_after", Errors(s.training_after)},
+                            {"before", PointErrorsJson(s.before)},
+                            {"after", PointErrorsJson(s.after)},
+                            {"training_after", PointErrorsJson(s.training_after)},
                             {"worse", s.worse}};
   }
-  j["all_points"] = {{"before", Errors(r.all_before)}, {"after", Errors(r.all_after)}};
+  j["all_points"] = {{"before", PointErrorsJson(r.all_before)}, {"after", PointErrorsJson(r.all_after)}};
   j["parameters"] = json::array();
   for (const IdentifiedParameter& p : id.parameters) {
-    const auto [est, unit] = ReportUnit(p.estimated, p.unit);
-    const auto [start, unit0] = ReportUnit(p.start, p.unit);
-    const auto [sigma, unit1] = ReportUnit(p.sigma, p.unit);
+    const double est = ReportValue(p.estimated, p.unit), start = ReportValue(p.start, p.unit);
+    const double sigma = ReportValue(p.sigma, p.unit);
+    const std::string unit = ReportUnit(p.unit);
     j["parameters"].push_back({{"name", p.name}, {"unit", unit}, {"nominal", start},
                                {"estimated", est}, {"correction", est - start},
                                {"sigma", sigma}});

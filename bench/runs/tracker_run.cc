@@ -17,6 +17,7 @@
 #include "bench/io/scenario.h"
 #include "bench/io/yaml_util.h"
 #include "bench/report/acceptance.h"
+#include "bench/report/report_units.h"
 #include "bench/scoring/calibration_scoring.h"
 #include "calib/common/errors.h"
 #include "calib/model/parameter_layout.h"
@@ -81,19 +82,7 @@ TrackerRunConfig ParseTrackerRunConfig(const Scenario& sc) {
   return c;
 }
 
-json Errors(const PointErrors& e) {
-  return {{"rms_mm", 1e3 * e.rms}, {"mean_mm", 1e3 * e.mean}, {"max_mm", 1e3 * e.max},
-          {"poses", e.poses}};
-}
-
 json Stats(const PositionErrorStats& s) { return {{"rms", 1e3 * s.rms}, {"max", 1e3 * s.max}}; }
-
-double ReportValue(double v, const std::string& unit) {
-  return unit == "m" ? 1e3 * v : unit == "rad" ? RadToDeg(v) : v;
-}
-std::string ReportUnit(const std::string& unit) {
-  return unit == "m" ? "mm" : unit == "rad" ? "deg" : unit;
-}
 
 void WriteFile(const fs::path& path, const std::string& text) { WriteTextFile(path.string(), text); }
 
@@ -241,7 +230,7 @@ int RunTrackerScenario(const RunOptions& o) {
   }
   for (const HeldOutSplit& s : result.calibration.splits) {
     j["heldout"][s.name] = {{"rule", s.rule}, {"training_poses", s.training},
-                            {"before", Errors(s.before)}, {"after", Errors(s.after)},
+                            {"before", PointErrorsJson(s.before)}, {"after", PointErrorsJson(s.after)},
                             {"worse", s.worse}};
   }
   j["truth_position_error_mm"] = {
