@@ -7,6 +7,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config
   libeigen3-dev libceres-dev libopencv-dev
+  libblas3 liblapack3   # the reference BLAS / LAPACK every program links by DT_RPATH (cmake/ReferenceBlas.cmake)
   libmujoco-dev libqhull-dev libosmesa6-dev
   liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev

@@ -114,10 +114,11 @@ pid_t SpawnTrial(const std::string& executable, const std::vector<std::string>& 
   // Child: only async-signal-safe calls until exec.
   prctl(PR_SET_PDEATHSIG, SIGKILL);
   if (getppid() != parent) _exit(127);  // the study died before prctl
-  // The same address layout in every trial process: cv::calibrateCamera's result depends on
-  // where its buffers lie (about 1e-6 px in the intrinsics with address-space randomization,
-  // measured; alignment-dependent SIMD / BLAS kernels), so that a trial reproduces bit for
-  // bit only without it. Where personality(2) is not allowed the trial runs randomized.
+  // The same address layout in every trial process. The known layout dependence (ATLAS's BLAS
+  // under cv::calibrateCamera, about 1e-6 px in the intrinsics) is gone since every program
+  // links the reference BLAS (cmake/ReferenceBlas.cmake, checked by a test); this stays as a
+  // second guard for any other address-dependent kernel. Where personality(2) is not allowed
+  // the trial runs randomized.
   const int persona = personality(0xffffffff);
   if (persona != -1) personality(static_cast<unsigned long>(persona) | ADDR_NO_RANDOMIZE);
   signal(SIGINT, SIG_DFL);
