@@ -321,6 +321,22 @@ int main(int argc, char** argv) {
                        "tracker file: the part of the points each split holds out (default 0.2)");
   identify->add_option("--seed", tracker_options.seed,
                        "tracker file: seed of the random split (default 1)");
+  identify->add_option("--declare", tracker_options.declared_terms,
+                       "tracker file: an error term the arm is known to have, "
+                       "TYPE[:JOINT[:ORDERS]] (e.g. joint_compliance:2); repeatable");
+  identify->add_flag("--no-diagnosis", "tracker file: skip model discovery");
+  identify->add_option("--diagnosis-alpha", tracker_options.diagnosis_alpha,
+                       "tracker file: level of the residual test and of each discovery step "
+                       "(default 0.05)");
+  identify->add_option("--diagnosis-min-gain", tracker_options.diagnosis_min_gain_percent,
+                       "tracker file: smallest held-out gain worth a term [%] (default 5)");
+  identify->add_option("--diagnosis-max-effects", tracker_options.diagnosis_max_effects,
+                       "tracker file: at most this many effects added (default 3)");
+  identify->add_option("--diagnosis-folds", tracker_options.diagnosis_folds,
+                       "tracker file: folds of the cross-validations (default 5)");
+  identify->add_option("--jobs", tracker_options.jobs,
+                       "tracker file: parallel candidate evaluations (default: all cores)");
+  identify->add_flag("--quiet", tracker_options.quiet, "no progress lines");
 
   SynthesizeOptions synth_options;
   auto* synth = app.add_subcommand(
@@ -377,6 +393,7 @@ int main(int argc, char** argv) {
         tracker_options.model = identify_options.model;
         tracker_options.measurements = identify_options.measurements;
         tracker_options.out_dir = identify_options.out_dir;
+        tracker_options.diagnosis = identify->count("--no-diagnosis") == 0;
         if (!identify_options.board_mount.empty() || !identify_options.robot.empty()) {
           throw InputError("--board-mount/--robot", "options of optical-axis measurements; " +
                                                         identify_options.measurements +
@@ -384,8 +401,12 @@ int main(int argc, char** argv) {
         }
         return RunTrackerIdentify(tracker_options);
       }
-      if (!tracker_options.ignore_columns.empty() || !tracker_options.validate.empty()) {
-        throw InputError("--ignore-column/--validate",
+      if (!tracker_options.ignore_columns.empty() || !tracker_options.validate.empty() ||
+          !tracker_options.declared_terms.empty() || identify->count("--no-diagnosis") > 0 ||
+          identify->count("--diagnosis-alpha") + identify->count("--diagnosis-min-gain") +
+                  identify->count("--diagnosis-max-effects") +
+                  identify->count("--diagnosis-folds") + identify->count("--jobs") > 0) {
+        throw InputError("--ignore-column/--validate/--declare/--diagnosis-*/--jobs",
                          "options of tracker files; " + identify_options.measurements +
                              " has no x_m/x_mm column");
       }

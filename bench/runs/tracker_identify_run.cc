@@ -11,9 +11,12 @@
 #include "bench/io/model_loader.h"
 #include "bench/io/model_yaml.h"
 #include "bench/io/output_files.h"
+#include "bench/io/term_spec_text.h"
 #include "bench/io/tracker_file.h"
+#include "bench/report/diagnosis_report.h"
 #include "bench/report/report_units.h"
 #include "calib/common/errors.h"
+#include "calib/diagnosis/model_discovery.h"
 #include "calib/model/robot_model.h"
 #include "calib/procedures/tracker_calibration.h"
 
@@ -38,7 +41,30 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
   const TrackerFile file = ReadTrackerFile(o.measurements, chain, o.ignore_columns);
   TrackerFile validation;
   if (!o.validate.empty()) validation = ReadTrackerFile(o.validate, chain, o.ignore_columns);
-  const RobotModel nominal = MakeRobotModel(chain);
+  RobotModel nominal = MakeRobotModel(chain);
+  for (const std::string& text : o.declared_terms) {
+    const std::string where = "--declare " + text;
+    nominal = WithTerm(nominal, MakeErrorTerm(ParseTermSpec(text, where), chain, chain.name, where));
+  }
+  for (const TrackerPoint& p : file.points) {
+    const std::string missing = MissingContext(nominal, p.context);
+    if (!missing.empty()) {
+      throw InputError(o.measurements + ":" + std::to_string(p.row),
+                       "a declared term needs what this row lacks: " + missing);
+    }
+  }
+  DiscoveryOptions discovery;
+  discovery.alpha = o.diagnosis_alpha;
+  discovery.min_gain_percent = o.diagnosis_min_gain_percent;
+  discovery.max_effects = o.diagnosis_max_effects;
+  discovery.folds = o.diagnosis_folds;
+  discovery.jobs = o.jobs;
+  discovery.seed = o.seed;
+  discovery.set.source = o.measurements;
+  if (!o.quiet) {
+    discovery.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+  }
+  if (o.diagnosis) ValidateDiscoveryOptions(discovery);
 
   TrackerCalibrationOptions options;
   options.holdout_fraction = o.holdout_fraction;
@@ -50,6 +76,16 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
   } catch (const InputError& e) {
     if (e.where().rfind(o.measurements, 0) == 0) throw;
     throw InputError(o.measurements, e.what());
+  }
+
+  DiscoveryResult diagnosis;
+  if (o.diagnosis) {
+    try {
+      diagnosis = DiscoverTrackerModel(nominal, file.points, discovery);
+    } catch (const InputError& e) {
+      if (e.where().rfind(o.measurements, 0) == 0) throw;
+      throw InputError(o.measurements, e.what());
+    }
   }
 
   const IdentificationResult& id = r.identified;
@@ -97,6 +133,13 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
                                    1e3 * r.X_TB.translation().z()}},
                        {"rotation_deg", aa.angle() * 180.0 / 3.14159265358979323846},
                        {"rotation_axis", {aa.axis().x(), aa.axis().y(), aa.axis().z()}}};
+  j["declared_terms"] = json::array();
+  for (const auto& t : nominal.terms) j["declared_terms"].push_back(TermLabel(t->spec()));
+  if (o.diagnosis) {
+    j["diagnosis"] = DiagnosisJson(diagnosis);
+  } else {
+    j["diagnosis"] = {{"verdict", nullptr}, {"skipped", "--no-diagnosis"}};
+  }
   j["warnings"] = r.warnings;
 
   const fs::path out(o.out_dir);
@@ -125,6 +168,7 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
   std::printf("%-8s %-10zu %18.4f / %7.4f %18.4f / %7.4f   (fitted, not held out)\n", "all",
               file.points.size(), 1e3 * r.all_before.rms, 1e3 * r.all_before.max,
               1e3 * r.all_after.rms, 1e3 * r.all_after.max);
+  if (o.diagnosis) std::printf("%s", DiagnosisSummary(diagnosis).c_str());
   for (const std::string& w : r.warnings) std::fprintf(stderr, "WARNING: %s\n", w.c_str());
   std::printf("wrote %s/report.json and identified_%s.yaml\n", out.string().c_str(),
               chain.name.c_str());

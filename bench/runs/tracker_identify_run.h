@@ -17,6 +17,16 @@ struct TrackerIdentifyOptions {
   double holdout_fraction = 0.2;            ///< of each split
   std::uint64_t seed = 1;                   ///< of the random split
   std::string out_dir;                      ///< report.json, identified_<robot>.yaml
+  /// Error terms the engineer knows the arm has (TYPE[:JOINT[:ORDERS]]), in the model from
+  /// the start: their magnitudes are identified, discovery does not try them again.
+  std::vector<std::string> declared_terms;
+  bool diagnosis = true;                    ///< model discovery after the identification
+  double diagnosis_alpha = 0.05;            ///< DiscoveryOptions::alpha
+  double diagnosis_min_gain_percent = 5.0;  ///< DiscoveryOptions::min_gain_percent
+  int diagnosis_max_effects = 3;            ///< DiscoveryOptions::max_effects
+  int diagnosis_folds = 5;                  ///< DiscoveryOptions::folds
+  int jobs = 0;                             ///< parallel candidate evaluations; 0: all cores
+  bool quiet = false;                       ///< no progress lines
 };
 
 /// Runs it; returns 0. Throws InputError for bad input (nothing is written then).

@@ -17,18 +17,20 @@ namespace fs = std::filesystem;
 const fs::path kData = fs::path(TWIN_SOURCE_DIR) / ".." / "shared" / "data" / "motoman_leica";
 const std::string kModel = std::string(TWIN_SOURCE_DIR) + "/models/motoman_sda10_right.yaml";
 
-nlohmann::json Identify(const std::string& file, int seed, const std::string& validate = "") {
+nlohmann::json Identify(const std::string& file, int seed, const std::string& validate = "",
+                        bool diagnosis = false) {
   const fs::path out = fs::path(::testing::TempDir()) / ("real_tracker_" + std::to_string(seed) +
                                                          fs::path(file).stem().string());
   fs::remove_all(out);
   std::vector<std::string> args = {"identify", "--model", kModel, "--measurements",
                                    (kData / file).string(), "--ignore-column", "q_E_rad",
                                    "--seed", std::to_string(seed), "--out", out.string()};
+  if (!diagnosis) args.push_back("--no-diagnosis");  // its own test below
   if (!validate.empty()) {
     args.push_back("--validate");
     args.push_back((kData / validate).string());
   }
-  const testing::ProcessRun r = testing::TwinbenchArgs(args, 120);
+  const testing::ProcessRun r = testing::TwinbenchArgs(args, 300);
   EXPECT_EQ(r.code, 0) << r.output;
   std::ifstream in(out / "report.json");
   return nlohmann::json::parse(in, nullptr, false);
@@ -78,6 +80,42 @@ TEST(RealTrackerData, MotomanWideIsReportedAndWorseHeldOutPartsAreFlagged) {
       warned = warned || w.get<std::string>().find(std::string("held-out ") + split) == 0;
     }
     EXPECT_EQ(worse, warned) << split;
+  }
+}
+
+// Model discovery on both files (issue 15). The wide file: a verdict, and when effects are
+// added the discovered model's region-disjoint held-out RMS at most 0.8 times the geometric
+// model's (the issue's target; an independent analysis found gravity-related terms worth about
+// 30 % there), or an "unexplained" with its evidence. The cube file: a verdict with its
+// evidence; whatever is added must not make the held-out error worse.
+TEST(RealTrackerData, MotomanDiagnosisGivesAVerdictWithItsEvidenceOnBothFiles) {
+  if (!fs::exists(kData / "right_arm_wide.csv") || !fs::exists(kData / "right_arm_cube.csv")) {
+    GTEST_SKIP() << "real tracker data absent: " << kData.string();
+  }
+  for (const char* file : {"right_arm_wide.csv", "right_arm_cube.csv"}) {
+    const nlohmann::json j = Identify(file, 1, "", true);
+    ASSERT_TRUE(j.is_object()) << file;
+    const nlohmann::json& d = j["diagnosis"];
+    const std::string verdict = d["verdict"];
+    const double start = d["heldout_rms_mm"]["start"], found = d["heldout_rms_mm"]["discovered"];
+    std::printf("[ measured ] %s: %s, region-disjoint held-out RMS %.4f -> %.4f mm\n", file,
+                verdict.c_str(), start, found);
+    ASSERT_TRUE(verdict == "consistent_with_noise" || verdict == "effects_added" ||
+                verdict == "unexplained") << verdict;
+    EXPECT_FALSE(d["reason"].get<std::string>().empty());
+    EXPECT_GT(d["noise_floor_mm"].get<double>(), 0.0);
+    EXPECT_FALSE(d["candidates"].empty());
+    if (verdict == "effects_added") {
+      EXPECT_FALSE(d["effects_added"].empty());
+      EXPECT_LE(found, start);
+      for (const auto& e : d["effects_added"]) EXPECT_TRUE(e["accepted"].get<bool>());
+      if (std::string(file) == "right_arm_wide.csv") {
+        EXPECT_LE(found, 0.8 * start);
+      }
+    } else if (verdict == "unexplained") {
+      EXPECT_FALSE(d["unexplained_evidence"].empty());
+      EXPECT_FALSE(d["residual_maps"].empty());
+    }
   }
 }
 

@@ -1,0 +1,153 @@
+// Model discovery on laser-tracker points (issue 15): after the identification, decide whether
+// the residual is noise or systematic, trace it to a physical effect the model lacks, add that
+// effect and report the held-out error before and after. Estimator side only: points, their
+// stated sigmas and the nominal model; never a true value.
+//
+// 1. Noise floor: the points' stated sigmas (the file's sigma column), else the set's default;
+//    where the data has repeated poses (the same joint readings to 1e-6 rad) their spread is
+//    reported beside it.
+// 2. Residual test: random K-fold cross-validation of the current model; the held-out
+//    residuals' chi-square sum(|e_i|^2 / sigma_i^2) over 3 n coordinates, divided by the
+//    expected inflation of prediction errors 1 + u / (3 n_train) (u the unknowns of the fit:
+//    a held-out point also carries the parameters' estimation error, on average u / n_train of
+//    the noise variance), against chi-square(3 n). p < alpha: "systematic".
+// 3. Candidate search by forward selection: every registered error term at every joint and
+//    order it applies to (CandidateTermSpecs) is added in turn and scored by region-disjoint
+//    cross-validation (K workspace blocks from k-means on the measured points: each block is
+//    predicted by a model that never saw its region). A candidate is tested only when its
+//    context is in the data (time stamps, temperatures, approach directions) and its
+//    parameters are identifiable (the rank rises; by less than its parameter count: partly,
+//    the engine then moves only the combinations the data sees) and not a disguise
+//    of the geometry (|correlation| with a geometric parameter below correlation_limit). The
+//    paired test is Wilcoxon's signed rank on per-point differences of held-out squared error
+//    (base minus candidate, one-sided), Holm-corrected over the candidates tested in the
+//    step. The candidate with the largest held-out gain is accepted only if its adjusted p is
+//    below alpha and its gain at least min_gain_percent; then the next step starts from the
+//    extended model, until none passes or max_effects are in.
+// 4. Verdict: "consistent_with_noise" (step 2 passes: nothing searched), "effects_added", or
+//    "unexplained" (systematic and no candidate passes), with the residual's strongest
+//    correlations (joint angles, gravity torques, time, temperature, acquisition order) and
+//    binned residual maps as evidence.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "calib/identification/engine.h"
+#include "calib/measurements/tracker_set.h"
+#include "calib/model/error_term.h"
+#include "calib/model/robot_model.h"
+
+namespace twin {
+
+struct DiscoveryOptions {
+  double alpha = 0.05;             ///< level of the residual test and family-wise level of a step
+  /// Smallest held-out gain worth a term: reduction of the held-out sum of squares [%]. A
+  /// significant but tiny gain (many points) is not worth a new parameter block.
+  double min_gain_percent = 5.0;
+  int max_effects = 3;             ///< at most this many effects added
+  int folds = 5;                   ///< K of both cross-validations (>= 2)
+  std::uint64_t seed = 1;          ///< of the random folds of the residual test
+  /// |correlation| between a term parameter and a geometric one from which the term counts as
+  /// a disguise of the geometry and is not accepted [-].
+  double correlation_limit = 0.999;
+  /// Candidates to try; empty: every registered term at every joint / order it applies to.
+  std::vector<TermSpec> candidates;
+  int jobs = 0;                    ///< parallel candidate evaluations; 0: the machine's cores
+  IdentificationOptions engine;    ///< of every identification
+  TrackerSetOptions set;           ///< default sigma, source for messages
+  /// Called with a line of progress (step, candidate k of m); may be empty.
+  std::function<void(const std::string&)> progress;
+};
+
+/// Throws InputError naming the bad field.
+void ValidateDiscoveryOptions(const DiscoveryOptions& options);
+
+struct NoiseFloor {
+  double sigma_m = 0;     ///< RMS of the points' per-axis sigmas [m]
+  std::string source;     ///< "stated per point", "the set's default", ...
+  int repeated_groups = 0;       ///< groups of points at the same joint readings
+  double repeat_sigma_m = -1;    ///< per-axis spread within those groups [m]; -1 none
+};
+
+struct ResidualTest {
+  std::string held_out;   ///< how the held-out residuals were obtained
+  int points = 0;
+  double rms_m = 0;       ///< held-out residual RMS (distance) [m]
+  double statistic = 0;   ///< chi-square / inflation
+  double dof = 0;
+  double inflation = 1;   ///< expected prediction-error inflation divided out
+  double p_value = 1;
+  bool systematic = false;
+};
+
+/// One term parameter's estimate.
+struct DiscoveredParameter {
+  std::string name, unit;
+  double estimated = 0, sigma = 0;  ///< [SI]
+};
+
+struct CandidateScore {
+  TermSpec spec;
+  std::string label;                ///< TermLabel
+  bool applicable = true;           ///< the data has the context the term needs
+  bool identifiable = true;         ///< its parameters raise the rank
+  std::string note;                 ///< why not applicable / identifiable / accepted
+  double max_geometry_correlation = 0;  ///< max |rho| with a geometric parameter [-]
+  std::string correlated_with;      ///< that geometric parameter
+  double heldout_rms_m = 0;         ///< region-disjoint held-out RMS with the term [m]
+  double gain_percent = 0;          ///< held-out sum-of-squares reduction vs the step's base [%]
+  double p_value = 1, p_adjusted = 1;  ///< Wilcoxon one-sided, and after Holm
+  bool tested = false;              ///< applicable, identifiable, and entered the correction
+  bool accepted = false;
+  std::vector<DiscoveredParameter> parameters;  ///< identified on every point
+};
+
+struct DiscoveryStep {
+  int index = 1;
+  double heldout_rms_before_m = 0;  ///< the step's base model, region-disjoint held-out [m]
+  double heldout_rms_after_m = 0;   ///< after the accepted term (= before when none) [m]
+  std::vector<CandidateScore> candidates;
+  int accepted = -1;                ///< index into candidates, -1 none
+};
+
+struct ResidualCorrelation {
+  std::string quantity;   ///< "q3", "tau2", "time", "temperature", "order"
+  std::string component;  ///< "x", "y", "z" (tracker frame) or "norm"
+  double r = 0;           ///< Pearson correlation over the held-out residuals [-]
+};
+
+struct ResidualMap {
+  std::string quantity;           ///< as above
+  std::string unit;
+  std::vector<double> bin_centre;
+  std::vector<double> rms_m;      ///< residual RMS in each bin [m]
+  std::vector<int> count;
+};
+
+struct DiscoveryResult {
+  std::string verdict;            ///< consistent_with_noise | effects_added | unexplained
+  std::string reason;             ///< one sentence for the report
+  NoiseFloor noise;
+  ResidualTest test_before;       ///< of the starting model
+  ResidualTest test_after;        ///< of the discovered model (= before when nothing added)
+  double heldout_rms_start_m = 0;      ///< region-disjoint, starting model [m]
+  double heldout_rms_discovered_m = 0; ///< region-disjoint, discovered model [m]
+  std::string region_rule;        ///< how the workspace blocks were made
+  std::vector<DiscoveryStep> steps;
+  std::vector<CandidateScore> effects_added;
+  RobotModel model;               ///< the discovered model, identified on every point
+  Transform X_TB = Transform::Identity();
+  std::vector<ResidualCorrelation> evidence;  ///< strongest |r| first (at most 8)
+  std::vector<ResidualMap> maps;  ///< residual vs each joint angle, gravity torque, order
+};
+
+/// Runs the diagnosis from `start` (the geometric model plus any declared terms). Throws
+/// InputError for bad options or too few points for the folds.
+DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
+                                     const std::vector<TrackerPoint>& points,
+                                     const DiscoveryOptions& options = {});
+
+}  // namespace twin

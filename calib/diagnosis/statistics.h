@@ -1,0 +1,45 @@
+// The statistics of model discovery (calib/diagnosis/model_discovery.h): a chi-square tail for
+// the residual test against the noise floor, a paired one-sided test of held-out residuals for
+// a candidate effect, Holm's step-down correction for the number of candidates tried, and
+// correlations for the residual maps. Written from the textbook definitions (references at
+// each function); no statistics library is among the project's dependencies.
+#pragma once
+
+#include <vector>
+
+namespace twin::stats {
+
+/// Regularized upper incomplete gamma Q(a, x) = Gamma(a, x) / Gamma(a), a > 0, x >= 0: the
+/// series of P for x < a + 1, Legendre's continued fraction of Q otherwise (Abramowitz and
+/// Stegun 6.5.29 and 6.5.31), both to 1e-14 relative.
+double UpperIncompleteGammaRatio(double a, double x);
+
+/// P(X >= x) for X chi-square with `dof` degrees of freedom (> 0): Q(dof / 2, x / 2).
+double ChiSquareUpperTail(double x, double dof);
+
+/// Standard normal upper tail P(Z >= z).
+double NormalUpperTail(double z);
+
+/// Result of the paired test.
+struct PairedTest {
+  int pairs = 0;      ///< non-zero differences used
+  double w_plus = 0;  ///< Wilcoxon's W+ (sum of the ranks of the positive differences)
+  double z = 0;       ///< its normal score, with tie and continuity correction
+  double p_value = 1; ///< one-sided: P(W+ this large | no improvement)
+};
+
+/// Wilcoxon's signed-rank test that the differences d (e.g. base minus candidate squared
+/// held-out error, per point) are centred above zero, one-sided, by the normal approximation
+/// with the tie correction of the variance (valid for 20 or more pairs; fewer give p = 1, i.e.
+/// no evidence). Zero differences are dropped.
+PairedTest WilcoxonSignedRankGreater(const std::vector<double>& d);
+
+/// Holm's step-down adjusted p-values (Holm 1979), same order as `p`: for the k-th smallest
+/// (k = 1..m), max over j <= k of min(1, (m - j + 1) p_(j)). Rejecting where adjusted < alpha
+/// keeps the family-wise error rate at alpha.
+std::vector<double> HolmAdjust(const std::vector<double>& p);
+
+/// Pearson's correlation of x and y (same size >= 3); 0 when either is constant.
+double Correlation(const std::vector<double>& x, const std::vector<double>& y);
+
+}  // namespace twin::stats

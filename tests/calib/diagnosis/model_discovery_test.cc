@@ -1,0 +1,200 @@
+#include "calib/diagnosis/model_discovery.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "calib/common/errors.h"
+#include "test_models.h"
+#include "tracker_synthetic.h"
+
+namespace twin {
+namespace {
+
+using testing::Perturbed;
+using testing::ReinovoLikeModel;
+using testing::SyntheticTrackerPoints;
+
+constexpr double kSigma = 1e-5;  // 10 um per axis, a laser tracker's class
+
+struct Case {
+  RobotModel nominal, truth;
+};
+
+// A truth 1 mm / 0.1 deg off the nominal geometry per parameter, plus the given effects with
+// the given parameter values (each term's slice in order).
+Case MakeCase(std::uint64_t seed, const std::vector<std::pair<TermSpec, std::vector<double>>>& fx) {
+  std::mt19937_64 rng(seed);
+  const KinematicModel nominal = ReinovoLikeModel(1);
+  KinematicModel chain = Perturbed(nominal, rng, 1e-3, DegToRad(0.1));
+  chain.X_BL0 = nominal.X_BL0;
+  chain.X_LtE = nominal.X_LtE;
+  RobotModel truth = MakeRobotModel(chain);
+  for (const auto& [spec, values] : fx) {
+    truth = WithTerm(truth, MakeErrorTerm(spec, chain, chain.name));
+    const int n = static_cast<int>(values.size());
+    for (int k = 0; k < n; ++k) truth.term_values(truth.term_values.size() - n + k) = values[k];
+  }
+  return {MakeRobotModel(nominal), truth};
+}
+
+const TermSpec kCompliance2{"joint_compliance", 1, {}};
+const TermSpec kCompliance3{"joint_compliance", 2, {}};
+const TermSpec kTransmission1{"transmission_error", 0, {1}};
+const TermSpec kTransmission4{"transmission_error", 3, {2}};
+// SyntheticTrackerPoints draws temperatures at random and stamps times in acquisition order of
+// random configurations: for this data both thermal terms are random regressors (placebos).
+const TermSpec kThermalGrowth{"thermal_growth", -1, {}};
+const TermSpec kThermalDrift{"thermal_drift", -1, {}};
+
+DiscoveryOptions Options(std::vector<TermSpec> candidates) {
+  DiscoveryOptions o;
+  o.candidates = std::move(candidates);
+  o.set.default_sigma = kSigma;
+  return o;
+}
+
+// Compliance of 3e-5 rad/(N m) at joint 2 (gravity torques of ~20-40 N m: ~1 mrad, ~0.5 mm at
+// the tool) is far above the noise; a geometric model cannot absorb it.
+const std::vector<double> kSoftJoint2{3e-5};
+
+TEST(ModelDiscovery, AGeometricTruthIsConsistentWithNoiseAndNothingIsAdded) {
+  const Case c = MakeCase(11, {});
+  const auto points = SyntheticTrackerPoints(c.truth, 150, 3, kSigma);
+  const DiscoveryResult r =
+      DiscoverTrackerModel(c.nominal, points, Options({kCompliance2, kTransmission1}));
+  EXPECT_EQ(r.verdict, "consistent_with_noise") << r.reason;
+  EXPECT_FALSE(r.test_before.systematic);
+  EXPECT_TRUE(r.effects_added.empty());
+  EXPECT_TRUE(r.steps.empty());
+  // The noise floor is the stated sigma (every synthetic point states it).
+  EXPECT_NEAR(r.noise.sigma_m, kSigma, 1e-15);  // an RMS of equal sigmas, to rounding
+  EXPECT_EQ(r.noise.repeated_groups, 0);
+}
+
+TEST(ModelDiscovery, OneUndeclaredEffectIsNamedAndTheHeldOutErrorFallsToTheNoise) {
+  const Case c = MakeCase(12, {{kCompliance2, kSoftJoint2}});
+  const auto points = SyntheticTrackerPoints(c.truth, 150, 4, kSigma);
+  const DiscoveryResult r = DiscoverTrackerModel(
+      c.nominal, points, Options({kCompliance3, kCompliance2, kTransmission1, kThermalDrift}));
+  ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+  EXPECT_TRUE(r.test_before.systematic);
+  ASSERT_EQ(r.effects_added.size(), 1u);
+  EXPECT_EQ(r.effects_added[0].spec.type, "joint_compliance");
+  EXPECT_EQ(r.effects_added[0].spec.joint, 1);
+  EXPECT_TRUE(r.effects_added[0].accepted);
+  EXPECT_LT(r.effects_added[0].p_adjusted, 0.05);
+  // Its estimate within 3 sigma of the truth (the sigma is the engine's 1-sigma).
+  ASSERT_EQ(r.effects_added[0].parameters.size(), 1u);
+  const DiscoveredParameter& p = r.effects_added[0].parameters[0];
+  EXPECT_NEAR(p.estimated, kSoftJoint2[0], 3.0 * p.sigma + 1e-9) << p.name;
+  // Held out, a point carries sqrt(3) sigma of noise (17 um) plus the estimation error of a
+  // region it did not see; 1.5x that is the bound. Before, the compliance left ~0.5 mm.
+  EXPECT_LT(r.heldout_rms_discovered_m, 1.5 * std::sqrt(3.0) * kSigma);
+  EXPECT_GT(r.heldout_rms_start_m, 10.0 * r.heldout_rms_discovered_m);
+  EXPECT_FALSE(r.test_after.systematic) << "p = " << r.test_after.p_value;
+  // Step 2 found nothing more (the placebo and the others rejected).
+  ASSERT_EQ(r.steps.size(), 2u);
+  EXPECT_EQ(r.steps[1].accepted, -1);
+}
+
+TEST(ModelDiscovery, TwoEffectsAreAddedInTwoSteps) {
+  // Transmission error at joint 1, first order, 0.2 mrad amplitude (~0.1 mm at the tool).
+  const Case c =
+      MakeCase(13, {{kCompliance2, kSoftJoint2}, {kTransmission1, {2e-4, -1e-4}}});
+  const auto points = SyntheticTrackerPoints(c.truth, 180, 5, kSigma);
+  const DiscoveryResult r = DiscoverTrackerModel(
+      c.nominal, points, Options({kCompliance2, kTransmission1, kTransmission4, kThermalGrowth}));
+  ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+  ASSERT_EQ(r.effects_added.size(), 2u);
+  std::vector<std::string> added{TermLabel(r.effects_added[0].spec),
+                                 TermLabel(r.effects_added[1].spec)};
+  std::sort(added.begin(), added.end());
+  EXPECT_EQ(added, (std::vector<std::string>{TermLabel(kCompliance2), TermLabel(kTransmission1)}));
+  EXPECT_LT(r.heldout_rms_discovered_m, 1.5 * std::sqrt(3.0) * kSigma);
+  EXPECT_LT(r.steps[0].heldout_rms_after_m, r.steps[0].heldout_rms_before_m);
+  EXPECT_LT(r.steps[1].heldout_rms_after_m, r.steps[1].heldout_rms_before_m);
+}
+
+TEST(ModelDiscovery, ASystematicResidualThatNoCandidateExplainsIsUnexplainedAndPlacebosAreRejected) {
+  // The compliance is there but not among the candidates: only the two random regressors are.
+  const Case c = MakeCase(14, {{kCompliance2, kSoftJoint2}});
+  const auto points = SyntheticTrackerPoints(c.truth, 150, 6, kSigma);
+  const DiscoveryResult r =
+      DiscoverTrackerModel(c.nominal, points, Options({kThermalGrowth, kThermalDrift}));
+  EXPECT_EQ(r.verdict, "unexplained") << r.reason;
+  EXPECT_TRUE(r.test_before.systematic);
+  EXPECT_TRUE(r.effects_added.empty());
+  ASSERT_EQ(r.steps.size(), 1u);
+  for (const CandidateScore& s : r.steps[0].candidates) {
+    EXPECT_TRUE(s.tested) << s.label << ": " << s.note;
+    EXPECT_FALSE(s.accepted) << s.label;
+  }
+  // The evidence: the strongest correlations and a map per quantity (6 joint angles, 6 gravity
+  // torques, order, time, temperature).
+  EXPECT_FALSE(r.evidence.empty());
+  EXPECT_EQ(r.maps.size(), 15u);
+}
+
+TEST(ModelDiscovery, ATermWithoutItsContextIsNotApplicableAndOneInvisibleToTheDataUnidentifiable) {
+  const Case c = MakeCase(15, {{kCompliance2, kSoftJoint2}});
+  auto points = SyntheticTrackerPoints(c.truth, 150, 7, kSigma);
+  for (TrackerPoint& p : points) p.context.time_s = std::numeric_limits<double>::quiet_NaN();
+  // Joint 6 carries only the reflector's small mass on its axis: its compliance has (almost) no
+  // torque to act on and cannot raise the rank.
+  const TermSpec compliance6{"joint_compliance", 5, {}};
+  const DiscoveryResult r = DiscoverTrackerModel(
+      c.nominal, points, Options({kThermalDrift, compliance6, kCompliance2}));
+  ASSERT_FALSE(r.steps.empty());
+  const std::vector<CandidateScore>& s = r.steps[0].candidates;
+  ASSERT_EQ(s.size(), 3u);
+  EXPECT_FALSE(s[0].applicable);
+  EXPECT_NE(s[0].note.find("not applicable"), std::string::npos) << s[0].note;
+  EXPECT_FALSE(s[1].identifiable) << s[1].note;
+  EXPECT_NE(s[1].note.find("unidentifiable"), std::string::npos) << s[1].note;
+  EXPECT_TRUE(s[2].accepted) << s[2].note;
+}
+
+TEST(ModelDiscovery, RepeatedPosesGiveTheirSpreadAsASecondNoiseEstimate) {
+  const Case c = MakeCase(16, {});
+  std::vector<TrackerPoint> points = SyntheticTrackerPoints(c.truth, 120, 8, 0.0);
+  // Every point measured twice with independent noise of 20 um.
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> noise(0.0, 2e-5);
+  std::vector<TrackerPoint> twice;
+  for (const TrackerPoint& p : points) {
+    for (int k = 0; k < 2; ++k) {
+      TrackerPoint q = p;
+      for (int a = 0; a < 3; ++a) q.p_T(a) += noise(rng);
+      twice.push_back(q);
+    }
+  }
+  DiscoveryOptions o = Options({kCompliance2});
+  o.set.default_sigma = 2e-5;
+  const DiscoveryResult r = DiscoverTrackerModel(c.nominal, twice, o);
+  EXPECT_EQ(r.noise.repeated_groups, 120);
+  // 360 degrees of freedom: the spread's relative standard error is 1/sqrt(720) = 3.7 %; 15 %.
+  EXPECT_NEAR(r.noise.repeat_sigma_m, 2e-5, 0.15 * 2e-5);
+  EXPECT_NE(r.noise.source.find("default"), std::string::npos) << r.noise.source;
+}
+
+TEST(ModelDiscovery, BadOptionsAndTooFewPointsAreRefused) {
+  const Case c = MakeCase(17, {});
+  const auto points = SyntheticTrackerPoints(c.truth, 150, 9, kSigma);
+  DiscoveryOptions o = Options({kCompliance2});
+  o.folds = 1;
+  EXPECT_THROW(DiscoverTrackerModel(c.nominal, points, o), InputError);
+  o = Options({kCompliance2});
+  o.alpha = 0.7;
+  EXPECT_THROW(DiscoverTrackerModel(c.nominal, points, o), InputError);
+  const std::vector<TrackerPoint> few(points.begin(), points.begin() + 14);
+  EXPECT_THROW(DiscoverTrackerModel(c.nominal, few, Options({kCompliance2})), InputError);
+}
+
+}  // namespace
+}  // namespace twin
