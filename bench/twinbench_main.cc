@@ -259,6 +259,7 @@ int main(int argc, char** argv) {
   run->add_option("--out", run_options.out_dir, "output folder (replaced when complete)")
       ->required();
   run->add_flag("--quiet", run_options.quiet, "no progress lines");
+  run->add_flag("--no-diagnosis", "tracker scenarios: skip model discovery");
   run->add_option("--trial", run_options.trial,
                   "study trial t: the scenario's truth and estimator seeds + t (default 0)")
       ->check(CLI::Range(0, 1000000000));
@@ -334,6 +335,9 @@ int main(int argc, char** argv) {
                        "tracker file: at most this many effects added (default 3)");
   identify->add_option("--diagnosis-folds", tracker_options.diagnosis_folds,
                        "tracker file: folds of the cross-validations (default 5)");
+  identify->add_option("--encoder-sigma-deg", tracker_options.encoder_sigma_deg,
+                       "tracker file: the joint readings' noise, carried into the diagnosis's "
+                       "noise floor (default 0: the tracker's sigma alone)");
   identify->add_option("--jobs", tracker_options.jobs,
                        "tracker file: parallel candidate evaluations (default: all cores)");
   identify->add_flag("--quiet", tracker_options.quiet, "no progress lines");
@@ -378,6 +382,7 @@ int main(int argc, char** argv) {
     if (*bench) return RunTwinBenchmark(bench_options);
     if (*run) {
       run_options.images = !no_images;
+      run_options.diagnosis = run->count("--no-diagnosis") == 0;
       return RunCalibrationScenario(run_options);
     }
     if (*study) {
@@ -405,7 +410,8 @@ int main(int argc, char** argv) {
           !tracker_options.declared_terms.empty() || identify->count("--no-diagnosis") > 0 ||
           identify->count("--diagnosis-alpha") + identify->count("--diagnosis-min-gain") +
                   identify->count("--diagnosis-max-effects") +
-                  identify->count("--diagnosis-folds") + identify->count("--jobs") > 0) {
+                  identify->count("--diagnosis-folds") + identify->count("--jobs") +
+                  identify->count("--encoder-sigma-deg") > 0) {
         throw InputError("--ignore-column/--validate/--declare/--diagnosis-*/--jobs",
                          "options of tracker files; " + identify_options.measurements +
                              " has no x_m/x_mm column");

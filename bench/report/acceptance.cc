@@ -19,7 +19,8 @@ const YamlKeys kCriterionKeys = {"figure", "max", "min", "name"};
 const std::vector<std::string> kTopLevel = {"scenario", "intrinsics", "robots", "timing_s",
                                             "base_frame", "status", "procedure",
     "truth_position_error_mm", "heldout", "identifiable_combinations", "tracker",
-    "condition_number"};
+    "condition_number", "truth_position_error_mm_physical",
+    "truth_position_error_mm_discovered_model", "diagnosis"};
 // More criteria than this are no longer a CI verdict but a second report.
 constexpr std::size_t kMaxCriteria = 100;
 

@@ -69,6 +69,8 @@ json DiagnosisJson(const DiscoveryResult& r) {
   j["reason"] = r.reason;
   j["noise_floor_mm"] = 1e3 * r.noise.sigma_m;
   j["noise_floor"] = {{"sigma_mm", 1e3 * r.noise.sigma_m},
+                      {"tracker_sigma_mm", 1e3 * r.noise.tracker_sigma_m},
+                      {"joint_sigma_deg", r.noise.joint_sigma_rad * 180.0 / 3.14159265358979323846},
                       {"source", r.noise.source},
                       {"repeated_pose_groups", r.noise.repeated_groups},
                       {"repeated_pose_sigma_mm",

@@ -28,6 +28,7 @@ struct RunOptions {
   std::string plan_cache;
   bool images = true;    ///< write servo_*.png and report.html (studies leave them out)
   std::string junit;     ///< JUnit XML of the acceptance criteria to write (empty: none)
+  bool diagnosis = true; ///< model discovery after a tracker calibration (--no-diagnosis)
 };
 
 /// The report's `scenario` key: name, file, seed (the truth seed, as before the split),

@@ -32,6 +32,7 @@
 #include "bench/report/study_summary.h"
 #include "bench/report/study_summary_html.h"
 #include "bench/runs/handclasp_run.h"
+#include "bench/runs/tracker_run.h"
 #include "bench/runs/trial_record.h"
 #include "bench/runs/trials_file.h"
 #include "calib/common/errors.h"
@@ -260,10 +261,12 @@ int RunStudy(const StudyOptions& o) {
   const Scenario sc = LoadScenario(o.scenario);
   if (IsPresent(sc.calibration)) ParseCalibrationConfig(sc);
   if (IsPresent(sc.handclasp)) ParseHandclaspConfig(sc);
-  if (!IsPresent(sc.calibration) && !IsPresent(sc.handclasp)) {
+  if (IsPresent(sc.tracker_calibration)) ValidateTrackerScenario(sc);
+  if (!IsPresent(sc.calibration) && !IsPresent(sc.handclasp) &&
+      !IsPresent(sc.tracker_calibration)) {
     throw InputError(sc.path + " scenario",
-                     "a study needs a calibration: or handclasp: section (what `twinbench run` "
-                     "runs)");
+                     "a study needs a calibration:, handclasp: or tracker_calibration: section "
+                     "(what `twinbench run` runs)");
   }
   const std::string hash = ScenarioHash(sc);
   const std::string executable = o.executable.empty() ? SelfExecutable() : o.executable;

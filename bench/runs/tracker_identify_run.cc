@@ -59,6 +59,7 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
   discovery.max_effects = o.diagnosis_max_effects;
   discovery.folds = o.diagnosis_folds;
   discovery.jobs = o.jobs;
+  discovery.joint_sigma_rad = DegToRad(o.encoder_sigma_deg);
   discovery.seed = o.seed;
   discovery.set.source = o.measurements;
   if (!o.quiet) {

@@ -25,6 +25,7 @@ struct TrackerIdentifyOptions {
   double diagnosis_min_gain_percent = 5.0;  ///< DiscoveryOptions::min_gain_percent
   int diagnosis_max_effects = 3;            ///< DiscoveryOptions::max_effects
   int diagnosis_folds = 5;                  ///< DiscoveryOptions::folds
+  double encoder_sigma_deg = 0.0;           ///< stated joint reading noise (DiscoveryOptions)
   int jobs = 0;                             ///< parallel candidate evaluations; 0: all cores
   bool quiet = false;                       ///< no progress lines
 };

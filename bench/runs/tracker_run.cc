@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <random>
 #include <sstream>
 
 #include <Eigen/Cholesky>
@@ -15,11 +16,14 @@
 #include "bench/io/model_yaml.h"
 #include "bench/io/output_files.h"
 #include "bench/io/scenario.h"
+#include "bench/io/term_spec_text.h"
 #include "bench/io/yaml_util.h"
 #include "bench/report/acceptance.h"
+#include "bench/report/diagnosis_report.h"
 #include "bench/report/report_units.h"
 #include "bench/scoring/calibration_scoring.h"
 #include "calib/common/errors.h"
+#include "calib/diagnosis/model_discovery.h"
 #include "calib/model/parameter_layout.h"
 #include "calib/model/robot_model.h"
 #include "calib/identification/engine.h"
@@ -33,14 +37,61 @@ using nlohmann::json;
 
 namespace {
 
-const YamlKeys kTrackerCalibrationKeys = {"robot", "told_reflector_mm", "poses", "max_attempts",
-                                          "joint_margin_deg", "holdout"};
+const YamlKeys kTrackerCalibrationKeys = {"robot",    "told_reflector_mm", "poses",
+                                          "max_attempts", "joint_margin_deg", "holdout",
+                                          "tracker_sigma_mm", "encoder_sigma_deg", "diagnosis"};
+const YamlKeys kDiagnosisKeys = {"enabled", "alpha", "min_gain_percent", "max_effects", "folds",
+                                 "truth_poses", "candidates"};
 
 struct TrackerRunConfig {
   int robot = 1;
   Vector3 told_p_F = Vector3::Zero();
   TrackerProcedureOptions procedure;
+  double told_sigma_m = 1e-5;  // the tracker's datasheet accuracy per axis
+  bool diagnosis = true;
+  DiscoveryOptions discovery;
+  int truth_poses = 60;        // poses of the physical-truth scoring of the discovered model
 };
+
+// The estimator's starting model: the nominal chain plus a term for every effect the scenario
+// declares (declared: true) that the estimator's library has, by type and joint only (never a
+// magnitude). Declared effects without a term (geometry errors, noise) need none; a declared
+// thermal growth needs temperatures, which this procedure does not record: said, not modelled.
+RobotModel DeclaredModel(const Scenario& sc, int robot, const KinematicModel& nominal,
+                         std::vector<std::string>* notes) {
+  RobotModel m = MakeRobotModel(nominal);
+  const std::string where = sc.path + " scenario.effects";
+  for (const EffectSpec& e : sc.twin.effects) {
+    if (!e.declared || (e.robot != -1 && e.robot != robot)) continue;
+    std::vector<TermSpec> specs;
+    const auto per_joint = [&](const std::string& type, std::vector<int> orders) {
+      for (int j = 0; j < nominal.num_joints(); ++j) {
+        if (e.joint == -1 || e.joint == j) specs.push_back({type, j, orders});
+      }
+    };
+    if (e.type == "joint_compliance" || e.type == "backlash") {
+      per_joint(e.type, {});
+    } else if (e.type == "transmission_error") {
+      const auto h = e.params.find("harmonic");
+      per_joint(e.type, {h != e.params.end() ? static_cast<int>(std::lround(h->second)) : 1});
+    } else if (e.type == "mount_deflection") {
+      specs.push_back({e.type, -1, {}});
+    } else if (e.type == "thermal_growth") {
+      notes->push_back("declared thermal_growth is not modelled: the tracker procedure records "
+                       "no temperature");
+    }
+    for (const TermSpec& spec : specs) {
+      bool present = false;
+      for (const auto& t : m.terms) {
+        const TermSpec& have = t->spec();
+        present = present || (have.type == spec.type && have.joint == spec.joint &&
+                              have.orders == spec.orders);
+      }
+      if (!present) m = WithTerm(m, MakeErrorTerm(spec, nominal, nominal.name, where));
+    }
+  }
+  return m;
+}
 
 TrackerRunConfig ParseTrackerRunConfig(const Scenario& sc) {
   const YamlReader r(sc.path);
@@ -77,8 +128,55 @@ TrackerRunConfig ParseTrackerRunConfig(const Scenario& sc) {
     if (!(v > 0.0 && v <= 0.5)) r.Fail(*f, "expected a fraction in (0, 0.5]");
     c.procedure.calibration.holdout_fraction = v;
   }
+  if (const auto f = m.Find("tracker_sigma_mm", false)) {
+    const double v = r.Number(*f);
+    if (!(v > 0.0 && v <= 10.0)) r.Fail(*f, "expected 0 < sigma <= 10 mm");
+    c.told_sigma_m = v / 1000.0;
+  }
+  c.procedure.calibration.set.default_sigma = c.told_sigma_m;
+  if (const auto f = m.Find("encoder_sigma_deg", false)) {
+    const double v = r.Number(*f);
+    if (!(v >= 0.0 && v <= 0.5)) r.Fail(*f, "expected 0 to 0.5 deg");
+    c.discovery.joint_sigma_rad = DegToRad(v);
+  }
   c.procedure.seed = sc.seeds.estimator;
   c.procedure.calibration.seed = sc.seeds.estimator;
+  c.discovery.seed = sc.seeds.estimator;
+  c.discovery.set.default_sigma = c.told_sigma_m;
+  if (const auto f = m.Find("diagnosis", false)) {
+    const YamlMap d(r, *f, kDiagnosisKeys);
+    if (const auto v = d.Find("enabled", false)) c.diagnosis = r.Bool(*v);
+    if (const auto v = d.Find("alpha", false)) c.discovery.alpha = r.Number(*v);
+    if (const auto v = d.Find("min_gain_percent", false)) {
+      c.discovery.min_gain_percent = r.Number(*v);
+    }
+    if (const auto v = d.Find("max_effects", false)) c.discovery.max_effects = r.Integer(*v);
+    if (const auto v = d.Find("folds", false)) c.discovery.folds = r.Integer(*v);
+    if (const auto v = d.Find("candidates", false)) {
+      if (!v->node.IsSequence() || v->node.size() == 0) {
+        r.Fail(*v, "expected a non-empty list of terms TYPE[:JOINT[:ORDERS]]");
+      }
+      for (std::size_t k = 0; k < v->node.size(); ++k) {
+        const YamlField item = v->Item(k);
+        const TermSpec spec = ParseTermSpec(r.String(item), r.Where(item));
+        try {
+          MakeErrorTerm(spec, sc.twin.robots[c.robot].model, "check", r.Where(item));
+        } catch (const InputError& e) {
+          r.Fail(item, e.what());
+        }
+        c.discovery.candidates.push_back(spec);
+      }
+    }
+    if (const auto v = d.Find("truth_poses", false)) {
+      c.truth_poses = r.Integer(*v);
+      if (c.truth_poses < 10 || c.truth_poses > 10000) r.Fail(*v, "expected 10 to 10000");
+    }
+    try {
+      ValidateDiscoveryOptions(c.discovery);
+    } catch (const InputError& e) {
+      r.Fail(*f, e.what());
+    }
+  }
   return c;
 }
 
@@ -158,18 +256,77 @@ int RunTrackerScenario(const RunOptions& o) {
   // Told: the nominal model with the drawn reflector. Never the truth.
   KinematicModel nominal = WithReflector(sc.twin.robots[robot].model, config.told_p_F);
   nominal.name = name;
+  // The payload the engineer weighed and drew: the board and its bracket on this flange, its
+  // mass at the board frame's origin, on the tool link (whose frame is the reflector's, turned
+  // about z by the tool link's theta) so that the gravity torques of error terms see it.
+  if (sc.twin.board.robot == robot && sc.twin.board.mass_kg > 0.0) {
+    Link& tool = nominal.tool();
+    const Matrix3 R_FLt = Eigen::AngleAxisd(tool.dh.theta_offset, Vector3::UnitZ()).toRotationMatrix();
+    const Vector3 p_com_Lt = R_FLt.transpose() * (sc.twin.board.X_FT.translation() - config.told_p_F);
+    const double m0 = tool.inertia.mass, m1 = sc.twin.board.mass_kg;
+    tool.inertia.p_LiCom = (m0 * tool.inertia.p_LiCom + m1 * p_com_Lt) / (m0 + m1);
+    tool.inertia.mass = m0 + m1;
+  }
 
   if (!o.quiet) {
     std::printf("twinbench run: tracker calibration of %s, scenario %s (%s)\n", name.c_str(),
                 sc.name.c_str(), sc.path.c_str());
   }
+  std::vector<std::string> notes;
+  const RobotModel start = DeclaredModel(sc, robot, nominal, &notes);
   TrackerProcedureResult result;
   try {
-    result = RunTrackerProcedure(cell, robot, nominal, config.procedure);
+    result = RunTrackerProcedure(cell, robot, start, config.procedure);
   } catch (const InputError& e) {
     throw InputError(sc.path + " scenario.tracker_calibration", e.what());
   }
   const IdentificationResult& id = result.calibration.identified;
+
+  // Model discovery (estimator side: the points and the starting model only).
+  const bool diagnose = o.diagnosis && config.diagnosis;
+  DiscoveryResult diagnosis;
+  if (diagnose) {
+    DiscoveryOptions d = config.discovery;
+    d.set.source = "tracker_calibration";
+    if (!o.quiet) {
+      d.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+    }
+    try {
+      diagnosis = DiscoverTrackerModel(start, result.points, d);
+    } catch (const InputError& e) {
+      throw InputError(sc.path + " scenario.tracker_calibration.diagnosis", e.what());
+    }
+  }
+
+  // Physical truth (bench only): the reflector where the twin's physics puts it (every effect
+  // included) at seeded random poses the twin reaches, against the delivered (calibrated,
+  // geometric plus declared terms) model and the discovered one, at the same readings.
+  std::vector<Vector3> phys_true, phys_calibrated, phys_discovered;
+  {
+    std::mt19937_64 rng(sc.seeds.truth * 7919 + 17);
+    const double margin = config.procedure.joint_margin_rad;
+    for (int a = 0; a < 20 * config.truth_poses &&
+                    static_cast<int>(phys_true.size()) < config.truth_poses; ++a) {
+      JointVector q = ZeroJoints(nominal);
+      for (int i = 0; i < nominal.num_joints(); ++i) {
+        const JointLimits& l = nominal.links[i].limits;
+        q(i) = std::uniform_real_distribution<double>(l.lower + margin, l.upper - margin)(rng);
+      }
+      const JointVector before = cell.ReadEncoders(robot);
+      if (cell.MoveTo(robot, q).status != MoveStatus::kSettled) continue;
+      MeasurementContext c;
+      c.q = cell.ReadEncoders(robot);
+      c.approach = JointVector(q.size());
+      for (int i = 0; i < q.size(); ++i) {
+        c.approach(i) = q(i) > before(i) ? 1.0 : (q(i) < before(i) ? -1.0 : 0.0);
+      }
+      c.time_s = cell.MeasureTracker(robot).time_s;
+      const TwinTruth t = cell.Truth();
+      phys_true.push_back(t.X_WB[robot].inverse() * (t.X_WF[robot] * t.tracker.p_FR));
+      phys_calibrated.push_back(EndPose(id.model, c).translation());
+      if (diagnose) phys_discovered.push_back(EndPose(diagnosis.model, c).translation());
+    }
+  }
 
   // Scoring against the truth (bench only): the true geometry with the true reflector.
   const TwinTruth truth = cell.Truth();
@@ -251,7 +408,33 @@ int RunTrackerScenario(const RunOptions& o) {
   j["unidentifiable"] = id.observability.unidentifiable;
   j["condition_number"] = id.condition_number();
   j["sigma0"] = id.sigma0;
+  j["declared_terms"] = json::array();
+  for (const auto& t : start.terms) j["declared_terms"].push_back(TermLabel(t->spec()));
+  if (!phys_true.empty()) {
+    const GaugeErrors calibrated = CompareInGauges(phys_calibrated, phys_true);
+    j["truth_position_error_mm_physical"] = {
+        {"poses", phys_true.size()},
+        {"rule", "the reflector where the twin's physics puts it (every effect) at seeded random "
+                 "poses, against each model at the same readings"},
+        {"calibrated_model",
+         {{"raw", Stats(calibrated.raw)}, {"rigid", Stats(calibrated.rigid)}}}};
+    if (diagnose) {
+      const GaugeErrors discovered = CompareInGauges(phys_discovered, phys_true);
+      j["truth_position_error_mm_physical"]["discovered_model"] = {
+          {"raw", Stats(discovered.raw)}, {"rigid", Stats(discovered.rigid)}};
+      j["truth_position_error_mm_discovered_model"] = {{"raw", Stats(discovered.raw)},
+                                                       {"rigid", Stats(discovered.rigid)}};
+    }
+  }
+  if (diagnose) {
+    j["diagnosis"] = DiagnosisJson(diagnosis);
+  } else {
+    j["diagnosis"] = {{"verdict", nullptr},
+                      {"skipped", o.diagnosis ? "tracker_calibration.diagnosis.enabled: false"
+                                              : "--no-diagnosis"}};
+  }
   j["warnings"] = result.calibration.warnings;
+  for (const std::string& n : notes) j["warnings"].push_back(n);
   j["timing_s"] = {{"total", std::chrono::duration<double>(std::chrono::steady_clock::now() -
                                                            t_start).count()}};
   const AcceptanceVerdict verdict = EvaluateAcceptance(acceptance, &j);
@@ -260,12 +443,12 @@ int RunTrackerScenario(const RunOptions& o) {
   std::ostringstream csv;
   csv << std::setprecision(17) << "pose";
   for (int i = 0; i < nominal.num_joints(); ++i) csv << ",q_" << nominal.links[i].name << "_rad";
-  csv << ",x_m,y_m,z_m,time_s\n";
+  csv << ",x_m,y_m,z_m,sigma_m,time_s\n";
   for (const TrackerPoint& p : result.points) {
     csv << p.row;
     for (int i = 0; i < p.context.q.size(); ++i) csv << "," << p.context.q(i);
-    csv << "," << p.p_T.x() << "," << p.p_T.y() << "," << p.p_T.z() << "," << p.context.time_s
-        << "\n";
+    csv << "," << p.p_T.x() << "," << p.p_T.y() << "," << p.p_T.z() << "," << config.told_sigma_m
+        << "," << p.context.time_s << "\n";
   }
   const fs::path out(o.out_dir);
   const std::string staging = CreateStagingDirectory(o.out_dir);
@@ -290,6 +473,15 @@ int RunTrackerScenario(const RunOptions& o) {
     for (const HeldOutSplit& s : result.calibration.splits) {
       std::printf("held-out %-6s %3d poses: %.4f -> %.4f mm%s\n", s.name.c_str(), s.after.poses,
                   1e3 * s.before.rms, 1e3 * s.after.rms, s.worse ? "  WORSE" : "");
+    }
+    if (diagnose) {
+      std::printf("%s", DiagnosisSummary(diagnosis).c_str());
+      if (j.contains("truth_position_error_mm_physical")) {
+        const json& ph = j["truth_position_error_mm_physical"];
+        std::printf("physical truth (%d poses, rigid RMS): calibrated %.4f mm, discovered %.4f mm\n",
+                    ph["poses"].get<int>(), ph["calibrated_model"]["rigid"]["rms"].get<double>(),
+                    ph["discovered_model"]["rigid"]["rms"].get<double>());
+      }
     }
     std::printf("wrote %s/{report.json, report.html, measurements.csv, identified_%s.yaml}\n",
                 out.string().c_str(), name.c_str());

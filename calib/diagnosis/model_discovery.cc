@@ -151,19 +151,48 @@ std::vector<int> RandomFolds(int n, int k, std::uint64_t seed) {
   return fold;
 }
 
-NoiseFloor EstimateNoise(const std::vector<TrackerPoint>& points, const DiscoveryOptions& o) {
-  NoiseFloor nf;
-  double sum = 0;
-  int stated = 0;
+// Per point: sigma_i^2 I + sigma_q^2 J J^T (header), J by central differences of `model`.
+std::vector<Matrix3> NoiseCovariances(const RobotModel& model,
+                                      const std::vector<TrackerPoint>& points,
+                                      const DiscoveryOptions& o) {
+  std::vector<Matrix3> out;
+  const double h = 1e-6;
   for (const TrackerPoint& p : points) {
-    sum += SigmaOf(p, o) * SigmaOf(p, o);
-    if (p.sigma > 0.0) ++stated;
+    const double s = SigmaOf(p, o);
+    Matrix3 S = s * s * Matrix3::Identity();
+    if (o.joint_sigma_rad > 0.0) {
+      for (int i = 0; i < p.context.q.size(); ++i) {
+        MeasurementContext plus = p.context, minus = p.context;
+        plus.q(i) += h;
+        minus.q(i) -= h;
+        const Vector3 j = (EndPose(model, plus).translation() - EndPose(model, minus).translation()) /
+                          (2.0 * h);
+        S += o.joint_sigma_rad * o.joint_sigma_rad * j * j.transpose();
+      }
+    }
+    out.push_back(S);
+  }
+  return out;
+}
+
+NoiseFloor EstimateNoise(const std::vector<TrackerPoint>& points,
+                         const std::vector<Matrix3>& covariance, const DiscoveryOptions& o) {
+  NoiseFloor nf;
+  double sum = 0, tracker = 0;
+  int stated = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    sum += covariance[i].trace() / 3.0;
+    tracker += SigmaOf(points[i], o) * SigmaOf(points[i], o);
+    if (points[i].sigma > 0.0) ++stated;
   }
   nf.sigma_m = std::sqrt(sum / points.size());
+  nf.tracker_sigma_m = std::sqrt(tracker / points.size());
+  nf.joint_sigma_rad = o.joint_sigma_rad;
   nf.source = stated == static_cast<int>(points.size())
                   ? "the sigma stated for each point"
                   : (stated == 0 ? "the set's default sigma (no point states one)"
                                  : "the stated sigmas, the set's default where a point has none");
+  if (o.joint_sigma_rad > 0.0) nf.source += ", with the stated joint reading noise through the model";
   // Repeated poses: the same joint readings to 1e-6 rad.
   std::vector<bool> used(points.size(), false);
   double ss = 0;
@@ -191,15 +220,15 @@ NoiseFloor EstimateNoise(const std::vector<TrackerPoint>& points, const Discover
 }
 
 ResidualTest TestResiduals(const CrossValidation& cv, const std::vector<TrackerPoint>& points,
-                           const DiscoveryOptions& o, const std::string& held_out) {
+                           const std::vector<Matrix3>& covariance, const DiscoveryOptions& o,
+                           const std::string& held_out) {
   ResidualTest t;
   t.held_out = held_out;
   t.points = static_cast<int>(points.size());
   t.rms_m = cv.Rms();
   double chi2 = 0;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const double s = SigmaOf(points[i], o);
-    chi2 += cv.e[i].squaredNorm() / (s * s);
+    chi2 += cv.e[i].dot(covariance[i].ldlt().solve(cv.e[i]));
   }
   t.dof = 3.0 * points.size();
   t.inflation = cv.train_coordinates > 0 ? 1.0 + cv.unknowns / cv.train_coordinates : 1.0;
@@ -385,6 +414,9 @@ void ValidateDiscoveryOptions(const DiscoveryOptions& o) {
     fail("correlation_limit", "must be in (0, 1]");
   }
   if (o.jobs < 0) fail("jobs", "must be >= 0");
+  if (!(o.joint_sigma_rad >= 0.0 && o.joint_sigma_rad <= 0.01)) {
+    fail("joint_sigma", "must be from 0 to 0.01 rad (0.57 deg)");
+  }
   ValidateIdentificationOptions(o.engine);
 }
 
@@ -406,7 +438,8 @@ DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
     if (o.progress) o.progress(line);
   };
   DiscoveryResult r;
-  r.noise = EstimateNoise(points, o);
+  const std::vector<Matrix3> covariance = NoiseCovariances(start, points, o);
+  r.noise = EstimateNoise(points, covariance, o);
   const std::vector<int> random = RandomFolds(n, o.folds, o.seed);
   const std::vector<int> region = RegionFolds(points, o.folds, &r.region_rule);
   const std::string random_rule = std::to_string(o.folds) + "-fold cross-validation, points "
@@ -416,7 +449,7 @@ DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
   RobotModel current = start;
   say("diagnosis: residual test of the starting model (" + std::to_string(o.folds) + " folds)");
   r.test_before = TestResiduals(CrossValidate(current, points, random, o.folds, o, "residual test"),
-                                points, o, random_rule);
+                                points, covariance, o, random_rule);
   CrossValidation current_region =
       CrossValidate(current, points, region, o.folds, o, "region folds");
   r.heldout_rms_start_m = current_region.Rms();
@@ -516,6 +549,12 @@ DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
       say("diagnosis: step " + std::to_string(step) + " added " + accepted.label +
           ", held-out RMS " + Mm(s.heldout_rms_before_m) + " -> " + Mm(s.heldout_rms_after_m));
       r.steps.push_back(std::move(s));
+      // Once the residual is consistent with the noise there is nothing left to explain: a
+      // further term could only fit noise.
+      r.test_after = TestResiduals(
+          CrossValidate(current, points, random, o.folds, o, "residual test"), points, covariance,
+          o, random_rule);
+      if (!r.test_after.systematic) break;
     }
     r.heldout_rms_discovered_m = current_region.Rms();
     if (r.effects_added.empty()) {
@@ -527,9 +566,6 @@ DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
          << Mm(r.noise.sigma_m) << " per axis) and no candidate effect passes";
       r.reason = os.str();
     } else {
-      r.test_after = TestResiduals(
-          CrossValidate(current, points, random, o.folds, o, "residual test"), points, o,
-          random_rule);
       r.verdict = "effects_added";
       std::ostringstream os;
       os << r.effects_added.size() << " effect(s) added; region-disjoint held-out RMS "

@@ -3,11 +3,14 @@
 // effect and report the held-out error before and after. Estimator side only: points, their
 // stated sigmas and the nominal model; never a true value.
 //
-// 1. Noise floor: the points' stated sigmas (the file's sigma column), else the set's default;
-//    where the data has repeated poses (the same joint readings to 1e-6 rad) their spread is
-//    reported beside it.
+// 1. Noise floor: the points' stated sigmas (the file's sigma column), else the set's default,
+//    plus the joint readings' noise when the engineer states it (joint_sigma_rad, an encoder's
+//    datasheet value) carried to the point through the model: per point the covariance
+//    Sigma_i = sigma_i^2 I + sigma_q^2 J_i J_i^T, J_i the point's position Jacobian in the joint
+//    angles (central differences of the starting model). Where the data has repeated poses
+//    (the same joint readings to 1e-6 rad) their spread is reported beside it.
 // 2. Residual test: random K-fold cross-validation of the current model; the held-out
-//    residuals' chi-square sum(|e_i|^2 / sigma_i^2) over 3 n coordinates, divided by the
+//    residuals' chi-square sum(e_i^T Sigma_i^-1 e_i) over 3 n coordinates, divided by the
 //    expected inflation of prediction errors 1 + u / (3 n_train) (u the unknowns of the fit:
 //    a held-out point also carries the parameters' estimation error, on average u / n_train of
 //    the noise variance), against chi-square(3 n). p < alpha: "systematic".
@@ -23,7 +26,8 @@
 //    (base minus candidate, one-sided), Holm-corrected over the candidates tested in the
 //    step. The candidate with the largest held-out gain is accepted only if its adjusted p is
 //    below alpha and its gain at least min_gain_percent; then the next step starts from the
-//    extended model, until none passes or max_effects are in.
+//    extended model, until none passes, the residual test of the extended model finds it
+//    consistent with the noise (nothing left to explain), or max_effects are in.
 // 4. Verdict: "consistent_with_noise" (step 2 passes: nothing searched), "effects_added", or
 //    "unexplained" (systematic and no candidate passes), with the residual's strongest
 //    correlations (joint angles, gravity torques, time, temperature, acquisition order) and
@@ -55,6 +59,9 @@ struct DiscoveryOptions {
   double correlation_limit = 0.999;
   /// Candidates to try; empty: every registered term at every joint / order it applies to.
   std::vector<TermSpec> candidates;
+  /// Noise of each joint reading (encoder), per joint [rad]; 0: not stated, the floor is the
+  /// tracker's alone.
+  double joint_sigma_rad = 0.0;
   int jobs = 0;                    ///< parallel candidate evaluations; 0: the machine's cores
   IdentificationOptions engine;    ///< of every identification
   TrackerSetOptions set;           ///< default sigma, source for messages
@@ -66,7 +73,10 @@ struct DiscoveryOptions {
 void ValidateDiscoveryOptions(const DiscoveryOptions& options);
 
 struct NoiseFloor {
-  double sigma_m = 0;     ///< RMS of the points' per-axis sigmas [m]
+  /// RMS over the points of the per-axis noise sqrt(trace(Sigma_i) / 3) [m]
+  double sigma_m = 0;
+  double tracker_sigma_m = 0;  ///< RMS of the points' stated (or default) sigmas [m]
+  double joint_sigma_rad = 0;  ///< the readings' stated noise carried through the model [rad]
   std::string source;     ///< "stated per point", "the set's default", ...
   int repeated_groups = 0;       ///< groups of points at the same joint readings
   double repeat_sigma_m = -1;    ///< per-axis spread within those groups [m]; -1 none

@@ -22,6 +22,12 @@ KinematicModel WithReflector(KinematicModel m, const Vector3& p_F) {
 
 TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const KinematicModel& nominal,
                                            const TrackerProcedureOptions& o) {
+  return RunTrackerProcedure(cell, robot, MakeRobotModel(nominal), o);
+}
+
+TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const RobotModel& start,
+                                           const TrackerProcedureOptions& o) {
+  const KinematicModel& nominal = start.chain;
   if (o.poses < 1 || o.poses > 100000) {
     throw InputError("tracker_calibration.poses", "expected 1 to 100000 poses, got " +
                                                       std::to_string(o.poses));
@@ -38,6 +44,7 @@ TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const Kinemati
       q(i) = lo < hi ? std::uniform_real_distribution<double>(lo, hi)(rng) : 0.5 * (l.lower + l.upper);
     }
     ++out.attempts;
+    const JointVector before = cell.ReadEncoders(robot);
     const MoveResult move = cell.MoveTo(robot, q);
     if (move.status != MoveStatus::kSettled) {
       out.skipped.push_back({a, std::string("move ") + ToString(move.status) + ": " + move.reason});
@@ -57,6 +64,10 @@ TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const Kinemati
     TrackerPoint p;
     p.context.q = reading;
     p.context.time_s = t.time_s;
+    p.context.approach = JointVector(q.size());
+    for (int i = 0; i < q.size(); ++i) {
+      p.context.approach(i) = q(i) > before(i) ? 1.0 : (q(i) < before(i) ? -1.0 : 0.0);
+    }
     p.p_T = t.p_T;
     p.row = a + 1;
     out.points.push_back(p);
@@ -73,7 +84,7 @@ TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const Kinemati
   }
   TrackerCalibrationOptions co = o.calibration;
   co.set.source = "tracker_calibration";
-  out.calibration = CalibrateFromTracker(MakeRobotModel(nominal), out.points, {}, co);
+  out.calibration = CalibrateFromTracker(start, out.points, {}, co);
   return out;
 }
 

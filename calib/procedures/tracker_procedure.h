@@ -43,7 +43,13 @@ KinematicModel WithReflector(KinematicModel flange_model, const Vector3& p_F);
 
 /// Runs the procedure on `robot` of `cell`. Throws InputError for bad options, or when fewer
 /// poses than the identification needs could be measured (with the skip reasons' counts).
+/// Each point's context carries the joint readings, the tracker's time stamp and each joint's
+/// approach direction (the sign of the commanded motion that reached the pose, from the
+/// readings before the move: what the controller knows).
 TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const KinematicModel& nominal,
+                                           const TrackerProcedureOptions& options);
+/// The same, identifying `start`: the nominal chain plus the error terms the engineer declares.
+TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const RobotModel& start,
                                            const TrackerProcedureOptions& options);
 
 }  // namespace twin

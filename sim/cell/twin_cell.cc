@@ -720,6 +720,8 @@ TwinTruth TwinCell::Truth() const {
     t.q_link[k] = s.LinkAngles(k);
     t.q_motor[k] = s.motor[k];
     t.p_WTip[k] = Vector3(s.d->site_xpos + 3 * s.site_tip[k]);
+    const int flange = s.site_L[k][s.Joints(k)];
+    t.X_WF[k] = FromMj(s.d->site_xpos + 3 * flange, s.d->site_xmat + 9 * flange);
   }
   // MuJoCo's camera looks along -z with y up; the optical frame C is it turned by pi about x.
   t.X_WC = FromMj(s.d->cam_xpos + 3 * s.camera, s.d->cam_xmat + 9 * s.camera) *

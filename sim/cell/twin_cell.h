@@ -23,6 +23,8 @@ struct TwinTruth {
   Transform X_WC;                                  ///< camera optical frame in the world now
   Transform X_WT;                                  ///< board frame (origin P) in the world now
   std::array<Vector3, kNumRobots> p_WTip;          ///< measuring tip points in the world now
+  std::array<Transform, kNumRobots> X_WF;          ///< flange frames in the world now (physics:
+                                                   ///< every effect included)
   CameraSpec camera;                               ///< true intrinsics, distortion, hand-eye
   BoardSpec board;                                 ///< true board geometry and mount
   TrackerSpec tracker;                             ///< true tracker pose, reflector, noise

@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The model-discovery table of the README ("Model discovery"): a seeded study of every
+# scenario in scenarios/discovery/ (20 trials each by default; each trial a different truth and
+# estimator seed), then per scenario: how often the injected (undeclared) effect was named,
+# how often something else was added, and the physical-truth RMS (rigid gauge, the twin's
+# reflector with every effect against the model at the same readings) of the geometric-only
+# model, of the discovered one and of the same trials without the effect (tracker_clean.yaml).
+# Usage: scripts/discovery_table.sh [TRIALS] [OUT_DIR]    (needs a build: scripts/build.sh)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+TRIALS="${1:-20}"
+OUT="${2:-out/discovery}"
+BIN="${TWINBENCH:-build/bin/twinbench}"   # TWINBENCH: another build (e.g. a copy while rebuilding)
+[ -x "$BIN" ] || { echo "discovery_table: build first (scripts/build.sh)" >&2; exit 2; }
+command -v jq >/dev/null || { echo "discovery_table: needs jq (scripts/install_deps.sh)" >&2; exit 2; }
+mkdir -p "$OUT"
+declare -A INJECTED=(
+  [tracker_clean]=""
+  [tracker_compliance_j2]="joint_compliance (joint 2)"
+  [tracker_compliance_j2_declared]=""
+  [tracker_transmission_j1]="transmission_error (joint 1, order 1)"
+  [tracker_backlash_j3]="backlash (joint 3)"
+)
+ORDER=(tracker_clean tracker_compliance_j2 tracker_transmission_j1 tracker_backlash_j3
+       tracker_compliance_j2_declared)
+for s in "${ORDER[@]}"; do
+  "$BIN" study "scenarios/discovery/$s.yaml" --trials "$TRIALS" --jobs 2 --out "$OUT/$s" >&2
+done
+# Per trial: trial, effects added (labels joined by ;), geometric-only and discovered RMS.
+rows() {
+  jq -r '[.trial,
+          ([.labels | to_entries[] | select(.key | test("^diagnosis\\.effects_added\\[[0-9]+\\]\\.label$")) | .value] | join(";")),
+          (.figures["truth_position_error_mm_physical.calibrated_model.rigid.rms"] // "nan"),
+          (.figures["truth_position_error_mm_discovered_model.rigid.rms"] // "nan")] | @tsv' \
+     "$OUT/$1/trials.jsonl" | sort -t$'\t' -k1,1
+}
+rows tracker_clean > "$OUT/clean.tsv"
+printf '| scenario | injected (undeclared) | named | something else added | truth RMS geometric-only [mm] | discovered [mm] | effect-free [mm] | discovered <= 1.2 x effect-free |\n'
+printf '|---|---|---|---|---|---|---|---|\n'
+for s in "${ORDER[@]}"; do
+  rows "$s" > "$OUT/$s.tsv"
+  join -t $'\t' "$OUT/$s.tsv" "$OUT/clean.tsv" | awk -F'\t' -v inj="${INJECTED[$s]}" -v name="$s" '
+    { n++; named += (inj != "" && index($2, inj) > 0);
+      split($2, added, ";"); for (k in added) if (added[k] != "" && added[k] != inj) { other++; break }
+      g += $3; d += $4; f += $6; within += ($4 <= 1.2 * $6) }
+    END { printf "| %s | %s | %s | %d of %d | %.4f | %.4f | %.4f | %d of %d |\n", name,
+          (inj == "" ? "none" : inj), (inj == "" ? "-" : named " of " n), other, n, g / n, d / n,
+          f / n, within, n }'
+done
