@@ -13,7 +13,7 @@ PACKAGES=(
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev
   slurmctld slurmd slurm-client munge
-  time
+  time jq   # jq: scripts/discovery_table.sh
 )
 
 missing=()

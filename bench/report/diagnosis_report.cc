@@ -1,8 +1,10 @@
 #include "bench/report/diagnosis_report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <vector>
 
 #include "bench/report/report_units.h"
 
@@ -112,6 +114,121 @@ json DiagnosisJson(const DiscoveryResult& r) {
                                   {"count", m.count}});
   }
   return j;
+}
+
+namespace {
+
+std::string Esc(const std::string& t) {
+  std::string o;
+  for (char c : t) {
+    switch (c) {
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '&': o += "&amp;"; break;
+      case '"': o += "&quot;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+
+std::string Fmt(const json& v, const char* f = "%.4g") {
+  if (!v.is_number()) return v.is_null() ? "-" : Esc(v.dump());
+  char buf[48];
+  std::snprintf(buf, sizeof buf, f, v.get<double>());
+  return buf;
+}
+
+// Horizontal bars, one per (label, value), scaled to the largest.
+std::string Bars(const std::vector<std::pair<std::string, double>>& bars, const char* unit) {
+  double top = 0;
+  for (const auto& b : bars) top = std::max(top, b.second);
+  if (!(top > 0)) top = 1;
+  std::ostringstream os;
+  const int h = 22;
+  os << "<svg width=\"640\" height=\"" << h * bars.size() + 4 << "\">";
+  for (std::size_t k = 0; k < bars.size(); ++k) {
+    const double w = 380.0 * bars[k].second / top;
+    os << "<text x=\"0\" y=\"" << h * k + 15 << "\" font-size=\"12\">" << Esc(bars[k].first)
+       << "</text><rect x=\"200\" y=\"" << h * k + 3 << "\" width=\"" << w << "\" height=\""
+       << h - 6 << "\" fill=\"#4a7ab5\"/><text x=\"" << 205 + w << "\" y=\"" << h * k + 15
+       << "\" font-size=\"12\">" << Fmt(bars[k].second) << " " << unit << "</text>";
+  }
+  os << "</svg>";
+  return os.str();
+}
+
+// A residual map: RMS per bin as a polyline with points.
+std::string Map(const json& m) {
+  const std::vector<double> x = m["bin_centre"], y = m["rms_mm"];
+  double ymax = 0;
+  for (double v : y) ymax = std::max(ymax, v);
+  if (!(ymax > 0)) ymax = 1;
+  const double x0 = x.empty() ? 0 : x.front(), x1 = x.empty() ? 1 : x.back();
+  const double span = x1 > x0 ? x1 - x0 : 1;
+  std::ostringstream os;
+  os << "<figure style=\"display:inline-block;margin:4px\"><svg width=\"200\" height=\"110\">"
+     << "<rect x=\"20\" y=\"5\" width=\"175\" height=\"85\" fill=\"none\" stroke=\"#999\"/>"
+     << "<polyline fill=\"none\" stroke=\"#b5554a\" points=\"";
+  for (std::size_t k = 0; k < x.size(); ++k) {
+    os << 20 + 175 * (x[k] - x0) / span << "," << 90 - 85 * y[k] / ymax << " ";
+  }
+  os << "\"/><text x=\"22\" y=\"104\" font-size=\"10\">" << Fmt(x0, "%.3g") << " .. "
+     << Fmt(x1, "%.3g") << " " << Esc(m["unit"].get<std::string>()) << "; max "
+     << Fmt(ymax, "%.3g") << " mm</text></svg><figcaption style=\"font-size:11px\">residual RMS vs "
+     << Esc(m["quantity"].get<std::string>()) << "</figcaption></figure>";
+  return os.str();
+}
+
+}  // namespace
+
+std::string DiagnosisHtml(const json& d) {
+  std::ostringstream os;
+  os << "<h2>Model discovery</h2>";
+  if (!d.contains("verdict") || d["verdict"].is_null()) {
+    os << "<p>Skipped (" << Esc(d.value("skipped", std::string("not run"))) << ").</p>";
+    return os.str();
+  }
+  os << "<p><b>" << Esc(d["verdict"].get<std::string>()) << "</b>: "
+     << Esc(d["reason"].get<std::string>()) << "</p>";
+  const json& nf = d["noise_floor"];
+  os << "<p>Noise floor " << Fmt(nf["sigma_mm"]) << " mm per axis (" << Esc(nf["source"])
+     << "). Residual test of the starting model: held-out RMS "
+     << Fmt(d["residual_test"]["before"]["rms_mm"]) << " mm, p = "
+     << Fmt(d["residual_test"]["before"]["p_value"]) << "; of the discovered model: "
+     << Fmt(d["residual_test"]["after"]["rms_mm"]) << " mm, p = "
+     << Fmt(d["residual_test"]["after"]["p_value"]) << ".</p>";
+  std::vector<std::pair<std::string, double>> bars{
+      {"geometric model", d["heldout_rms_mm"]["start"].get<double>()}};
+  for (const json& s : d["steps"]) {
+    if (!s["accepted"].is_null()) {
+      bars.push_back({"+ " + s["accepted"].get<std::string>(), s["heldout_rms_after_mm"]});
+    }
+  }
+  os << "<h3>Region-disjoint held-out RMS</h3><p>" << Esc(d["region_rule"]) << "</p>"
+     << Bars(bars, "mm");
+  os << "<h3>Decision chain</h3><table><tr><th>step</th><th>candidate</th><th>tested</th>"
+        "<th>held-out gain [%]</th><th>p</th><th>Holm p</th><th>max |rho| geometry</th>"
+        "<th>accepted</th><th>note</th></tr>";
+  for (const json& c : d["candidates"]) {
+    os << "<tr><td>" << c["step"] << "</td><td>" << Esc(c["label"]) << "</td><td>"
+       << (c["tested"].get<bool>() ? "yes" : "no") << "</td><td>"
+       << Fmt(c["heldout_gain_percent"], "%.1f") << "</td><td>" << Fmt(c["p_value"], "%.2g")
+       << "</td><td>" << Fmt(c["p_adjusted"], "%.2g") << "</td><td>"
+       << Fmt(c["max_geometry_correlation"], "%.3f") << "</td><td>"
+       << (c["accepted"].get<bool>() ? "<b>yes</b>" : "") << "</td><td style=\"text-align:left\">"
+       << Esc(c["note"]) << "</td></tr>";
+  }
+  os << "</table><h3>Strongest residual correlations</h3><table><tr><th>quantity</th>"
+        "<th>component</th><th>r</th></tr>";
+  for (const json& e : d["unexplained_evidence"]) {
+    os << "<tr><td>" << Esc(e["quantity"]) << "</td><td>" << Esc(e["component"]) << "</td><td>"
+       << Fmt(e["r"], "%.3f") << "</td></tr>";
+  }
+  os << "</table><h3>Residual maps (held out, region-disjoint, final model)</h3><div>";
+  for (const json& m : d["residual_maps"]) os << Map(m);
+  os << "</div>";
+  return os.str();
 }
 
 std::string DiagnosisSummary(const DiscoveryResult& r) {

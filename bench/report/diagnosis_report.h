@@ -15,6 +15,12 @@ namespace twin {
 ///  steps[], effects_added[], candidates[], unexplained_evidence[], residual_maps[]}.
 nlohmann::json DiagnosisJson(const DiscoveryResult& r);
 
+/// An HTML fragment (a section, no page) of DiagnosisJson's output: the verdict and reason, the
+/// noise floor and residual tests, before/after bars of the region-disjoint held-out RMS, the
+/// decision chain with every candidate, the strongest residual correlations and the residual
+/// maps as small inline SVG charts. `d` without a verdict (skipped) gives a one-line note.
+std::string DiagnosisHtml(const nlohmann::json& d);
+
 /// Lines for the terminal: the verdict and the decision chain, one step a line.
 std::string DiagnosisSummary(const DiscoveryResult& r);
 

@@ -147,6 +147,11 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
   const std::string staging = CreateStagingDirectory(o.out_dir);
   try {
     WriteFile(fs::path(staging) / "report.json", j.dump(2) + "\n");
+    WriteFile(fs::path(staging) / "report.html",
+              "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>identify " + chain.name +
+                  "</title><style>body{font-family:sans-serif}td,th{padding:2px 8px;"
+                  "text-align:right}</style></head><body><h1>Tracker identification: " +
+                  o.measurements + "</h1>" + DiagnosisHtml(j["diagnosis"]) + "</body></html>\n");
     WriteFile(fs::path(staging) / ("identified_" + chain.name + ".yaml"),
               ModelToYaml(id.model.chain));
     PublishDirectory(staging, out.string());
@@ -171,7 +176,7 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
               1e3 * r.all_after.rms, 1e3 * r.all_after.max);
   if (o.diagnosis) std::printf("%s", DiagnosisSummary(diagnosis).c_str());
   for (const std::string& w : r.warnings) std::fprintf(stderr, "WARNING: %s\n", w.c_str());
-  std::printf("wrote %s/report.json and identified_%s.yaml\n", out.string().c_str(),
+  std::printf("wrote %s/report.json, report.html and identified_%s.yaml\n", out.string().c_str(),
               chain.name.c_str());
   return 0;
 }

@@ -215,7 +215,9 @@ std::string Html(const json& j) {
   }
   os << "</table><h2>Unidentifiable</h2><ul>";
   for (const json& u : j["unidentifiable"]) os << "<li>" << u.get<std::string>() << "</li>";
-  os << "</ul></body></html>\n";
+  os << "</ul>";
+  if (j.contains("diagnosis")) os << DiagnosisHtml(j["diagnosis"]);
+  os << "</body></html>\n";
   return os.str();
 }
 

@@ -6,6 +6,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <string>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -94,6 +96,11 @@ TEST(TrackerIdentifyRun, TheReportCarriesTheDiagnosisAndNamesTheUndeclaredCompli
       EXPECT_TRUE(c.contains(key)) << key;
     }
   }
+  // report.html shows the decision chain with the accepted term.
+  std::ifstream html(fs::path(o.out_dir) / "report.html");
+  const std::string page((std::istreambuf_iterator<char>(html)), std::istreambuf_iterator<char>());
+  EXPECT_NE(page.find("Decision chain"), std::string::npos);
+  EXPECT_NE(page.find("joint_compliance (joint 2)"), std::string::npos);
   // Geometric-only held-out error is the compliance's (~0.1-0.5 mm); discovered, the noise's.
   EXPECT_LT(d["heldout_rms_mm"]["discovered"].get<double>(),
             0.2 * d["heldout_rms_mm"]["start"].get<double>());
