@@ -6,6 +6,7 @@
 #include <sstream>
 #include <vector>
 
+#include "bench/report/report_html.h"
 #include "bench/report/report_units.h"
 
 namespace twin {
@@ -118,19 +119,7 @@ json DiagnosisJson(const DiscoveryResult& r) {
 
 namespace {
 
-std::string Esc(const std::string& t) {
-  std::string o;
-  for (char c : t) {
-    switch (c) {
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '&': o += "&amp;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
-    }
-  }
-  return o;
-}
+std::string Esc(const std::string& t) { return HtmlEscape(t); }
 
 std::string Fmt(const json& v, const char* f = "%.4g") {
   if (!v.is_number()) return v.is_null() ? "-" : Esc(v.dump());

@@ -14,6 +14,7 @@
 #include "bench/io/term_spec_text.h"
 #include "bench/io/tracker_file.h"
 #include "bench/report/diagnosis_report.h"
+#include "bench/report/report_html.h"
 #include "bench/report/report_units.h"
 #include "calib/common/errors.h"
 #include "calib/diagnosis/model_discovery.h"
@@ -151,7 +152,7 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
               "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>identify " + chain.name +
                   "</title><style>body{font-family:sans-serif}td,th{padding:2px 8px;"
                   "text-align:right}</style></head><body><h1>Tracker identification: " +
-                  o.measurements + "</h1>" + DiagnosisHtml(j["diagnosis"]) + "</body></html>\n");
+                  HtmlEscape(o.measurements) + "</h1>" + DiagnosisHtml(j["diagnosis"]) + "</body></html>\n");
     WriteFile(fs::path(staging) / ("identified_" + chain.name + ".yaml"),
               ModelToYaml(id.model.chain));
     PublishDirectory(staging, out.string());
