@@ -159,11 +159,7 @@ TrackerRunConfig ParseTrackerRunConfig(const Scenario& sc) {
       for (std::size_t k = 0; k < v->node.size(); ++k) {
         const YamlField item = v->Item(k);
         const TermSpec spec = ParseTermSpec(r.String(item), r.Where(item));
-        try {
-          MakeErrorTerm(spec, sc.twin.robots[c.robot].model, "check", r.Where(item));
-        } catch (const InputError& e) {
-          r.Fail(item, e.what());
-        }
+        MakeErrorTerm(spec, sc.twin.robots[c.robot].model, "check", r.Where(item));
         c.discovery.candidates.push_back(spec);
       }
     }

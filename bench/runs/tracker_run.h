@@ -9,6 +9,20 @@
 //   max_attempts: 300                # optional (3 x poses): configurations tried at most
 //   joint_margin_deg: 10             # optional: off each joint limit
 //   holdout: 0.2                     # optional: the part each held-out split keeps back
+//   tracker_sigma_mm: 0.01           # optional (0.01): the tracker's datasheet sigma per axis
+//   encoder_sigma_deg: 0.0006        # optional (0): the encoders' datasheet noise, for the
+//                                    # diagnosis's noise floor
+//   diagnosis:                       # optional: model discovery (calib/diagnosis/)
+//     enabled: true                  #   false: skip it (as --no-diagnosis)
+//     alpha: 0.05                    #   level of the residual test and of each step
+//     min_gain_percent: 5            #   smallest held-out gain worth a term
+//     max_effects: 3
+//     folds: 5
+//     candidates: [joint_compliance:2, transmission_error:1:1]  # default: every term
+//     truth_poses: 60                #   poses of the physical-truth scoring (bench)
+// Effects of the twin with declared: true and a term in the estimator's library
+// (joint_compliance, transmission_error, backlash, mount_deflection) are in the estimator's
+// model from the start, by type and joint only.
 #pragma once
 
 #include "bench/runs/calibration_run.h"

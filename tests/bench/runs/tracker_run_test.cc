@@ -2,6 +2,9 @@
 // reduced scenarios/tracker_reinovo.yaml: 40 poses.
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -93,6 +96,23 @@ std::string DiscoveryScenario(const std::string& name) {
                         "    holdout: 0.2\n    diagnosis:\n      candidates: [joint_compliance:2, "
                         "joint_compliance:3, transmission_error:1:1, backlash:3]\n");
   return t;
+}
+
+TEST(TrackerRun, BadDiagnosisSettingsAreRefusedByCheckNamingTheKey) {
+  const fs::path dir = Folder("discovery_bad");
+  const std::string good = DiscoveryScenario("tracker_compliance_j2.yaml");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"joint_compliance:2, ", "joint_compliance:9, "},  // no joint 9
+      {"joint_compliance:2, ", "no_such_term, "},
+      {"      candidates:", "      folds: 1\n      candidates:"},
+      {"      candidates:", "      colour: red\n      candidates:"},
+  };
+  for (const auto& [from, to] : cases) {
+    std::ofstream(dir / "s.yaml") << testing::Replaced(good, from, to);
+    const testing::ProcessRun r = testing::TwinbenchArgs({"check", (dir / "s.yaml").string()}, 60);
+    EXPECT_EQ(r.code, 2) << to << "\n" << r.output;
+    EXPECT_NE(r.output.find("diagnosis"), std::string::npos) << to << "\n" << r.output;
+  }
 }
 
 TEST(TrackerRun, AnUndeclaredCompliantJointIsDiscoveredAndScoredAgainstThePhysicalTruth) {
