@@ -64,7 +64,7 @@ TEST(StudyCli, BadInputExitsTwoAndRunsNothing) {
       {kSmall + " --trials 4 --shard 1-2 --out " + out, "--shard"},
       {kSmall + " --trials 4 --jobs -1 --out " + out, "--jobs"},
       {std::string(TWIN_SOURCE_DIR) + "/scenarios/twin_demo.yaml --trials 2 --out " + out,
-       "calibration: or handclasp:"},
+       "calibration:, handclasp: or tracker_calibration: section"},
       {"/nonexistent.yaml --trials 2 --out " + out, "/nonexistent.yaml"},
   };
   for (const Case& c : cases) {
