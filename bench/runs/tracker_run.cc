@@ -314,10 +314,7 @@ int RunTrackerScenario(const RunOptions& o) {
       if (cell.MoveTo(robot, q).status != MoveStatus::kSettled) continue;
       MeasurementContext c;
       c.q = cell.ReadEncoders(robot);
-      c.approach = JointVector(q.size());
-      for (int i = 0; i < q.size(); ++i) {
-        c.approach(i) = q(i) > before(i) ? 1.0 : (q(i) < before(i) ? -1.0 : 0.0);
-      }
+      c.approach = ApproachDirections(before, q);
       c.time_s = cell.MeasureTracker(robot).time_s;
       const TwinTruth t = cell.Truth();
       phys_true.push_back(t.X_WB[robot].inverse() * (t.X_WF[robot] * t.tracker.p_FR));

@@ -27,6 +27,14 @@ struct MeasurementContext {
   double approach_of(int i) const { return i < approach.size() ? approach(i) : 0.0; }
 };
 
+/// Each joint's approach direction for a move from readings `before` to target `q`: the sign
+/// of the commanded motion (+1, -1; 0 for a joint that did not move).
+inline JointVector ApproachDirections(const JointVector& before, const JointVector& q) {
+  JointVector a(q.size());
+  for (int i = 0; i < q.size(); ++i) a(i) = q(i) > before(i) ? 1.0 : (q(i) < before(i) ? -1.0 : 0.0);
+  return a;
+}
+
 /// A context with readings q and nothing else known.
 inline MeasurementContext ContextOf(const JointVector& q) {
   MeasurementContext c;

@@ -64,10 +64,7 @@ TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const RobotMod
     TrackerPoint p;
     p.context.q = reading;
     p.context.time_s = t.time_s;
-    p.context.approach = JointVector(q.size());
-    for (int i = 0; i < q.size(); ++i) {
-      p.context.approach(i) = q(i) > before(i) ? 1.0 : (q(i) < before(i) ? -1.0 : 0.0);
-    }
+    p.context.approach = ApproachDirections(before, q);
     p.p_T = t.p_T;
     p.row = a + 1;
     out.points.push_back(p);
