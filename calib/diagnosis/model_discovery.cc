@@ -16,69 +16,169 @@
 namespace twin {
 namespace {
 
-// Held-out residuals of one cross-validation: e[i] = predicted - measured for point i, from
-// the model trained without i's fold.
-struct CrossValidation {
-  std::vector<Vector3> e;
-  double unknowns = 0;  // mean over folds of the fit's unknowns
-  double train_coordinates = 0;  // mean over folds of 3 n_train
-  double Sse() const {
-    double s = 0;
-    for (const Vector3& v : e) s += v.squaredNorm();
-    return s;
-  }
-  double Rms() const { return e.empty() ? 0.0 : std::sqrt(Sse() / e.size()); }
-};
+std::string Mm(double m) {
+  std::ostringstream os;
+  os.precision(4);
+  os << 1e3 * m << " mm";
+  return os.str();
+}
 
+// One identification on a subset of the data.
 struct Fit {
   IdentificationResult result;
-  Transform X_TB = Transform::Identity();
+  Transform X_TB = Transform::Identity();  // tracker points
+  // Optical axes: the identified line and depth offset of each training axis (by its index).
+  std::vector<int> axes;
+  std::vector<Line3> lines;
+  std::vector<double> depth_offsets;
 };
 
-Fit FitModel(const RobotModel& model, const std::vector<TrackerPoint>& points,
-             const DiscoveryOptions& o, const std::string& what) {
-  TrackerSetOptions so = o.set;
-  so.source = o.set.source + " (" + what + ")";
-  TrackerSet set(points, so);
-  Fit f;
-  f.result = Identify(model, {&set}, o.engine);
-  if (f.result.status == IdentificationStatus::kFailed) {
-    throw InputError(so.source, "the identification failed: " + f.result.reason);
+// Held-out residuals of one cross-validation, per unit of data (a point, a sample): e[i] from
+// the model trained without i's fold.
+struct CrossValidation {
+  std::vector<Eigen::VectorXd> e;  // the unit's residual [m]
+  std::vector<double> loss;        // what gains and the paired test compare
+  std::vector<double> dist2;       // squared distance, of the reported RMS [m^2]
+  std::vector<double> chi2;        // e^T Sigma^-1 e against the noise floor [-]
+  double dof = 0;                  // of sum(chi2)
+  double unknowns = 0;             // mean over folds of the fit's unknowns
+  double train_rows = 0;           // mean over folds of the training residual rows
+  double Sse() const { return std::accumulate(loss.begin(), loss.end(), 0.0); }
+  double Rms() const {
+    return dist2.empty() ? 0.0
+                         : std::sqrt(std::accumulate(dist2.begin(), dist2.end(), 0.0) /
+                                     dist2.size());
   }
-  f.X_TB = set.X_TB();
+};
+
+// What the search needs of one kind of measurement.
+class Data {
+ public:
+  virtual ~Data() = default;
+  virtual int size() const = 0;
+  virtual const std::string& source() const = 0;
+  virtual const MeasurementContext& context(int i) const = 0;
+  virtual std::string Where(int i) const = 0;   // "row 12", for messages
+  virtual double Order(int i) const = 0;        // acquisition order
+  virtual std::string Measured() const = 0;     // "these points", for notes
+  /// Identifies `model` on the units `train` (all when empty).
+  virtual Fit FitOn(const RobotModel& model, const std::vector<int>& train,
+                    const std::string& what) const = 0;
+  /// Residual rows of the units `train` in a fit.
+  virtual double Rows(const std::vector<int>& train) const = 0;
+  /// Fills cv's entries of the units `test` (a fold) from `fit`, adds their dof.
+  virtual void HeldOut(const Fit& fit, const std::vector<int>& test, CrossValidation* cv) const = 0;
+  /// Named per-unit components of the residual for the evidence.
+  virtual std::vector<std::pair<std::string, std::vector<double>>> Components(
+      const CrossValidation& cv) const = 0;
+  /// Whether the residual test is the adjustment's global test (InSample) rather than
+  /// held-out (header, "Optical axes").
+  virtual bool GlobalTest() const { return false; }
+  /// The in-sample residuals of `model` fitted on every unit with the stated weights; dof the
+  /// redundancy.
+  virtual CrossValidation InSample(const RobotModel& model, const std::string& what) const {
+    (void)model;
+    throw InputError(source(), what + ": no in-sample test for this data");
+  }
+};
+
+Fit Identified(const RobotModel& model, MeasurementSet* set, const DiscoveryOptions& o,
+               const std::string& source) {
+  Fit f;
+  f.result = Identify(model, {set}, o.engine);
+  if (f.result.status == IdentificationStatus::kFailed) {
+    throw InputError(source, "the identification failed: " + f.result.reason);
+  }
   return f;
 }
 
-CrossValidation CrossValidate(const RobotModel& model, const std::vector<TrackerPoint>& points,
-                              const std::vector<int>& fold_of, int folds,
-                              const DiscoveryOptions& o, const std::string& what) {
-  CrossValidation cv;
-  cv.e.assign(points.size(), Vector3::Zero());
-  for (int k = 0; k < folds; ++k) {
-    std::vector<TrackerPoint> train;
-    std::vector<int> test;
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      if (fold_of[i] == k) {
-        test.push_back(static_cast<int>(i));
-      } else {
-        train.push_back(points[i]);
-      }
-    }
-    if (test.empty()) continue;
-    const Fit fit = FitModel(model, train, o, what + ", fold " + std::to_string(k + 1));
-    for (int i : test) {
-      cv.e[i] = fit.X_TB * EndPose(fit.result.model, points[i].context).translation() -
-                points[i].p_T;
-    }
-    cv.unknowns += fit.result.unknowns / static_cast<double>(folds);
-    cv.train_coordinates += 3.0 * train.size() / folds;
-  }
-  return cv;
-}
+// ---- tracker points ------------------------------------------------------------------------
 
 double SigmaOf(const TrackerPoint& p, const DiscoveryOptions& o) {
   return p.sigma > 0.0 ? p.sigma : o.set.default_sigma;
 }
+
+// Per point: sigma_i^2 I + sigma_q^2 J J^T (header), J by central differences of `model`.
+Eigen::Matrix<double, 3, Eigen::Dynamic> PositionJacobian(const RobotModel& model,
+                                                          const MeasurementContext& c) {
+  const double h = 1e-6;
+  Eigen::Matrix<double, 3, Eigen::Dynamic> J(3, c.q.size());
+  for (int i = 0; i < c.q.size(); ++i) {
+    MeasurementContext plus = c, minus = c;
+    plus.q(i) += h;
+    minus.q(i) -= h;
+    J.col(i) = (EndPose(model, plus).translation() - EndPose(model, minus).translation()) / (2.0 * h);
+  }
+  return J;
+}
+
+class TrackerData : public Data {
+ public:
+  TrackerData(const RobotModel& start, const std::vector<TrackerPoint>& points,
+              const DiscoveryOptions& o)
+      : points_(points), o_(o) {
+    for (const TrackerPoint& p : points_) {
+      const double s = SigmaOf(p, o_);
+      Matrix3 S = s * s * Matrix3::Identity();
+      if (o_.joint_sigma_rad > 0.0) {
+        const auto J = PositionJacobian(start, p.context);
+        S += o_.joint_sigma_rad * o_.joint_sigma_rad * J * J.transpose();
+      }
+      covariance_.push_back(S);
+    }
+  }
+  int size() const override { return static_cast<int>(points_.size()); }
+  const std::string& source() const override { return o_.set.source; }
+  const MeasurementContext& context(int i) const override { return points_[i].context; }
+  std::string Where(int i) const override { return "row " + std::to_string(points_[i].row); }
+  double Order(int i) const override { return points_[i].row; }
+  std::string Measured() const override { return "these points"; }
+  Fit FitOn(const RobotModel& model, const std::vector<int>& train,
+            const std::string& what) const override {
+    TrackerSetOptions so = o_.set;
+    so.source = o_.set.source + " (" + what + ")";
+    std::vector<TrackerPoint> subset;
+    if (train.empty()) {
+      subset = points_;
+    } else {
+      for (int i : train) subset.push_back(points_[i]);
+    }
+    TrackerSet set(subset, so);
+    Fit f = Identified(model, &set, o_, so.source);
+    f.X_TB = set.X_TB();
+    return f;
+  }
+  double Rows(const std::vector<int>& train) const override { return 3.0 * train.size(); }
+  void HeldOut(const Fit& fit, const std::vector<int>& test, CrossValidation* cv) const override {
+    for (int i : test) {
+      const Vector3 e =
+          fit.X_TB * EndPose(fit.result.model, points_[i].context).translation() - points_[i].p_T;
+      cv->e[i] = e;
+      cv->loss[i] = e.squaredNorm();
+      cv->dist2[i] = e.squaredNorm();
+      cv->chi2[i] = e.dot(covariance_[i].ldlt().solve(e));
+      cv->dof += 3.0;
+    }
+  }
+  std::vector<std::pair<std::string, std::vector<double>>> Components(
+      const CrossValidation& cv) const override {
+    std::vector<std::pair<std::string, std::vector<double>>> out{
+        {"x", {}}, {"y", {}}, {"z", {}}, {"norm", {}}};
+    for (const Eigen::VectorXd& e : cv.e) {
+      for (int a = 0; a < 3; ++a) out[a].second.push_back(e(a));
+      out[3].second.push_back(e.norm());
+    }
+    return out;
+  }
+
+  const std::vector<TrackerPoint>& points() const { return points_; }
+  const std::vector<Matrix3>& covariance() const { return covariance_; }
+
+ private:
+  std::vector<TrackerPoint> points_;
+  const DiscoveryOptions& o_;
+  std::vector<Matrix3> covariance_;
+};
 
 // Workspace blocks: k-means (Lloyd) on the measured points, started from the point nearest
 // the centroid and then each time the point farthest from the centres so far (deterministic).
@@ -151,37 +251,13 @@ std::vector<int> RandomFolds(int n, int k, std::uint64_t seed) {
   return fold;
 }
 
-// Per point: sigma_i^2 I + sigma_q^2 J J^T (header), J by central differences of `model`.
-std::vector<Matrix3> NoiseCovariances(const RobotModel& model,
-                                      const std::vector<TrackerPoint>& points,
-                                      const DiscoveryOptions& o) {
-  std::vector<Matrix3> out;
-  const double h = 1e-6;
-  for (const TrackerPoint& p : points) {
-    const double s = SigmaOf(p, o);
-    Matrix3 S = s * s * Matrix3::Identity();
-    if (o.joint_sigma_rad > 0.0) {
-      for (int i = 0; i < p.context.q.size(); ++i) {
-        MeasurementContext plus = p.context, minus = p.context;
-        plus.q(i) += h;
-        minus.q(i) -= h;
-        const Vector3 j = (EndPose(model, plus).translation() - EndPose(model, minus).translation()) /
-                          (2.0 * h);
-        S += o.joint_sigma_rad * o.joint_sigma_rad * j * j.transpose();
-      }
-    }
-    out.push_back(S);
-  }
-  return out;
-}
-
-NoiseFloor EstimateNoise(const std::vector<TrackerPoint>& points,
-                         const std::vector<Matrix3>& covariance, const DiscoveryOptions& o) {
+NoiseFloor TrackerNoise(const TrackerData& data, const DiscoveryOptions& o) {
+  const std::vector<TrackerPoint>& points = data.points();
   NoiseFloor nf;
   double sum = 0, tracker = 0;
   int stated = 0;
   for (std::size_t i = 0; i < points.size(); ++i) {
-    sum += covariance[i].trace() / 3.0;
+    sum += data.covariance()[i].trace() / 3.0;
     tracker += SigmaOf(points[i], o) * SigmaOf(points[i], o);
     if (points[i].sigma > 0.0) ++stated;
   }
@@ -219,37 +295,301 @@ NoiseFloor EstimateNoise(const std::vector<TrackerPoint>& points,
   return nf;
 }
 
-ResidualTest TestResiduals(const CrossValidation& cv, const std::vector<TrackerPoint>& points,
-                           const std::vector<Matrix3>& covariance, const DiscoveryOptions& o,
+// ---- optical axes --------------------------------------------------------------------------
+
+class OpticalData : public Data {
+ public:
+  OpticalData(const RobotModel& start, const std::vector<AxisSample>& samples,
+              const DiscoveryOptions& o)
+      : start_(start), samples_(samples), o_(o) {
+    depth_ = o_.axis_set.use_depth &&
+             std::all_of(samples_.begin(), samples_.end(),
+                         [](const AxisSample& s) { return std::isfinite(s.depth); });
+    for (const AxisSample& s : samples_) {
+      contexts_.push_back(s.context());
+      if (o_.joint_sigma_rad > 0.0) jacobians_.push_back(PositionJacobian(start, contexts_.back()));
+    }
+    for (const AxisSample& s : samples_) {
+      if (std::find(axes_.begin(), axes_.end(), s.axis) == axes_.end()) axes_.push_back(s.axis);
+    }
+    std::sort(axes_.begin(), axes_.end());
+  }
+  int size() const override { return static_cast<int>(samples_.size()); }
+  const std::string& source() const override { return o_.axis_source; }
+  const MeasurementContext& context(int i) const override { return contexts_[i]; }
+  std::string Where(int i) const override {
+    return "sample " + std::to_string(i + 1) + " (axis " + std::to_string(samples_[i].axis + 1) +
+           ")";
+  }
+  double Order(int i) const override { return i; }
+  std::string Measured() const override { return "the optical axes (the line constraint)"; }
+  bool depth() const { return depth_; }
+  const std::vector<int>& axes() const { return axes_; }
+  /// Sample i's noise: its own (the board pose's covariance) where known, else the stated one.
+  double SigmaOffset(int i) const {
+    return samples_[i].sigma_offset > 0.0 ? samples_[i].sigma_offset
+                                          : o_.axis_set.sigma_perpendicular;
+  }
+  double SigmaDepth(int i) const {
+    return samples_[i].sigma_depth > 0.0 ? samples_[i].sigma_depth : o_.axis_set.sigma_depth;
+  }
+  /// The stated joint noise at sample i through the model, averaged over directions [m^2].
+  double JointVariancePerCoordinate(int i) const {
+    return o_.joint_sigma_rad > 0.0
+               ? o_.joint_sigma_rad * o_.joint_sigma_rad * jacobians_[i].squaredNorm() / 3.0
+               : 0.0;
+  }
+  const std::vector<AxisSample>& samples() const { return samples_; }
+
+  Fit FitOn(const RobotModel& model, const std::vector<int>& train,
+            const std::string& what) const override {
+    std::vector<int> units = train;
+    if (units.empty()) {
+      units.resize(samples_.size());
+      std::iota(units.begin(), units.end(), 0);
+    }
+    // The set wants axes 0..q-1: renumber the training axes in order.
+    std::vector<int> present;
+    for (int i : units) present.push_back(samples_[i].axis);
+    std::sort(present.begin(), present.end());
+    present.erase(std::unique(present.begin(), present.end()), present.end());
+    std::vector<AxisSample> subset;
+    for (int i : units) {
+      AxisSample s = samples_[i];
+      s.axis = static_cast<int>(std::lower_bound(present.begin(), present.end(), s.axis) -
+                                present.begin());
+      subset.push_back(s);
+    }
+    OpticalAxisSetOptions so = o_.axis_set;
+    so.use_depth = depth_;
+    so.use_sample_sigmas = true;  // each sample's own noise where known (SigmaOffset)
+    OpticalAxisSet set(subset, so);
+    Fit f = Identified(model, &set, o_, o_.axis_source + " (" + what + ")");
+    f.axes = present;
+    f.lines = set.lines();
+    f.depth_offsets = set.depth_offsets();
+    return f;
+  }
+  double Rows(const std::vector<int>& train) const override {
+    return (depth_ ? 3.0 : 2.0) * train.size();
+  }
+  void HeldOut(const Fit& fit, const std::vector<int>& test, CrossValidation* cv) const override {
+    // Group the fold's samples by axis; each axis is scored by its own line.
+    std::vector<int> axes;
+    for (int i : test) {
+      if (std::find(axes.begin(), axes.end(), samples_[i].axis) == axes.end()) {
+        axes.push_back(samples_[i].axis);
+      }
+    }
+    for (int axis : axes) {
+      std::vector<int> idx;
+      std::vector<Vector3> p;
+      for (int i : test) {
+        if (samples_[i].axis != axis) continue;
+        idx.push_back(i);
+        p.push_back(EndPose(fit.result.model, contexts_[i]).translation() - samples_[i].offset);
+      }
+      const auto trained = std::find(fit.axes.begin(), fit.axes.end(), axis);
+      Line3 line;
+      double t = 0;
+      const int dim = depth_ ? 3 : 2;
+      if (trained != fit.axes.end()) {
+        // The axis trained its line: the held-out samples are scored against it (3 rows each).
+        line = fit.lines[trained - fit.axes.begin()];
+        t = depth_ ? fit.depth_offsets[trained - fit.axes.begin()] : 0.0;
+        cv->dof += dim * static_cast<double>(idx.size());
+      } else {
+        // A whole held-out axis: its own line and depth offset from its predicted points.
+        line = FitLine(p);
+        if (depth_) {
+          double c = 0;
+          for (std::size_t k = 0; k < idx.size(); ++k) {
+            c += line.direction.dot(p[k] - line.point) * samples_[idx[k]].depth;
+          }
+          if (c < 0) line.direction = -line.direction;  // along growing depth
+          for (std::size_t k = 0; k < idx.size(); ++k) {
+            t += (line.direction.dot(p[k] - line.point) - samples_[idx[k]].depth) / idx.size();
+          }
+        }
+        const double m = static_cast<double>(idx.size());
+        cv->dof += depth_ ? 3.0 * m - 5.0 : 2.0 * m - 4.0;
+      }
+      Score(line, t, idx, p, cv);
+    }
+  }
+  // The residual of samples idx (points p on their axis) against `line` and depth offset t.
+  void Score(const Line3& line, double t, const std::vector<int>& idx,
+             const std::vector<Vector3>& p, CrossValidation* cv) const {
+    const Vector3 mu = line.direction.normalized();
+    Eigen::Matrix3d P;  // rows n1, n2, mu
+    const Vector3 n1 = mu.unitOrthogonal();
+    P.row(0) = n1.transpose();
+    P.row(1) = mu.cross(n1).transpose();
+    P.row(2) = mu.transpose();
+    const int dim = depth_ ? 3 : 2;
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+      const int i = idx[k];
+      const double sp = SigmaOffset(i), sd = SigmaDepth(i);
+      const Vector3 local = P * (p[k] - line.point);
+      Eigen::VectorXd e(dim);
+      e(0) = local(0);
+      e(1) = local(1);
+      if (depth_) e(2) = local(2) - t - samples_[i].depth;
+      Eigen::MatrixXd S = Eigen::MatrixXd::Zero(dim, dim);
+      S(0, 0) = S(1, 1) = sp * sp;
+      if (depth_) S(2, 2) = sd * sd;
+      if (o_.joint_sigma_rad > 0.0) {
+        const Eigen::MatrixXd PJ = (P * jacobians_[i]).topRows(dim);
+        S += o_.joint_sigma_rad * o_.joint_sigma_rad * PJ * PJ.transpose();
+      }
+      cv->e[i] = e;
+      cv->dist2[i] = e.head<2>().squaredNorm();
+      cv->loss[i] =
+          e.head<2>().squaredNorm() / (sp * sp) + (depth_ ? e(2) * e(2) / (sd * sd) : 0.0);
+      cv->chi2[i] = e.dot(S.ldlt().solve(e));
+    }
+  }
+  bool GlobalTest() const override { return true; }
+  CrossValidation InSample(const RobotModel& model, const std::string& what) const override {
+    DiscoveryOptions stated = o_;
+    stated.engine.estimate_group_weights = false;  // the weights are the stated sigmas
+    const OpticalData with_stated(start_, samples_, stated);
+    const Fit all = with_stated.FitOn(model, {}, what);
+    CrossValidation cv;
+    const int n = size();
+    cv.e.assign(n, Eigen::VectorXd());
+    cv.loss.assign(n, 0.0);
+    cv.dist2.assign(n, 0.0);
+    cv.chi2.assign(n, 0.0);
+    for (std::size_t k = 0; k < all.axes.size(); ++k) {
+      std::vector<int> idx;
+      std::vector<Vector3> p;
+      for (int i = 0; i < n; ++i) {
+        if (samples_[i].axis != all.axes[k]) continue;
+        idx.push_back(i);
+        p.push_back(EndPose(all.result.model, contexts_[i]).translation() - samples_[i].offset);
+      }
+      Score(all.lines[k], depth_ ? all.depth_offsets[k] : 0.0, idx, p, &cv);
+    }
+    cv.dof = all.result.redundancy;
+    return cv;
+  }
+  std::vector<std::pair<std::string, std::vector<double>>> Components(
+      const CrossValidation& cv) const override {
+    std::vector<std::pair<std::string, std::vector<double>>> out{{"distance", {}}};
+    if (depth_) out.push_back({"depth", {}});
+    for (const Eigen::VectorXd& e : cv.e) {
+      out[0].second.push_back(e.head<2>().norm());
+      if (depth_) out[1].second.push_back(e(2));
+    }
+    return out;
+  }
+
+ private:
+  RobotModel start_;
+  std::vector<AxisSample> samples_;
+  const DiscoveryOptions& o_;
+  bool depth_ = false;
+  std::vector<MeasurementContext> contexts_;
+  std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>> jacobians_;
+  std::vector<int> axes_;  // distinct axis indices, ascending
+};
+
+// Region folds: whole axes, consecutive plan axes together (every sample of an axis in the
+// same fold).
+std::vector<int> AxisFolds(const OpticalData& data, int k, std::string* rule) {
+  const std::vector<int>& axes = data.axes();
+  const int q = static_cast<int>(axes.size());
+  std::vector<int> fold;
+  for (const AxisSample& s : data.samples()) {
+    const int r = static_cast<int>(std::lower_bound(axes.begin(), axes.end(), s.axis) - axes.begin());
+    fold.push_back(r * k / q);
+  }
+  std::ostringstream os;
+  os << k << " folds of whole optical axes (" << q << " axes, consecutive plan axes together); "
+     << "each held-out axis scored by the straightness of its predicted points (its own line "
+        "and depth offset fitted to them)";
+  *rule = os.str();
+  return fold;
+}
+
+NoiseFloor OpticalNoise(const OpticalData& data, const DiscoveryOptions& o) {
+  NoiseFloor nf;
+  nf.joint_sigma_rad = o.joint_sigma_rad;
+  // RMS over the samples: of the offset's sigma per coordinate (joint noise included, averaged
+  // over directions) for sigma_m, of the offset's and the depth's alone for the others.
+  double sum = 0, offset = 0, depth = 0;
+  int own = 0;
+  for (int i = 0; i < data.size(); ++i) {
+    offset += data.SigmaOffset(i) * data.SigmaOffset(i);
+    depth += data.SigmaDepth(i) * data.SigmaDepth(i);
+    sum += data.SigmaOffset(i) * data.SigmaOffset(i) + data.JointVariancePerCoordinate(i);
+    if (data.samples()[i].sigma_offset > 0.0 && data.samples()[i].sigma_depth > 0.0) ++own;
+  }
+  const int n = std::max(1, data.size());
+  nf.sigma_m = std::sqrt(sum / n);
+  nf.tracker_sigma_m = std::sqrt(offset / n);
+  nf.depth_sigma_m = data.depth() ? std::sqrt(depth / n) : -1.0;
+  nf.source = own == data.size()
+                  ? "each sample's own: the board pose's covariance (the corner noise the "
+                    "intrinsics step measured, through the camera model)"
+                  : (own == 0 ? "the stated sigmas of the offset (sigma_perpendicular) and of "
+                                "the depth (sigma_depth)"
+                              : "each sample's own where known, the stated sigmas elsewhere");
+  if (o.joint_sigma_rad > 0.0) nf.source += ", with the stated joint reading noise through the model";
+  return nf;
+}
+
+CrossValidation CrossValidate(const Data& data, const RobotModel& model,
+                              const std::vector<int>& fold_of, int folds,
+                              const std::string& what) {
+  CrossValidation cv;
+  const int n = data.size();
+  cv.e.assign(n, Eigen::VectorXd());
+  cv.loss.assign(n, 0.0);
+  cv.dist2.assign(n, 0.0);
+  cv.chi2.assign(n, 0.0);
+  for (int k = 0; k < folds; ++k) {
+    std::vector<int> train, test;
+    for (int i = 0; i < n; ++i) (fold_of[i] == k ? test : train).push_back(i);
+    if (test.empty()) continue;
+    const Fit fit = data.FitOn(model, train, what + ", fold " + std::to_string(k + 1));
+    data.HeldOut(fit, test, &cv);
+    cv.unknowns += fit.result.unknowns / static_cast<double>(folds);
+    cv.train_rows += data.Rows(train) / folds;
+  }
+  return cv;
+}
+
+ResidualTest TestResiduals(const CrossValidation& cv, const DiscoveryOptions& o,
                            const std::string& held_out) {
   ResidualTest t;
   t.held_out = held_out;
-  t.points = static_cast<int>(points.size());
+  t.points = static_cast<int>(cv.e.size());
   t.rms_m = cv.Rms();
-  double chi2 = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    chi2 += cv.e[i].dot(covariance[i].ldlt().solve(cv.e[i]));
-  }
-  t.dof = 3.0 * points.size();
-  t.inflation = cv.train_coordinates > 0 ? 1.0 + cv.unknowns / cv.train_coordinates : 1.0;
+  const double chi2 = std::accumulate(cv.chi2.begin(), cv.chi2.end(), 0.0);
+  t.dof = cv.dof;
+  t.inflation = cv.train_rows > 0 ? 1.0 + cv.unknowns / cv.train_rows : 1.0;
   t.statistic = chi2 / t.inflation;
   t.p_value = stats::ChiSquareUpperTail(t.statistic, t.dof);
   t.systematic = t.p_value < o.alpha;
   return t;
 }
 
-std::string Mm(double m) {
-  std::ostringstream os;
-  os.precision(4);
-  os << 1e3 * m << " mm";
-  return os.str();
+// The residual test of `model` (step 2): held out (random folds) or, where the data says so,
+// the adjustment's global test.
+ResidualTest RunResidualTest(const Data& data, const RobotModel& model,
+                             const std::vector<int>& folds_of, int folds,
+                             const DiscoveryOptions& o, const std::string& rule,
+                             const std::string& what) {
+  if (!data.GlobalTest()) return TestResiduals(CrossValidate(data, model, folds_of, folds, what), o, rule);
+  return TestResiduals(data.InSample(model, what + ", every sample"), o, rule);
 }
 
 // Scores one candidate against the step's base (its region cross-validation `base_cv`).
-CandidateScore ScoreCandidate(const RobotModel& base, int base_rank, const TermSpec& spec,
-                              const std::vector<TrackerPoint>& points,
-                              const std::vector<int>& region, const CrossValidation& base_cv,
-                              const DiscoveryOptions& o) {
+CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base_rank,
+                              const TermSpec& spec, const std::vector<int>& region, int folds,
+                              const CrossValidation& base_cv) {
   CandidateScore c;
   c.spec = spec;
   c.label = TermLabel(spec);
@@ -261,16 +601,16 @@ CandidateScore ScoreCandidate(const RobotModel& base, int base_rank, const TermS
     c.note = e.what();
     return c;
   }
-  for (const TrackerPoint& p : points) {
-    const std::string missing = MissingContext(model, p.context);
+  for (int i = 0; i < data.size(); ++i) {
+    const std::string missing = MissingContext(model, data.context(i));
     if (!missing.empty()) {
       c.applicable = false;
-      c.note = "not applicable: " + missing + " (row " + std::to_string(p.row) + ")";
+      c.note = "not applicable: " + missing + " (" + data.Where(i) + ")";
       return c;
     }
   }
   const int added = static_cast<int>(model.terms.back()->parameters().size());
-  const Fit all = FitModel(model, points, o, "candidate " + c.label + ", every point");
+  const Fit all = data.FitOn(model, {}, "candidate " + c.label + ", all data");
   const int first = model.num_parameters() - added;
   for (int k = 0; k < added; ++k) {
     const IdentifiedParameter& ip = all.result.parameters[first + k];
@@ -279,7 +619,7 @@ CandidateScore ScoreCandidate(const RobotModel& base, int base_rank, const TermS
   const int rank = all.result.observability.rank;
   if (rank <= base_rank) {
     c.identifiable = false;
-    c.note = "unidentifiable from these points: the rank does not rise with its " +
+    c.note = "unidentifiable from " + data.Measured() + ": the rank does not rise with its " +
              std::to_string(added) + " parameter(s) (the measurements cannot tell it from the "
              "geometry, or it has nothing to act on)";
     return c;
@@ -304,71 +644,67 @@ CandidateScore ScoreCandidate(const RobotModel& base, int base_rank, const TermS
       }
     }
   }
-  const CrossValidation cv =
-      CrossValidate(model, points, region, o.folds, o, "candidate " + c.label);
+  const CrossValidation cv = CrossValidate(data, model, region, folds, "candidate " + c.label);
   c.heldout_rms_m = cv.Rms();
   const double base_sse = base_cv.Sse();
   c.gain_percent = base_sse > 0 ? 100.0 * (1.0 - cv.Sse() / base_sse) : 0.0;
-  std::vector<double> d(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    d[i] = base_cv.e[i].squaredNorm() - cv.e[i].squaredNorm();
-  }
+  std::vector<double> d(cv.loss.size());
+  for (std::size_t i = 0; i < d.size(); ++i) d[i] = base_cv.loss[i] - cv.loss[i];
   c.p_value = stats::WilcoxonSignedRankGreater(d).p_value;
   c.tested = true;
   return c;
 }
 
-// Quantities the residual is correlated with and mapped against, per point.
+// Quantities the residual is correlated with and mapped against, per unit of data.
 struct Quantity {
   std::string name, unit;
   std::vector<double> values;
 };
 
-std::vector<Quantity> Quantities(const RobotModel& model, const std::vector<TrackerPoint>& points) {
+std::vector<Quantity> Quantities(const RobotModel& model, const Data& data) {
   std::vector<Quantity> out;
   const int n = model.chain.num_joints();
+  const int units = data.size();
   for (int j = 0; j < n; ++j) {
     Quantity q{"q" + std::to_string(j + 1), "rad", {}};
-    for (const TrackerPoint& p : points) q.values.push_back(p.context.q(j));
+    for (int i = 0; i < units; ++i) q.values.push_back(data.context(i).q(j));
     out.push_back(q);
   }
   std::vector<Eigen::VectorXd> tau;
-  for (const TrackerPoint& p : points) tau.push_back(GravityTorques(model, p.context.q));
+  for (int i = 0; i < units; ++i) tau.push_back(GravityTorques(model, data.context(i).q));
   for (int j = 0; j < n; ++j) {
     Quantity q{"tau" + std::to_string(j + 1), "N m", {}};
     for (const Eigen::VectorXd& t : tau) q.values.push_back(t(j));
     out.push_back(q);
   }
   Quantity order{"order", "row", {}};
-  for (const TrackerPoint& p : points) order.values.push_back(p.row);
+  for (int i = 0; i < units; ++i) order.values.push_back(data.Order(i));
   out.push_back(order);
-  if (std::all_of(points.begin(), points.end(),
-                  [](const TrackerPoint& p) { return p.context.has_time(); })) {
+  bool time = true, temperature = true;
+  for (int i = 0; i < units; ++i) {
+    time = time && data.context(i).has_time();
+    temperature = temperature && data.context(i).has_temperature();
+  }
+  if (time) {
     Quantity q{"time", "s", {}};
-    for (const TrackerPoint& p : points) q.values.push_back(p.context.time_s);
+    for (int i = 0; i < units; ++i) q.values.push_back(data.context(i).time_s);
     out.push_back(q);
   }
-  if (std::all_of(points.begin(), points.end(),
-                  [](const TrackerPoint& p) { return p.context.has_temperature(); })) {
+  if (temperature) {
     Quantity q{"temperature", "K", {}};
-    for (const TrackerPoint& p : points) q.values.push_back(p.context.temperature_delta_K);
+    for (int i = 0; i < units; ++i) q.values.push_back(data.context(i).temperature_delta_K);
     out.push_back(q);
   }
   return out;
 }
 
-void Evidence(const RobotModel& model, const std::vector<TrackerPoint>& points,
-              const CrossValidation& cv, DiscoveryResult* r) {
-  const std::vector<Quantity> quantities = Quantities(model, points);
-  std::vector<std::vector<double>> comp(4);
-  const char* names[4] = {"x", "y", "z", "norm"};
-  for (const Vector3& e : cv.e) {
-    for (int a = 0; a < 3; ++a) comp[a].push_back(e(a));
-    comp[3].push_back(e.norm());
-  }
+void Evidence(const RobotModel& model, const Data& data, const CrossValidation& cv,
+              DiscoveryResult* r) {
+  const std::vector<Quantity> quantities = Quantities(model, data);
+  const auto components = data.Components(cv);
   for (const Quantity& q : quantities) {
-    for (int a = 0; a < 4; ++a) {
-      r->evidence.push_back({q.name, names[a], stats::Correlation(q.values, comp[a])});
+    for (const auto& [name, values] : components) {
+      r->evidence.push_back({q.name, name, stats::Correlation(q.values, values)});
     }
     // Map: residual RMS in 8 equal bins of the quantity's range.
     ResidualMap m;
@@ -382,7 +718,7 @@ void Evidence(const RobotModel& model, const std::vector<TrackerPoint>& points,
     for (std::size_t i = 0; i < q.values.size(); ++i) {
       int b = hi > lo ? static_cast<int>((q.values[i] - lo) / (hi - lo) * bins) : 0;
       b = std::clamp(b, 0, bins - 1);
-      ss[b] += cv.e[i].squaredNorm();
+      ss[b] += cv.dist2[i];
       ++m.count[b];
     }
     for (int b = 0; b < bins; ++b) {
@@ -398,66 +734,28 @@ void Evidence(const RobotModel& model, const std::vector<TrackerPoint>& points,
   if (r->evidence.size() > 8) r->evidence.resize(8);
 }
 
-}  // namespace
-
-void ValidateDiscoveryOptions(const DiscoveryOptions& o) {
-  const auto fail = [](const std::string& field, const std::string& why) {
-    throw InputError("diagnosis." + field, why);
-  };
-  if (!(o.alpha > 0.0 && o.alpha < 0.5)) fail("alpha", "must be in (0, 0.5)");
-  if (!(o.min_gain_percent >= 0.0 && o.min_gain_percent < 100.0)) {
-    fail("min_gain_percent", "must be in [0, 100)");
-  }
-  if (o.max_effects < 0 || o.max_effects > 10) fail("max_effects", "must be from 0 to 10");
-  if (o.folds < 2 || o.folds > 20) fail("folds", "must be from 2 to 20");
-  if (!(o.correlation_limit > 0.0 && o.correlation_limit <= 1.0)) {
-    fail("correlation_limit", "must be in (0, 1]");
-  }
-  if (o.jobs < 0) fail("jobs", "must be >= 0");
-  if (!(o.joint_sigma_rad >= 0.0 && o.joint_sigma_rad <= 0.01)) {
-    fail("joint_sigma", "must be from 0 to 0.01 rad (0.57 deg)");
-  }
-  ValidateIdentificationOptions(o.engine);
-}
-
-DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
-                                     const std::vector<TrackerPoint>& points,
-                                     const DiscoveryOptions& o) {
-  ValidateDiscoveryOptions(o);
-  const int n = static_cast<int>(points.size());
-  const int per_fold_train = n - (n + o.folds - 1) / o.folds;
-  if (3 * per_fold_train <= start.num_parameters() + 6) {
-    throw InputError(o.set.source, "model discovery: " + std::to_string(n) + " points leave " +
-                                       std::to_string(per_fold_train) +
-                                       " to train on in a fold of " + std::to_string(o.folds) +
-                                       ", too few for the model's " +
-                                       std::to_string(start.num_parameters()) +
-                                       " parameters and the tracker pose");
-  }
+// Steps 2-4 of the header on any kind of data; `r` holds the noise floor and the fold rules.
+void Discover(const Data& data, const RobotModel& start, const std::vector<int>& random,
+              int random_folds, const std::vector<int>& region, int folds,
+              const std::string& random_rule,
+              const DiscoveryOptions& o, DiscoveryResult* out) {
+  DiscoveryResult& r = *out;
   const auto say = [&](const std::string& line) {
     if (o.progress) o.progress(line);
   };
-  DiscoveryResult r;
-  const std::vector<Matrix3> covariance = NoiseCovariances(start, points, o);
-  r.noise = EstimateNoise(points, covariance, o);
-  const std::vector<int> random = RandomFolds(n, o.folds, o.seed);
-  const std::vector<int> region = RegionFolds(points, o.folds, &r.region_rule);
-  const std::string random_rule = std::to_string(o.folds) + "-fold cross-validation, points "
-                                  "assigned to folds at random (seed " + std::to_string(o.seed) +
-                                  ")";
-
   RobotModel current = start;
-  say("diagnosis: residual test of the starting model (" + std::to_string(o.folds) + " folds)");
-  r.test_before = TestResiduals(CrossValidate(current, points, random, o.folds, o, "residual test"),
-                                points, covariance, o, random_rule);
-  CrossValidation current_region =
-      CrossValidate(current, points, region, o.folds, o, "region folds");
+  say("diagnosis: residual test of the starting model (" + std::to_string(random_folds) +
+      " folds)");
+  r.test_before =
+      RunResidualTest(data, current, random, random_folds, o, random_rule, "residual test");
+  CrossValidation current_region = CrossValidate(data, current, region, folds, "region folds");
   r.heldout_rms_start_m = current_region.Rms();
   if (!r.test_before.systematic) {
     r.verdict = "consistent_with_noise";
     std::ostringstream os;
-    os << "the held-out residuals (RMS " << Mm(r.test_before.rms_m) << ") are consistent with "
-       << "the noise floor (sigma " << Mm(r.noise.sigma_m) << " per axis): p = "
+    os << "the residuals of the residual test (RMS " << Mm(r.test_before.rms_m)
+       << ") are consistent with the noise floor (sigma " << Mm(r.noise.sigma_m)
+       << " per coordinate): p = "
        << r.test_before.p_value << " >= alpha = " << o.alpha << "; no effect searched";
     r.reason = os.str();
     r.test_after = r.test_before;
@@ -468,19 +766,18 @@ DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
     const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
     const int jobs = o.jobs > 0 ? o.jobs : static_cast<int>(cores);
     for (int step = 1; step <= o.max_effects; ++step) {
-      const int base_rank = FitModel(current, points, o, "step base").result.observability.rank;
+      const int base_rank = data.FitOn(current, {}, "step base").result.observability.rank;
       DiscoveryStep s;
       s.index = step;
       s.heldout_rms_before_m = current_region.Rms();
       s.candidates.resize(all_specs.size());
       std::atomic<int> next{0}, done{0};
       std::mutex mutex;
-      std::string error;
       const auto worker = [&]() {
         for (int k = next++; k < static_cast<int>(all_specs.size()); k = next++) {
           try {
-            s.candidates[k] = ScoreCandidate(current, base_rank, all_specs[k], points, region,
-                                             current_region, o);
+            s.candidates[k] = ScoreCandidate(data, current, base_rank, all_specs[k], region,
+                                             folds, current_region);
           } catch (const std::exception& e) {
             s.candidates[k].spec = all_specs[k];
             s.candidates[k].label = TermLabel(all_specs[k]);
@@ -543,7 +840,7 @@ DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
       const CandidateScore& accepted = s.candidates[best];
       s.accepted = best;
       current = WithTerm(current, MakeErrorTerm(accepted.spec, start.chain, start.name()));
-      current_region = CrossValidate(current, points, region, o.folds, o, "region folds");
+      current_region = CrossValidate(data, current, region, folds, "region folds");
       s.heldout_rms_after_m = current_region.Rms();
       r.effects_added.push_back(accepted);
       say("diagnosis: step " + std::to_string(step) + " added " + accepted.label +
@@ -551,9 +848,8 @@ DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
       r.steps.push_back(std::move(s));
       // Once the residual is consistent with the noise there is nothing left to explain: a
       // further term could only fit noise.
-      r.test_after = TestResiduals(
-          CrossValidate(current, points, random, o.folds, o, "residual test"), points, covariance,
-          o, random_rule);
+      r.test_after =
+          RunResidualTest(data, current, random, random_folds, o, random_rule, "residual test");
       if (!r.test_after.systematic) break;
     }
     r.heldout_rms_discovered_m = current_region.Rms();
@@ -561,9 +857,9 @@ DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
       r.test_after = r.test_before;
       r.verdict = "unexplained";
       std::ostringstream os;
-      os << "the held-out residuals (RMS " << Mm(r.test_before.rms_m)
+      os << "the residuals of the residual test (RMS " << Mm(r.test_before.rms_m)
          << ") are systematic (p = " << r.test_before.p_value << " against sigma "
-         << Mm(r.noise.sigma_m) << " per axis) and no candidate effect passes";
+         << Mm(r.noise.sigma_m) << " per coordinate) and no candidate effect passes";
       r.reason = os.str();
     } else {
       r.verdict = "effects_added";
@@ -576,10 +872,91 @@ DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
       r.reason = os.str();
     }
   }
-  const Fit final_fit = FitModel(current, points, o, "discovered model, every point");
+  const Fit final_fit = data.FitOn(current, {}, "discovered model, all data");
   r.model = final_fit.result.model;
   r.X_TB = final_fit.X_TB;
-  Evidence(start, points, current_region, &r);
+  Evidence(start, data, current_region, &r);
+}
+
+}  // namespace
+
+void ValidateDiscoveryOptions(const DiscoveryOptions& o) {
+  const auto fail = [](const std::string& field, const std::string& why) {
+    throw InputError("diagnosis." + field, why);
+  };
+  if (!(o.alpha > 0.0 && o.alpha < 0.5)) fail("alpha", "must be in (0, 0.5)");
+  if (!(o.min_gain_percent >= 0.0 && o.min_gain_percent < 100.0)) {
+    fail("min_gain_percent", "must be in [0, 100)");
+  }
+  if (o.max_effects < 0 || o.max_effects > 10) fail("max_effects", "must be from 0 to 10");
+  if (o.folds < 2 || o.folds > 20) fail("folds", "must be from 2 to 20");
+  if (!(o.correlation_limit > 0.0 && o.correlation_limit <= 1.0)) {
+    fail("correlation_limit", "must be in (0, 1]");
+  }
+  if (o.jobs < 0) fail("jobs", "must be >= 0");
+  if (!(o.joint_sigma_rad >= 0.0 && o.joint_sigma_rad <= 0.01)) {
+    fail("joint_sigma", "must be from 0 to 0.01 rad (0.57 deg)");
+  }
+  ValidateIdentificationOptions(o.engine);
+}
+
+DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
+                                     const std::vector<TrackerPoint>& points,
+                                     const DiscoveryOptions& o) {
+  ValidateDiscoveryOptions(o);
+  const int n = static_cast<int>(points.size());
+  const int per_fold_train = n - (n + o.folds - 1) / o.folds;
+  if (3 * per_fold_train <= start.num_parameters() + 6) {
+    throw InputError(o.set.source, "model discovery: " + std::to_string(n) + " points leave " +
+                                       std::to_string(per_fold_train) +
+                                       " to train on in a fold of " + std::to_string(o.folds) +
+                                       ", too few for the model's " +
+                                       std::to_string(start.num_parameters()) +
+                                       " parameters and the tracker pose");
+  }
+  const TrackerData data(start, points, o);
+  DiscoveryResult r;
+  r.data = "tracker_points";
+  r.noise = TrackerNoise(data, o);
+  const std::vector<int> random = RandomFolds(n, o.folds, o.seed);
+  const std::vector<int> region = RegionFolds(points, o.folds, &r.region_rule);
+  const std::string random_rule = std::to_string(o.folds) + "-fold cross-validation, points "
+                                  "assigned to folds at random (seed " + std::to_string(o.seed) +
+                                  ")";
+  Discover(data, start, random, o.folds, region, o.folds, random_rule, o, &r);
+  return r;
+}
+
+DiscoveryResult DiscoverOpticalAxisModel(const RobotModel& start,
+                                         const std::vector<AxisSample>& samples,
+                                         const DiscoveryOptions& o) {
+  ValidateDiscoveryOptions(o);
+  const OpticalData data(start, samples, o);
+  for (int axis : data.axes()) {
+    const auto m = std::count_if(samples.begin(), samples.end(),
+                                 [&](const AxisSample& s) { return s.axis == axis; });
+    if (m < 3 || axis < 0) {
+      throw InputError(o.axis_source, "model discovery: axis " + std::to_string(axis + 1) +
+                                          " has " + std::to_string(m) +
+                                          " samples; every axis needs 3 or more");
+    }
+  }
+  const int q = static_cast<int>(data.axes().size());
+  if (q < 3) {
+    throw InputError(o.axis_source, "model discovery: " + std::to_string(q) +
+                                        " optical axes; held-out scoring by whole axes needs 3 "
+                                        "or more (2 to train on in every fold)");
+  }
+  const int folds = std::min(o.folds, q);  // of the region folds
+  DiscoveryResult r;
+  r.data = "optical_axes";
+  r.noise = OpticalNoise(data, o);
+  const std::string global_rule =
+      "in sample: the adjustment's global test, every sample fitted with the stated sigmas, "
+      "chi-square over the redundancy (rows less the unknowns, lines included); held-out "
+      "samples of few short axes have leverages up to near 1 and a heavy-tailed chi-square";
+  const std::vector<int> region = AxisFolds(data, folds, &r.region_rule);
+  Discover(data, start, region, folds, region, folds, global_rule, o, &r);
   return r;
 }
 

@@ -1,7 +1,11 @@
-// Model discovery on laser-tracker points (issue 15): after the identification, decide whether
-// the residual is noise or systematic, trace it to a physical effect the model lacks, add that
-// effect and report the held-out error before and after. Estimator side only: points, their
-// stated sigmas and the nominal model; never a true value.
+// Model discovery (issue 15): after the identification, decide whether the residual is noise or
+// systematic, trace it to a physical effect the model lacks, add that effect and report the
+// held-out error before and after. Two kinds of data: laser-tracker points
+// (DiscoverTrackerModel) and optical-axis samples (DiscoverOpticalAxisModel, the line
+// constraint of Zhu et al. 2019, eq. 13-15, with the depth scale measurement). Estimator side
+// only: the measurements, their stated noise and the nominal model; never a true value.
+//
+// The steps below are written for tracker points; what differs for optical axes is at the end.
 //
 // 1. Noise floor: the points' stated sigmas (the file's sigma column), else the set's default,
 //    plus the joint readings' noise when the engineer states it (joint_sigma_rad, an encoder's
@@ -32,6 +36,34 @@
 //    "unexplained" (systematic and no candidate passes), with the residual's strongest
 //    correlations (joint angles, gravity torques, time, temperature, acquisition order) and
 //    binned residual maps as evidence.
+//
+// Optical axes (DiscoverOpticalAxisModel). A unit of data is one aligned pose (AxisSample).
+// - Noise floor: each sample's own sigmas where it states them (AxisSample::sigma_offset,
+//   sigma_depth: the board pose's covariance, i.e. the corner noise the intrinsics step
+//   measured carried through the camera model, optical_axis_procedure.cc), else the stated
+//   ones (OpticalAxisSetOptions: sigma_perpendicular, the camera's measurement of the servo's
+//   residual offset; sigma_depth, the depth from the board pose); plus the stated joint reading
+//   noise through the model's Jacobian, projected on (n1, n2, line direction). Every
+//   identification of the diagnosis weights each sample by its own sigmas.
+// - Residual test: the adjustment's global test, not a held-out one: every sample fitted with
+//   those weights (no re-estimation), chi-square of the whitened residuals against
+//   chi-square(redundancy), the rows less every unknown (the geometry's rank, 4 + 1 per line).
+//   A held-out sample of few, short axes is predicted against a line trained on a handful of
+//   its neighbours (leverages up to near 1): its chi-square is heavy-tailed, and on synthetic
+//   geometric truths the held-out test called 4 to 7 of 10 clean seeds systematic; the global
+//   test's null distribution is exact for a linear model and called 0 of 10.
+// - Candidates: region folds of whole axes (consecutive plan axes together, K = min(folds,
+//   axes)): the axis's own line is a nuisance, so a held-out axis is scored by the straightness
+//   of its predicted points p_i = p_BE(q_i) - o_i: the total-least-squares line through them
+//   (FitLine) gives each sample's perpendicular offset in a basis (n1, n2) of the plane normal
+//   to the line and, with depths, its along-line position less the measured depth less their
+//   mean offset (eq. 13-15 and the scale measurement of nonlinear_identification.h). Gains and
+//   the paired test compare whitened squared residuals (the depth is noisier and would
+//   otherwise dominate); RMS figures are of the perpendicular distance, the paper's
+//   misaligned error.
+// A term the line constraint cannot see (the compliance of a joint gravity has no torque
+// about, a scale without depths, a tool offset along the camera axis) does not raise the rank:
+// the report names it unidentifiable, it is never tested or added.
 #pragma once
 
 #include <cstdint>
@@ -40,6 +72,7 @@
 #include <vector>
 
 #include "calib/identification/engine.h"
+#include "calib/measurements/optical_axis_set.h"
 #include "calib/measurements/tracker_set.h"
 #include "calib/model/error_term.h"
 #include "calib/model/robot_model.h"
@@ -64,7 +97,11 @@ struct DiscoveryOptions {
   double joint_sigma_rad = 0.0;
   int jobs = 0;                    ///< parallel candidate evaluations; 0: the machine's cores
   IdentificationOptions engine;    ///< of every identification
-  TrackerSetOptions set;           ///< default sigma, source for messages
+  TrackerSetOptions set;           ///< default sigma, source for messages (tracker points)
+  /// Optical axes: the stated noise (sigma_perpendicular, sigma_depth), the use of depths and
+  /// the Huber threshold of every identification.
+  OpticalAxisSetOptions axis_set;
+  std::string axis_source = "optical-axis samples";  ///< origin, for messages (optical axes)
   /// Called with a line of progress (step, candidate k of m); may be empty.
   std::function<void(const std::string&)> progress;
 };
@@ -73,9 +110,12 @@ struct DiscoveryOptions {
 void ValidateDiscoveryOptions(const DiscoveryOptions& options);
 
 struct NoiseFloor {
-  /// RMS over the points of the per-axis noise sqrt(trace(Sigma_i) / 3) [m]
+  /// Tracker: RMS over the points of the per-axis noise sqrt(trace(Sigma_i) / 3); optical
+  /// axes: of the perpendicular noise per coordinate, joint noise included [m]
   double sigma_m = 0;
-  double tracker_sigma_m = 0;  ///< RMS of the points' stated (or default) sigmas [m]
+  /// RMS of the points' stated (or default) sigmas; optical axes: sigma_perpendicular [m]
+  double tracker_sigma_m = 0;
+  double depth_sigma_m = -1;   ///< optical axes with depths: sigma_depth [m]; -1 none
   double joint_sigma_rad = 0;  ///< the readings' stated noise carried through the model [rad]
   std::string source;     ///< "stated per point", "the set's default", ...
   int repeated_groups = 0;       ///< groups of points at the same joint readings
@@ -125,7 +165,9 @@ struct DiscoveryStep {
 
 struct ResidualCorrelation {
   std::string quantity;   ///< "q3", "tau2", "time", "temperature", "order"
-  std::string component;  ///< "x", "y", "z" (tracker frame) or "norm"
+  /// "x", "y", "z" (tracker frame) or "norm"; optical axes "distance" (perpendicular) or
+  /// "depth" (along-line, signed)
+  std::string component;
   double r = 0;           ///< Pearson correlation over the held-out residuals [-]
 };
 
@@ -138,6 +180,7 @@ struct ResidualMap {
 };
 
 struct DiscoveryResult {
+  std::string data;               ///< "tracker_points" or "optical_axes"
   std::string verdict;            ///< consistent_with_noise | effects_added | unexplained
   std::string reason;             ///< one sentence for the report
   NoiseFloor noise;
@@ -149,7 +192,7 @@ struct DiscoveryResult {
   std::vector<DiscoveryStep> steps;
   std::vector<CandidateScore> effects_added;
   RobotModel model;               ///< the discovered model, identified on every point
-  Transform X_TB = Transform::Identity();
+  Transform X_TB = Transform::Identity();  ///< tracker points: the tracker pose
   std::vector<ResidualCorrelation> evidence;  ///< strongest |r| first (at most 8)
   std::vector<ResidualMap> maps;  ///< residual vs each joint angle, gravity torque, order
 };
@@ -159,5 +202,13 @@ struct DiscoveryResult {
 DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
                                      const std::vector<TrackerPoint>& points,
                                      const DiscoveryOptions& options = {});
+
+/// The diagnosis on one robot's optical-axis samples (header, "Optical axes"); `start` is the
+/// board robot's model (BoardRobotModel: end point the feature point) plus any declared terms;
+/// sample axis indices may have gaps (plan axes). Throws InputError for bad options, fewer
+/// than 3 axes with 3 or more samples, or samples the set refuses.
+DiscoveryResult DiscoverOpticalAxisModel(const RobotModel& start,
+                                         const std::vector<AxisSample>& samples,
+                                         const DiscoveryOptions& options = {});
 
 }  // namespace twin

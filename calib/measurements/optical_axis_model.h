@@ -32,6 +32,11 @@ struct AxisSample {
   /// board's pose (known square length); NaN when not measured. Only differences between
   /// samples of one axis are used (the scale measurement of IdentifyNonlinear).
   double depth = std::numeric_limits<double>::quiet_NaN();
+  /// Standard deviations of the camera's measurement of `offset` (per coordinate across the
+  /// axis) and of `depth`, from the board pose's covariance (the corner noise through the
+  /// camera model) [m]; 0: not known (users fall back to a stated default).
+  double sigma_offset = 0.0;
+  double sigma_depth = 0.0;
   /// Sign of each joint's last motion before the reading (empty: unknown); see
   /// MeasurementContext.
   JointVector approach;

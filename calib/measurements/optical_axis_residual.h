@@ -22,6 +22,7 @@ struct OpticalAxisLine {
   Vector3 c0;
   Eigen::Matrix<double, 3, 2> N;
   const double& weight;  // owned by the measurement set; re-estimated between solves
+  double scale = 1.0;    // the sample's own factor on weight (its sigma relative to the group's)
 
   template <typename T>
   bool operator()(const T* p, const T* s, const T* mu, T* residual) const {
@@ -29,7 +30,7 @@ struct OpticalAxisLine {
     const Vec3T<T> m(mu[0], mu[1], mu[2]);
     const Vec3T<T> d = Vec3T<T>(p[0], p[1], p[2]) - offset.cast<T>() - c;
     const Vec3T<T> r = d - m * (d.dot(m) / m.squaredNorm());
-    for (int i = 0; i < 3; ++i) residual[i] = T(weight) * r(i);
+    for (int i = 0; i < 3; ++i) residual[i] = T(weight * scale) * r(i);
     return true;
   }
 };
@@ -44,6 +45,7 @@ struct OpticalAxisLineDepth {
   OpticalAxisLine line;
   double depth;
   const double& depth_weight;  // 1 / sigma of the depth [1/m]
+  double depth_scale = 1.0;    // the sample's own factor on depth_weight
 
   template <typename T>
   bool operator()(const T* p, const T* s, const T* mu, const T* t, T* residual) const {
@@ -52,7 +54,7 @@ struct OpticalAxisLineDepth {
                        line.N.col(1).cast<T>() * s[1];
     const Vec3T<T> m(mu[0], mu[1], mu[2]);
     const Vec3T<T> e = Vec3T<T>(p[0], p[1], p[2]) - line.offset.cast<T>() - c;
-    residual[3] = T(depth_weight) * (e.dot(m) / m.norm() - t[0] - T(depth));
+    residual[3] = T(depth_weight * depth_scale) * (e.dot(m) / m.norm() - t[0] - T(depth));
     return true;
   }
 };

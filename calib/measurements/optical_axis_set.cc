@@ -113,7 +113,12 @@ void OpticalAxisSet::AddResiduals(const RobotModel& model, double* params,
   blocks_.clear();
   for (const AxisSample& smp : samples_) {
     const int k = smp.axis;
-    const OpticalAxisLine line{smp.offset, c0_[k], N_[k], w_perp_};
+    const bool own = options_.use_sample_sigmas;
+    const double scale = own && smp.sigma_offset > 0.0
+                             ? options_.sigma_perpendicular / smp.sigma_offset : 1.0;
+    const double depth_scale =
+        own && smp.sigma_depth > 0.0 ? options_.sigma_depth / smp.sigma_depth : 1.0;
+    const OpticalAxisLine line{smp.offset, c0_[k], N_[k], w_perp_, scale};
     // A Huber loss on the whole block (the perpendicular rows dominate it).
     ceres::LossFunction* loss =
         options_.huber_scale > 0.0
@@ -121,7 +126,7 @@ void OpticalAxisSet::AddResiduals(const RobotModel& model, double* params,
             : nullptr;
     if (depth_) {
       auto* cost = new PointMeasurementCost<OpticalAxisLineDepth, 4, 2, 3, 1>(
-          model, smp.context(), new OpticalAxisLineDepth{line, smp.depth, w_depth_});
+          model, smp.context(), new OpticalAxisLineDepth{line, smp.depth, w_depth_, depth_scale});
       blocks_.push_back(problem->AddResidualBlock(
           cost, loss, {params, s_[k].data(), mu_[k].data(), &t_[k]}));
     } else {

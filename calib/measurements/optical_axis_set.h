@@ -23,6 +23,9 @@ struct OpticalAxisSetOptions {
   /// Huber threshold on a sample's perpendicular distance [m]; 0: plain least squares. Applied
   /// in whitened units with the starting sigma_perpendicular.
   double huber_scale = 0.0;
+  /// Weight each sample by its own sigmas (AxisSample::sigma_offset, sigma_depth) where known,
+  /// relative to the two above (which then scale the groups); false: every sample alike.
+  bool use_sample_sigmas = false;
 };
 
 class OpticalAxisSet : public MeasurementSet {
@@ -53,6 +56,8 @@ class OpticalAxisSet : public MeasurementSet {
   const std::vector<Line3>& initial_lines() const { return initial_; }
   /// RMS of (along-line position - t_k - depth) over the samples at the current values [m].
   double DepthRms(const RobotModel& model) const;
+  /// The along-line offsets t_k of the depth residuals (current values; 0 without depths) [m].
+  const std::vector<double>& depth_offsets() const { return t_; }
   /// Current weights (1 / sigma) of the perpendicular and depth residuals [1/m].
   double perpendicular_weight() const { return w_perp_; }
   double depth_weight() const { return w_depth_; }

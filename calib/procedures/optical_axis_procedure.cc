@@ -41,8 +41,20 @@ std::string Fixed(double v, int digits) {
 // centre corner is the board's centre of symmetry, so P does not depend on how OpenCV ordered
 // the corners. nullopt when the board was not found or lies behind the camera. `det` is in
 // frame coordinates.
-std::optional<Vector3> FeaturePointInCamera(const FeatureDetection& det, const BoardGeometry& board,
-                                            const IntrinsicsResult& intr) {
+//
+// Its covariance: the pose's, sigma^2 (J^T J)^-1 with J the reprojections' Jacobian in the
+// pose (cv::projectPoints, at the refined pose) and sigma the corner noise the intrinsics step
+// measured (its RMS reprojection error over every corner of every view); P is the board
+// frame's origin, so its covariance is the translation block. The intrinsics' own error (a
+// common scale of every depth) is not in it: that is one error for the run, not noise.
+struct FeaturePoint {
+  Vector3 p_C = Vector3::Zero();
+  Matrix3 covariance = Matrix3::Zero();
+};
+
+std::optional<FeaturePoint> FeaturePointInCamera(const FeatureDetection& det,
+                                                 const BoardGeometry& board,
+                                                 const IntrinsicsResult& intr) {
   if (det.status != DetectionStatus::kFound) return std::nullopt;
   const cv::Size n = det.pattern_size;
   std::vector<cv::Point3d> object;
@@ -64,7 +76,20 @@ std::optional<Vector3> FeaturePointInCamera(const FeatureDetection& det, const B
   // Refine by Levenberg-Marquardt on the reprojection error.
   cv::solvePnPRefineLM(object, pixels, K, dist, rvec, tvec);
   if (!(tvec[2] > 0)) return std::nullopt;
-  return Vector3(tvec[0], tvec[1], tvec[2]);
+  FeaturePoint f;
+  f.p_C = Vector3(tvec[0], tvec[1], tvec[2]);
+  std::vector<cv::Point2d> projected;
+  cv::Mat jacobian;  // 2N x (3 rvec + 3 tvec + 2 f + 2 c + 5 distortion)
+  cv::projectPoints(object, rvec, tvec, K, dist, projected, jacobian);
+  Eigen::Matrix<double, 6, 6> JtJ = Eigen::Matrix<double, 6, 6>::Zero();
+  for (int row = 0; row < jacobian.rows; ++row) {
+    Eigen::Matrix<double, 6, 1> g;
+    for (int c = 0; c < 6; ++c) g(c) = jacobian.at<double>(row, c);
+    JtJ += g * g.transpose();
+  }
+  const Eigen::Matrix<double, 6, 6> cov = intr.rms_px * intr.rms_px * JtJ.inverse();
+  if (cov.allFinite()) f.covariance = cov.block<3, 3>(3, 3);
+  return f;
 }
 
 // The samples of `axes` (plan indices), renumbered 0.. in that order; axes with fewer than 3
@@ -530,9 +555,9 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
           say(where + ": skipped (" + ToString(sr.status) + "): " + sr.reason);
           continue;
         }
-        const std::optional<Vector3> p_C =
+        const std::optional<FeaturePoint> fp =
             FeaturePointInCamera(sr.detection_after, knowledge.board, out.intrinsics);
-        if (!p_C) {
+        if (!fp) {
           rc.failed.push_back({k, i, "board_pose_failed",
                                "aligned, but solvePnP found no board pose in the last image",
                                sr.frames});
@@ -545,6 +570,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
         ap.q_passive = sr.q_passive;
         ap.q_active = setup.q_active;
         ap.pixel_error = sr.pixel_error;
+        const Vector3* p_C = &fp->p_C;
         ap.p_C = *p_C;
         ap.offset = R_BpC * Vector3(p_C->x(), p_C->y(), 0.0);
         ap.frames = sr.frames;
@@ -558,6 +584,8 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
         smp.q = sr.q_passive;
         smp.offset = ap.offset;
         smp.depth = p_C->z();
+        smp.sigma_offset = std::sqrt(0.5 * (fp->covariance(0, 0) + fp->covariance(1, 1)));
+        smp.sigma_depth = std::sqrt(fp->covariance(2, 2));
         rc.samples.push_back(smp);
         correction = EndPose(rc.nominal, sr.q_passive).translation() -
                      EndPose(rc.nominal, planned).translation();

@@ -11,6 +11,7 @@
 
 #include "calib/kinematics/inverse_kinematics.h"
 #include "calib/measurements/optical_axis_model.h"
+#include "calib/model/robot_model.h"
 #include "test_models.h"
 
 namespace twin::testing {
@@ -82,6 +83,36 @@ inline OpticalAxisScenario MakeOpticalAxisScenario(std::uint64_t seed, double jo
     }
   }
   return s;
+}
+
+/// Samples of `scenario`'s poses as a servo with a residual would record them when the arm also
+/// has the effects of `truth` (the scenario's true chain plus error terms; at zero term values
+/// exactly the scenario): the feature point p = EndPose(truth, q) is off the true axis by its
+/// perpendicular part, which the camera measures (AxisSample::offset, plus Gaussian noise of
+/// `sigma_perpendicular` per coordinate), and its distance along the axis from the camera is
+/// the depth (plus noise of `sigma_depth`). With a right model p_BE(q) - offset lies on a line.
+inline std::vector<AxisSample> SamplesWithEffects(const OpticalAxisScenario& scenario,
+                                                  const RobotModel& truth, std::uint64_t seed,
+                                                  double sigma_perpendicular,
+                                                  double sigma_depth) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::vector<AxisSample> out;
+  for (const AxisSample& s : scenario.samples) {
+    const Line3& axis = scenario.axes[s.axis];
+    const Vector3 p = EndPose(truth, s.context()).translation();
+    const Vector3 d = p - axis.point;
+    const double along = axis.direction.dot(d);
+    Vector3 perpendicular = d - along * axis.direction;
+    const Vector3 n1 = axis.direction.unitOrthogonal();
+    const Vector3 n2 = axis.direction.cross(n1);
+    perpendicular += sigma_perpendicular * (noise(rng) * n1 + noise(rng) * n2);
+    AxisSample r = s;
+    r.offset = perpendicular;
+    r.depth = along + sigma_depth * noise(rng);
+    out.push_back(r);
+  }
+  return out;
 }
 
 }  // namespace twin::testing

@@ -1,0 +1,171 @@
+// Model discovery on optical-axis samples (DiscoverOpticalAxisModel): each decision path on
+// synthetic line-constraint data from the paper's geometry (5 axes x 10 positions, the true
+// feature point's offset from the axis measured as a servo with a residual would).
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "calib/common/errors.h"
+#include "calib/diagnosis/model_discovery.h"
+#include "optical_axis_synthetic.h"
+
+namespace twin {
+namespace {
+
+using testing::MakeOpticalAxisScenario;
+using testing::OpticalAxisScenario;
+using testing::SamplesWithEffects;
+
+// The set's stated noise (OpticalAxisSetOptions defaults): 0.02 mm perpendicular, 0.1 mm depth.
+constexpr double kPerp = 2e-5;
+constexpr double kDepth = 1e-4;
+
+const TermSpec kCompliance2{"joint_compliance", 1, {}};
+const TermSpec kCompliance1{"joint_compliance", 0, {}};
+const TermSpec kTransmission3{"transmission_error", 2, {1}};
+const TermSpec kThermalGrowth{"thermal_growth", -1, {}};
+const TermSpec kThermalDrift{"thermal_drift", -1, {}};
+
+struct Data {
+  OpticalAxisScenario scenario;
+  RobotModel nominal;
+  std::vector<AxisSample> samples;
+};
+
+// The scenario's geometry errors (1.5 mm / 0.15 deg) plus `effects` at `values`.
+Data MakeData(std::uint64_t seed, const std::vector<std::pair<TermSpec, std::vector<double>>>& fx,
+              bool temperatures = false) {
+  Data d;
+  d.scenario = MakeOpticalAxisScenario(seed, 0.0, 0.0015, DegToRad(0.15));
+  RobotModel truth = MakeRobotModel(d.scenario.truth);
+  for (const auto& [spec, values] : fx) {
+    truth = WithTerm(truth, MakeErrorTerm(spec, d.scenario.truth, d.scenario.truth.name));
+    const int n = static_cast<int>(values.size());
+    for (int k = 0; k < n; ++k) truth.term_values(truth.term_values.size() - n + k) = values[k];
+  }
+  if (temperatures) {
+    for (AxisSample& s : d.scenario.samples) s.temperature_delta_K = 0.0;
+  }
+  d.samples = SamplesWithEffects(d.scenario, truth, seed + 100, kPerp, kDepth);
+  d.nominal = MakeRobotModel(d.scenario.nominal);
+  return d;
+}
+
+DiscoveryOptions Options(std::vector<TermSpec> candidates) {
+  DiscoveryOptions o;
+  o.candidates = std::move(candidates);
+  o.axis_set.sigma_perpendicular = kPerp;
+  o.axis_set.sigma_depth = kDepth;
+  return o;
+}
+
+TEST(OpticalAxisDiscovery, AGeometricTruthIsConsistentWithNoise) {
+  const Data d = MakeData(21, {});
+  const DiscoveryResult r =
+      DiscoverOpticalAxisModel(d.nominal, d.samples, Options({kCompliance2, kTransmission3}));
+  EXPECT_EQ(r.data, "optical_axes");
+  EXPECT_EQ(r.verdict, "consistent_with_noise") << r.reason;
+  EXPECT_TRUE(r.effects_added.empty());
+  EXPECT_DOUBLE_EQ(r.noise.tracker_sigma_m, kPerp);
+  EXPECT_DOUBLE_EQ(r.noise.depth_sigma_m, kDepth);
+  // The global test's redundancy: 50 samples x 3 rows less the unknowns (the rank of the
+  // geometry and 5 lines of 4 + 1 parameters), i.e. fewer than 150 - 25.
+  EXPECT_GT(r.test_before.dof, 0.0);
+  EXPECT_LT(r.test_before.dof, 150.0 - 25.0);
+  EXPECT_NE(r.region_rule.find("whole optical axes"), std::string::npos) << r.region_rule;
+}
+
+TEST(OpticalAxisDiscovery, AnUndeclaredComplianceIsNamed) {
+  // 1e-4 rad/(N m) at joint 2: the poses' gravity torques vary by ~10 N m over the region, so
+  // the sag varies by ~1 mrad (~0.5 mm at the board) beyond what the geometry absorbs.
+  const Data d = MakeData(22, {{kCompliance2, {1e-4}}});
+  const DiscoveryResult r = DiscoverOpticalAxisModel(
+      d.nominal, d.samples, Options({kCompliance1, kCompliance2, kTransmission3}));
+  ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+  ASSERT_EQ(r.effects_added.size(), 1u);
+  EXPECT_EQ(TermLabel(r.effects_added[0].spec), TermLabel(kCompliance2));
+  EXPECT_LT(r.heldout_rms_discovered_m, 0.5 * r.heldout_rms_start_m);
+  // Joint 1 is vertical: gravity has no torque about it, its compliance nothing to act on.
+  const CandidateScore& c1 = r.steps[0].candidates[0];
+  EXPECT_FALSE(c1.identifiable) << c1.note;
+  EXPECT_NE(c1.note.find("unidentifiable from the optical axes"), std::string::npos) << c1.note;
+}
+
+TEST(OpticalAxisDiscovery, AnEffectInvisibleToTheLineConstraintIsNamedUnidentifiable) {
+  // Thermal growth at one temperature is a uniform scale of the lengths: without depths the
+  // line constraint cannot see any scale (lines stay lines), so the term cannot raise the rank.
+  Data d = MakeData(23, {{kCompliance2, {1e-4}}}, true);
+  for (AxisSample& s : d.samples) s.depth = std::nan("");
+  const DiscoveryResult r =
+      DiscoverOpticalAxisModel(d.nominal, d.samples, Options({kThermalGrowth, kCompliance2}));
+  ASSERT_FALSE(r.steps.empty());
+  const CandidateScore& growth = r.steps[0].candidates[0];
+  EXPECT_TRUE(growth.applicable) << growth.note;
+  EXPECT_FALSE(growth.identifiable) << growth.note;
+  EXPECT_FALSE(growth.tested);
+  EXPECT_FALSE(growth.accepted);
+  EXPECT_NE(growth.note.find("unidentifiable"), std::string::npos) << growth.note;
+  // Without depths 2 rows a sample, lines of 4 parameters.
+  EXPECT_LT(r.test_before.dof, 100.0 - 20.0);
+  EXPECT_LT(r.noise.depth_sigma_m, 0.0);
+}
+
+TEST(OpticalAxisDiscovery, ASystematicResidualNoCandidateExplainsIsUnexplainedAndPlacebosAreRejected) {
+  // The compliance is in the data, but only random regressors are offered: temperatures and
+  // time stamps drawn at random per sample (placebos), and the vertical joint's compliance.
+  Data d = MakeData(24, {{kCompliance2, {1e-4}}});
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (AxisSample& s : d.samples) {
+    s.temperature_delta_K = 5.0 * u(rng);
+    s.time_s = 3600.0 * u(rng);
+  }
+  const DiscoveryResult r = DiscoverOpticalAxisModel(
+      d.nominal, d.samples, Options({kCompliance1, kThermalGrowth, kThermalDrift}));
+  EXPECT_EQ(r.verdict, "unexplained") << r.reason;
+  EXPECT_TRUE(r.effects_added.empty());
+  EXPECT_FALSE(r.evidence.empty());
+  ASSERT_EQ(r.steps.size(), 1u);
+  EXPECT_TRUE(r.steps[0].candidates[1].tested) << r.steps[0].candidates[1].note;
+  EXPECT_TRUE(r.steps[0].candidates[2].tested) << r.steps[0].candidates[2].note;
+  EXPECT_TRUE(r.evidence[0].component == "distance" || r.evidence[0].component == "depth")
+      << r.evidence[0].component;
+}
+
+TEST(OpticalAxisDiscovery, EachSamplesOwnSigmasAreItsNoiseFloor) {
+  // The data drawn with 5 um across and 0.3 mm along the axis, each sample stating so (as the
+  // procedure does from the board pose's covariance); the set's defaults (20 um, 0.1 mm) would
+  // call the depths systematic.
+  Data d = MakeData(26, {});
+  d.samples = SamplesWithEffects(d.scenario, MakeRobotModel(d.scenario.truth), 126, 5e-6, 3e-4);
+  for (AxisSample& s : d.samples) {
+    s.sigma_offset = 5e-6;
+    s.sigma_depth = 3e-4;
+  }
+  const DiscoveryResult r = DiscoverOpticalAxisModel(d.nominal, d.samples, Options({kCompliance2}));
+  EXPECT_EQ(r.verdict, "consistent_with_noise") << r.reason;
+  EXPECT_NEAR(r.noise.tracker_sigma_m, 5e-6, 1e-15);  // an RMS of equal sigmas, to rounding
+  EXPECT_NEAR(r.noise.depth_sigma_m, 3e-4, 1e-15);
+  EXPECT_NE(r.noise.source.find("each sample's own"), std::string::npos) << r.noise.source;
+  // The same data judged against the defaults: the depths are three times noisier than said.
+  for (AxisSample& s : d.samples) s.sigma_offset = s.sigma_depth = 0.0;
+  const DiscoveryResult stated =
+      DiscoverOpticalAxisModel(d.nominal, d.samples, Options({kCompliance2}));
+  EXPECT_TRUE(stated.test_before.systematic) << stated.reason;
+}
+
+TEST(OpticalAxisDiscovery, TooFewAxesAreRefused) {
+  const Data d = MakeData(25, {});
+  std::vector<AxisSample> two;
+  for (const AxisSample& s : d.samples) {
+    if (s.axis < 2) two.push_back(s);
+  }
+  EXPECT_THROW(DiscoverOpticalAxisModel(d.nominal, two, Options({kCompliance2})), InputError);
+}
+
+}  // namespace
+}  // namespace twin
