@@ -259,7 +259,7 @@ int main(int argc, char** argv) {
   run->add_option("--out", run_options.out_dir, "output folder (replaced when complete)")
       ->required();
   run->add_flag("--quiet", run_options.quiet, "no progress lines");
-  run->add_flag("--no-diagnosis", "tracker scenarios: skip model discovery");
+  run->add_flag("--no-diagnosis", "skip model discovery after the calibration");
   run->add_option("--trial", run_options.trial,
                   "study trial t: the scenario's truth and estimator seeds + t (default 0)")
       ->check(CLI::Range(0, 1000000000));

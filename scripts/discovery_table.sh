@@ -4,11 +4,14 @@
 # estimator seed), then per scenario: how often the injected (undeclared) effect was named,
 # how often something else was added, and the physical-truth RMS (rigid gauge, the twin's
 # reflector with every effect against the model at the same readings) of the geometric-only
-# model, of the discovered one and of the same trials without the effect (tracker_clean.yaml).
-# Usage: scripts/discovery_table.sh [TRIALS] [OUT_DIR]    (needs a build: scripts/build.sh)
+# model, of the discovered one and of the same trials without the effect (*_clean.yaml).
+# Usage: scripts/discovery_table.sh [TRIALS] [OUT_DIR] [tracker|optical]
+#   tracker (default): the laser-tracker scenarios; optical: the optical-axis ones (robot r2,
+#   the board's feature point instead of the reflector). Needs a build: scripts/build.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 TRIALS="${1:-20}"
+PROCEDURE="${3:-tracker}"
 OUT="${2:-out/discovery}"
 BIN="${TWINBENCH:-build/bin/twinbench}"   # TWINBENCH: another build (e.g. a copy while rebuilding)
 [ -x "$BIN" ] || { echo "discovery_table: build first (scripts/build.sh)" >&2; exit 2; }
@@ -20,21 +23,32 @@ declare -A INJECTED=(
   [tracker_compliance_j2_declared]=""
   [tracker_transmission_j1]="transmission_error (joint 1, order 1)"
   [tracker_backlash_j3]="backlash (joint 3)"
+  [optical_clean]=""
+  [optical_compliance_j2]="joint_compliance (joint 2)"
 )
-ORDER=(tracker_clean tracker_compliance_j2 tracker_transmission_j1 tracker_backlash_j3
-       tracker_compliance_j2_declared)
+case "$PROCEDURE" in
+  tracker)
+    ORDER=(tracker_clean tracker_compliance_j2 tracker_transmission_j1 tracker_backlash_j3
+           tracker_compliance_j2_declared)
+    PREFIX="" ;;
+  optical)
+    ORDER=(optical_clean optical_compliance_j2)
+    PREFIX="robots.r2." ;;
+  *) echo "discovery_table: procedure must be tracker or optical, got '$PROCEDURE'" >&2; exit 2 ;;
+esac
+CLEAN="${ORDER[0]}"
 for s in "${ORDER[@]}"; do
   "$BIN" study "scenarios/discovery/$s.yaml" --trials "$TRIALS" --jobs 2 --out "$OUT/$s" >&2
 done
 # Per trial: trial, effects added (labels joined by ;), geometric-only and discovered RMS.
 rows() {
-  jq -r '[.trial,
-          ([.labels | to_entries[] | select(.key | test("^diagnosis\\.effects_added\\[[0-9]+\\]\\.label$")) | .value] | join(";")),
-          (.figures["truth_position_error_mm_physical.calibrated_model.rigid.rms"] // "nan"),
-          (.figures["truth_position_error_mm_discovered_model.rigid.rms"] // "nan")] | @tsv' \
+  jq -r --arg p "$PREFIX" '[.trial,
+          ([.labels | to_entries[] | select(.key | startswith($p)) | select(.key[($p | length):] | test("^diagnosis\\.effects_added\\[[0-9]+\\]\\.label$")) | .value] | join(";")),
+          (.figures[$p + "truth_position_error_mm_physical.calibrated_model.rigid.rms"] // "nan"),
+          (.figures[$p + "truth_position_error_mm_discovered_model.rigid.rms"] // "nan")] | @tsv' \
      "$OUT/$1/trials.jsonl" | sort -t$'\t' -k1,1
 }
-rows tracker_clean > "$OUT/clean.tsv"
+rows "$CLEAN" > "$OUT/clean.tsv"
 printf '| scenario | injected (undeclared) | named | something else added | truth RMS geometric-only [mm] | discovered [mm] | effect-free [mm] | discovered <= 1.2 x effect-free |\n'
 printf '|---|---|---|---|---|---|---|---|\n'
 for s in "${ORDER[@]}"; do

@@ -15,7 +15,7 @@ const YamlKeys kKeys = {"robots",           "rough_base_from_robot1", "rough_han
                         "board_mount",      "board_squares",          "board_square_mm",
                         "intrinsics_views", "planning",               "servo",
                         "calibration_axes", "scoring",                "calibration_split",
-                        "refit_all_axes"};
+                        "refit_all_axes",   "diagnosis",              "board_mass_kg"};
 const YamlKeys kPlanningKeys = {"axes",
                                 "positions_per_axis",
                                 "swarm_size",
@@ -105,6 +105,13 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
                      "mounted board), got " + DescribeNode(square.node));
     }
     c.knowledge.board = BoardGeometry{n[0], n[1], mm / 1000.0};
+  }
+  if (const auto f = m.Find("board_mass_kg", false)) {
+    c.board_mass_kg = r.Number(*f);
+    // A flange-mounted target with its bracket: above 50 kg it is no board a small arm holds.
+    if (!(c.board_mass_kg >= 0.0 && c.board_mass_kg <= 50.0)) {
+      r.Fail(*f, "expected 0 to 50 kg (the board with its bracket, as weighed)");
+    }
   }
 
   OpticalAxisOptions& o = c.options;
@@ -216,6 +223,10 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
       }
     }
     if (const auto g = sm.Find("seed", false)) c.scoring_seed = r.Unsigned64(*g);
+  }
+  c.discovery.seed = sc.seeds.estimator;
+  if (const auto f = m.Find("diagnosis", false)) {
+    ParseDiagnosisSection(r, *f, sc.twin.robots[0].model, &c.diagnosis, &c.discovery, true);
   }
   try {
     ValidateOpticalAxisOptions(o);

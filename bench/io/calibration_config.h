@@ -10,6 +10,9 @@
 //     board_mount: {xyz_mm: [0, 0, 40], rpy_deg: [0, 0, 0]}  # required: X_FT by drawing
 //     board_squares: [4, 4]            # required: the printed board (even counts, 2..30)
 //     board_square_mm: 20              # required: its printed square side [1, 500] mm
+//     board_mass_kg: 0.2               # the board with its bracket, as weighed (default 0:
+//                                      # not told); a point mass at the feature point in the
+//                                      # models of the diagnosis, whose gravity terms need it
 //     intrinsics_views: 25             # board views for Zhang's method
 //     planning:                        # section IV and eq. 50 (defaults: the paper's)
 //       axes: 5                        # q
@@ -36,6 +39,8 @@
 //     refit_all_axes: true             # deliver the model refit on all axes after validation
 //                                      # (false: the calibration-set model)
 //     scoring: {configurations: 200, seed: 1}   # truth metrics (bench only)
+//     diagnosis: {enabled: true, ...}  # model discovery per calibrated robot on its aligned
+//                                      # poses (bench/io/diagnosis_config.h)
 //
 // Told versus true: the told values come from this section only. The twin's truth (the
 // scenario's robots[1].base_from_robot1, camera.hand_eye and intrinsics, board.*) is never
@@ -52,6 +57,7 @@
 
 #include <cstdint>
 
+#include "bench/io/diagnosis_config.h"
 #include "bench/io/scenario.h"
 #include "calib/procedures/optical_axis_procedure.h"
 
@@ -63,6 +69,11 @@ struct CalibrationConfig {
   OpticalAxisOptions options;    ///< procedure options (progress left empty)
   int scoring_configurations = 200;   ///< random joint configurations for truth metrics
   std::uint64_t scoring_seed = 1;     ///< their seed
+  double board_mass_kg = 0.0;         ///< told payload (weighed), for gravity terms
+  DiagnosisConfig diagnosis;          ///< model discovery (calibration.diagnosis)
+  /// Why it does not run when diagnosis.enabled is false (for the report).
+  std::string diagnosis_skip_reason = "calibration.diagnosis.enabled: false";
+  DiscoveryOptions discovery;         ///< its options (candidates checked on robot 1's model)
 };
 
 /// Parses scenario.calibration (an InputError when the section is absent or wrong). The

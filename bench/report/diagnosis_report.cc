@@ -70,15 +70,22 @@ json DiagnosisJson(const DiscoveryResult& r) {
   json j;
   j["verdict"] = r.verdict;
   j["reason"] = r.reason;
+  j["data"] = r.data;
   j["noise_floor_mm"] = 1e3 * r.noise.sigma_m;
+  const bool optical = r.data == "optical_axes";
   j["noise_floor"] = {{"sigma_mm", 1e3 * r.noise.sigma_m},
-                      {"tracker_sigma_mm", 1e3 * r.noise.tracker_sigma_m},
+                      {optical ? "perpendicular_sigma_mm" : "tracker_sigma_mm",
+                       1e3 * r.noise.tracker_sigma_m},
                       {"joint_sigma_deg", r.noise.joint_sigma_rad * 180.0 / 3.14159265358979323846},
                       {"source", r.noise.source},
                       {"repeated_pose_groups", r.noise.repeated_groups},
                       {"repeated_pose_sigma_mm",
                        r.noise.repeat_sigma_m >= 0 ? json(1e3 * r.noise.repeat_sigma_m)
                                                    : json(nullptr)}};
+  if (optical) {
+    j["noise_floor"]["depth_sigma_mm"] =
+        r.noise.depth_sigma_m >= 0 ? json(1e3 * r.noise.depth_sigma_m) : json(nullptr);
+  }
   j["residual_test"] = {{"before", TestJson(r.test_before)}, {"after", TestJson(r.test_after)}};
   j["heldout_rms_mm"] = {{"start", 1e3 * r.heldout_rms_start_m},
                          {"discovered", 1e3 * r.heldout_rms_discovered_m},
@@ -181,8 +188,9 @@ std::string DiagnosisHtml(const json& d) {
   os << "<p><b>" << Esc(d["verdict"].get<std::string>()) << "</b>: "
      << Esc(d["reason"].get<std::string>()) << "</p>";
   const json& nf = d["noise_floor"];
-  os << "<p>Noise floor " << Fmt(nf["sigma_mm"]) << " mm per axis (" << Esc(nf["source"])
-     << "). Residual test of the starting model: held-out RMS "
+  os << "<p>Noise floor " << Fmt(nf["sigma_mm"]) << " mm per coordinate (" << Esc(nf["source"])
+     << "). Residual test of the starting model (" << Esc(d["residual_test"]["before"]["held_out"])
+     << "): RMS "
      << Fmt(d["residual_test"]["before"]["rms_mm"]) << " mm, p = "
      << Fmt(d["residual_test"]["before"]["p_value"]) << "; of the discovered model: "
      << Fmt(d["residual_test"]["after"]["rms_mm"]) << " mm, p = "
@@ -223,12 +231,13 @@ std::string DiagnosisHtml(const json& d) {
 std::string DiagnosisSummary(const DiscoveryResult& r) {
   std::ostringstream os;
   os << "diagnosis: " << r.verdict << ": " << r.reason << "\n";
-  os << "  noise floor " << Mm(r.noise.sigma_m) << " per axis (" << r.noise.source << ")";
+  os << "  noise floor " << Mm(r.noise.sigma_m) << " per coordinate (" << r.noise.source << ")";
   if (r.noise.repeat_sigma_m >= 0) {
     os << "; repeated poses (" << r.noise.repeated_groups << " groups) spread "
        << Mm(r.noise.repeat_sigma_m);
   }
-  os << "\n  residual test: held-out RMS " << Mm(r.test_before.rms_m) << ", p = "
+  os << "\n  residual test (" << (r.data == "optical_axes" ? "in sample, global" : "held out")
+     << "): RMS " << Mm(r.test_before.rms_m) << ", p = "
      << r.test_before.p_value << " (" << (r.test_before.systematic ? "systematic" : "noise")
      << ")\n";
   for (const DiscoveryStep& s : r.steps) {

@@ -24,6 +24,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench/report/diagnosis_report.h"
+
 namespace twin {
 namespace {
 
@@ -643,7 +645,14 @@ std::string RenderReportHtml(const json& report) {
   if (robots != nullptr && robots->is_object()) {
     int i = 0;
     for (auto it = robots->begin(); it != robots->end(); ++it, ++i)
-      if (it.value().is_object()) o << RobotSection(it.key(), it.value(), i);
+      if (it.value().is_object()) {
+        o << RobotSection(it.key(), it.value(), i);
+        if (it.value().contains("diagnosis")) {
+          o << "<div id=\"diagnosis-" << i << "\"><p class=\"meta\">robot "
+            << HtmlEscape(it.key()) << ", model discovery on its aligned poses</p>"
+            << DiagnosisHtml(it.value()["diagnosis"]) << "</div>\n";
+        }
+      }
   }
   o << BaseFrameSection(Find(root, "base_frame"));
   o << TimingSection(Find(root, "timing_s"));

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <random>
 #include <limits>
 #include <map>
 #include <set>
@@ -27,6 +28,7 @@
 #include "bench/io/model_yaml.h"
 #include "bench/io/output_files.h"
 #include "bench/report/acceptance.h"
+#include "bench/report/diagnosis_report.h"
 #include "bench/report/report_html.h"
 #include "bench/io/scenario.h"
 #include "bench/io/yaml_util.h"
@@ -199,7 +201,8 @@ json ScenarioJson(const Scenario& sc) {
 
 OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, CalibrationConfig config,
                                     const fs::path& staging, bool quiet,
-                                    std::chrono::steady_clock::time_point t_start, json* report) {
+                                    std::chrono::steady_clock::time_point t_start, json* report,
+                                    std::map<int, DiscoveryResult>* diagnoses) {
   config.options.progress = [&](const std::string& line) {
     if (quiet) return;
     std::printf("[%7.1f s] %s\n", Seconds(t_start), line.c_str());
@@ -208,6 +211,43 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
   TimedCell timed(cell);
   const OpticalAxisResult result = RunOpticalAxisCalibration(timed, config.knowledge,
                                                              config.options);
+
+  // Model discovery per calibrated robot: estimator side (its aligned poses, the nominal board
+  // model, the stated noise), before any truth is read. A robot whose poses do not allow it
+  // (fewer than 3 axes) is reported as skipped; the calibration stands.
+  std::map<int, DiscoveryResult> diagnosis;
+  std::map<int, std::string> diagnosis_skipped;
+  const auto t_diagnosis = Clock::now();
+  for (const RobotCalibration& rc : result.robots) {
+    const std::string name = sc.robot_names[rc.robot];
+    if (!config.diagnosis.enabled) {
+      diagnosis_skipped[rc.robot] = config.diagnosis_skip_reason;
+      continue;
+    }
+    DiscoveryOptions d = config.discovery;
+    d.axis_source = sc.path + " scenario.calibration.diagnosis (robot " + name + ")";
+    if (!quiet) {
+      d.progress = [&, name](const std::string& line) {
+        std::printf("[%7.1f s] %s: %s\n", Seconds(t_start), name.c_str(), line.c_str());
+        std::fflush(stdout);
+      };
+    }
+    // The told payload: the weighed board as a point mass at the feature point, the origin of
+    // the board model's tool link (BoardRobotModel), so that gravity terms see it.
+    KinematicModel model = rc.nominal;
+    if (config.board_mass_kg > 0.0) {
+      Link& tool = model.tool();
+      const double m0 = tool.inertia.mass, m1 = config.board_mass_kg;
+      tool.inertia.p_LiCom = m0 * tool.inertia.p_LiCom / (m0 + m1);
+      tool.inertia.mass = m0 + m1;
+    }
+    try {
+      diagnosis[rc.robot] = DiscoverOpticalAxisModel(MakeRobotModel(model), rc.samples, d);
+    } catch (const InputError& e) {
+      diagnosis_skipped[rc.robot] = e.what();
+    }
+  }
+  const double diagnosis_s = Seconds(t_diagnosis);
 
   // Scoring: estimates meet truth only here, after the procedure ended.
   const auto t_score = Clock::now();
@@ -407,6 +447,11 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                  m = std::max(m, std::abs(lin.correction(i) - nl.correction(i)));
              return m;
            }())}}}};
+    if (diagnosis.count(rc.robot)) {
+      r["diagnosis"] = DiagnosisJson(diagnosis.at(rc.robot));
+    } else {
+      r["diagnosis"] = {{"verdict", nullptr}, {"skipped", diagnosis_skipped[rc.robot]}};
+    }
     robots[name] = r;
     AppendRows(rc, name, camera, csv_joints, &csv);
     // The identified model, ready to load (tool link = board mount, as identified).
@@ -418,7 +463,8 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
   (*report)["timing_s"] = {{"total", Seconds(t_start)}, {"intrinsics", result.intrinsics_s},
                         {"planning", planning},      {"planning_compute", planning_compute},
                         {"servoing", servoing},
-                        {"identification", identification}, {"scoring", scoring},
+                        {"identification", identification}, {"diagnosis", diagnosis_s},
+                        {"scoring", scoring},
                         {"cell",
                          {{"frames", timed.frames},
                           {"region_frames", timed.region_frames},
@@ -428,10 +474,71 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                           {"grab_image", timed.grab_s},
                           {"moves", timed.moves},
                           {"move_to", timed.move_s}}}};
+  if (diagnoses) *diagnoses = std::move(diagnosis);
   return result;
 }
 
 namespace {
+
+// Physical truth (bench only, after the procedure and the diagnosis): the board's feature point
+// where the twin's physics puts it (every effect, the mount's deflection included) at seeded
+// random poses of each diagnosed robot that holds the board now, against the delivered model
+// and the discovered one at the same readings; raw and rigid gauges as the tracker runs.
+// The robot ends where the last pose left it.
+void ScorePhysicalTruth(TwinCell& cell, const Scenario& sc, const CalibrationConfig& config,
+                        const OpticalAxisResult& result,
+                        const std::map<int, DiscoveryResult>& diagnoses, json* report) {
+  for (const RobotCalibration& rc : result.robots) {
+    const auto d = diagnoses.find(rc.robot);
+    if (d == diagnoses.end()) continue;
+    json& r = (*report)["robots"][sc.robot_names[rc.robot]];
+    if (cell.Truth().board.robot != rc.robot) {
+      r["truth_position_error_mm_physical"] = {
+          {"skipped", "the board is on the other robot at the end of the procedure"}};
+      continue;
+    }
+    const RobotModel delivered = MakeRobotModel(rc.identified);
+    // Nothing added: the discovered model is the delivered one.
+    const RobotModel& discovered_model =
+        d->second.effects_added.empty() ? delivered : d->second.model;
+    std::vector<Vector3> p_true, p_delivered, p_discovered;
+    std::mt19937_64 rng(sc.seeds.truth * 7919 + 31 + rc.robot);
+    const double margin = DegToRad(10.0);
+    const int wanted = config.diagnosis.truth_poses;
+    for (int a = 0; a < 20 * wanted && static_cast<int>(p_true.size()) < wanted; ++a) {
+      JointVector q = ZeroJoints(rc.nominal);
+      for (int i = 0; i < rc.nominal.num_joints(); ++i) {
+        const JointLimits& l = rc.nominal.links[i].limits;
+        q(i) = std::uniform_real_distribution<double>(l.lower + margin, l.upper - margin)(rng);
+      }
+      const JointVector before = cell.ReadEncoders(rc.robot);
+      if (cell.MoveTo(rc.robot, q).status != MoveStatus::kSettled) continue;
+      MeasurementContext c;
+      c.q = cell.ReadEncoders(rc.robot);
+      c.approach = ApproachDirections(before, q);
+      if (!MissingContext(discovered_model, c).empty()) break;  // a term needs what is not read
+      const TwinTruth t = cell.Truth();
+      p_true.push_back(t.X_WB[rc.robot].inverse() * t.X_WT.translation());
+      p_delivered.push_back(EndPose(delivered, c).translation());
+      p_discovered.push_back(EndPose(discovered_model, c).translation());
+    }
+    if (p_true.size() < 10) {
+      r["truth_position_error_mm_physical"] = {
+          {"skipped", "fewer than 10 random poses settled"}};
+      continue;
+    }
+    const GaugeErrors calibrated = CompareInGauges(p_delivered, p_true);
+    const GaugeErrors discovered = CompareInGauges(p_discovered, p_true);
+    r["truth_position_error_mm_physical"] = {
+        {"poses", p_true.size()},
+        {"rule", "the board's feature point where the twin's physics puts it (every effect) at "
+                 "seeded random poses, against each model at the same readings"},
+        {"calibrated_model", {{"raw", Stats(calibrated.raw)}, {"rigid", Stats(calibrated.rigid)}}},
+        {"discovered_model", {{"raw", Stats(discovered.raw)}, {"rigid", Stats(discovered.rigid)}}}};
+    r["truth_position_error_mm_discovered_model"] = {{"raw", Stats(discovered.raw)},
+                                                     {"rigid", Stats(discovered.rigid)}};
+  }
+}
 
 // A refusal at run time (too few aligned poses, the board not in view, ...) names the step;
 // the message also names the scenario file so the user knows which input to fix.
@@ -455,6 +562,10 @@ int RunCalibrationScenario(const RunOptions& o) {
   // Everything is validated before anything is written: the sections, the output paths and
   // the cell itself (its initial pose must settle without collisions).
   CalibrationConfig config = ParseCalibrationConfig(sc);
+  if (!o.diagnosis) {
+    config.diagnosis.enabled = false;
+    config.diagnosis_skip_reason = "--no-diagnosis";
+  }
   if (!o.plan_cache.empty()) {
     config.options.plan_store = std::make_shared<FilePlanStore>(o.plan_cache);
   }
@@ -470,7 +581,10 @@ int RunCalibrationScenario(const RunOptions& o) {
   AcceptanceVerdict verdict;
   try {
     std::printf("twinbench run: scenario %s (%s)\n", sc.name.c_str(), sc.path.c_str());
-    RunCalibrationStage(cell, sc, config, staging, o.quiet, t_start, &report);
+    std::map<int, DiscoveryResult> diagnoses;
+    const OpticalAxisResult result =
+        RunCalibrationStage(cell, sc, config, staging, o.quiet, t_start, &report, &diagnoses);
+    ScorePhysicalTruth(cell, sc, config, result, diagnoses, &report);
     verdict = EvaluateAcceptance(acceptance, &report);
     WriteText(staging / "report.json", report.dump(2) + "\n");
     if (o.images) WriteText(staging / "report.html", RenderReportHtml(report));
@@ -510,6 +624,24 @@ int RunCalibrationScenario(const RunOptions& o) {
                     "truth RMS rigid %.4f, similarity %.4f\n",
                     name.c_str(), D(h["rigid"]["after"]["rms"]),
                     D(h["similarity"]["after"]["rms"]));
+      }
+      const json& dg = r["diagnosis"];
+      if (dg["verdict"].is_null()) {
+        std::printf("%-6s diagnosis skipped (%s)\n", name.c_str(),
+                    dg.value("skipped", std::string()).c_str());
+      } else {
+        std::printf("%-6s diagnosis: %s: %s\n", name.c_str(),
+                    dg["verdict"].get<std::string>().c_str(),
+                    dg["reason"].get<std::string>().c_str());
+      }
+      if (r.contains("truth_position_error_mm_physical") &&
+          r["truth_position_error_mm_physical"].contains("poses")) {
+        const json& ph = r["truth_position_error_mm_physical"];
+        std::printf("%-6s physical truth (%d poses, rigid RMS): calibrated %.4f mm, discovered "
+                    "%.4f mm\n",
+                    name.c_str(), ph["poses"].get<int>(),
+                    D(ph["calibrated_model"]["rigid"]["rms"]),
+                    D(ph["discovered_model"]["rigid"]["rms"]));
       }
       std::printf("%-6s scale estimated %.6f, true %.6f; servo %d aligned, %d failed, %.2f "
                   "frames/pose\n",

@@ -6,12 +6,14 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "bench/io/calibration_config.h"
 #include "bench/io/scenario.h"
+#include "calib/diagnosis/model_discovery.h"
 #include "calib/procedures/optical_axis_procedure.h"
 #include "sim/cell/twin_cell.h"
 
@@ -28,7 +30,7 @@ struct RunOptions {
   std::string plan_cache;
   bool images = true;    ///< write servo_*.png and report.html (studies leave them out)
   std::string junit;     ///< JUnit XML of the acceptance criteria to write (empty: none)
-  bool diagnosis = true; ///< model discovery after a tracker calibration (--no-diagnosis)
+  bool diagnosis = true; ///< model discovery after the calibration (--no-diagnosis)
 };
 
 /// The report's `scenario` key: name, file, seed (the truth seed, as before the split),
@@ -45,11 +47,15 @@ int RunCalibrationScenario(const RunOptions& options);
 /// procedure with `config`, scores it against the cell's truth, writes servo_*.png,
 /// measurements.csv and identified_<robot>.yaml into `staging` and sets the report keys
 /// scenario, intrinsics, robots and timing_s. Progress lines carry the time since t_start.
+/// With config.diagnosis.enabled, model discovery runs on each calibrated robot's aligned poses
+/// (estimator side, before any truth is read) into robots.<name>.diagnosis; `diagnoses`, when
+/// given, receives them (robot index -> result; robots whose diagnosis was skipped are absent).
 OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& scenario,
                                       CalibrationConfig config,
                                       const std::filesystem::path& staging, bool quiet,
                                       std::chrono::steady_clock::time_point t_start,
-                                      nlohmann::json* report);
+                                      nlohmann::json* report,
+                                      std::map<int, DiscoveryResult>* diagnoses = nullptr);
 
 /// Options of RunIdentify.
 struct IdentifyOptions {

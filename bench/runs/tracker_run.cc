@@ -19,6 +19,7 @@
 #include "bench/io/term_spec_text.h"
 #include "bench/io/yaml_util.h"
 #include "bench/report/acceptance.h"
+#include "bench/io/diagnosis_config.h"
 #include "bench/report/diagnosis_report.h"
 #include "bench/report/report_units.h"
 #include "bench/scoring/calibration_scoring.h"
@@ -40,8 +41,6 @@ namespace {
 const YamlKeys kTrackerCalibrationKeys = {"robot",    "told_reflector_mm", "poses",
                                           "max_attempts", "joint_margin_deg", "holdout",
                                           "tracker_sigma_mm", "encoder_sigma_deg", "diagnosis"};
-const YamlKeys kDiagnosisKeys = {"enabled", "alpha", "min_gain_percent", "max_effects", "folds",
-                                 "truth_poses", "candidates"};
 
 struct TrackerRunConfig {
   int robot = 1;
@@ -144,34 +143,10 @@ TrackerRunConfig ParseTrackerRunConfig(const Scenario& sc) {
   c.discovery.seed = sc.seeds.estimator;
   c.discovery.set.default_sigma = c.told_sigma_m;
   if (const auto f = m.Find("diagnosis", false)) {
-    const YamlMap d(r, *f, kDiagnosisKeys);
-    if (const auto v = d.Find("enabled", false)) c.diagnosis = r.Bool(*v);
-    if (const auto v = d.Find("alpha", false)) c.discovery.alpha = r.Number(*v);
-    if (const auto v = d.Find("min_gain_percent", false)) {
-      c.discovery.min_gain_percent = r.Number(*v);
-    }
-    if (const auto v = d.Find("max_effects", false)) c.discovery.max_effects = r.Integer(*v);
-    if (const auto v = d.Find("folds", false)) c.discovery.folds = r.Integer(*v);
-    if (const auto v = d.Find("candidates", false)) {
-      if (!v->node.IsSequence() || v->node.size() == 0) {
-        r.Fail(*v, "expected a non-empty list of terms TYPE[:JOINT[:ORDERS]]");
-      }
-      for (std::size_t k = 0; k < v->node.size(); ++k) {
-        const YamlField item = v->Item(k);
-        const TermSpec spec = ParseTermSpec(r.String(item), r.Where(item));
-        MakeErrorTerm(spec, sc.twin.robots[c.robot].model, "check", r.Where(item));
-        c.discovery.candidates.push_back(spec);
-      }
-    }
-    if (const auto v = d.Find("truth_poses", false)) {
-      c.truth_poses = r.Integer(*v);
-      if (c.truth_poses < 10 || c.truth_poses > 10000) r.Fail(*v, "expected 10 to 10000");
-    }
-    try {
-      ValidateDiscoveryOptions(c.discovery);
-    } catch (const InputError& e) {
-      r.Fail(*f, e.what());
-    }
+    DiagnosisConfig d;
+    ParseDiagnosisSection(r, *f, sc.twin.robots[c.robot].model, &d, &c.discovery);
+    c.diagnosis = d.enabled;
+    c.truth_poses = d.truth_poses;
   }
   return c;
 }

@@ -10,6 +10,8 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -61,6 +63,68 @@ TEST(CalibrationCli, UnknownCalibrationKeyNamesFileLineAndKey) {
   EXPECT_NE(r.output.find("bad.yaml:"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("tolerance_pix"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
+// The reduced study scenario (4 axes x 5 positions, a few seconds): the diagnosis runs by
+// default on the calibrated robot's aligned poses and its verdict, noise floor (each sample's
+// own, from the board pose) and the physical-truth scoring are in the report; --no-diagnosis
+// skips it and says so.
+TEST(CalibrationCli, RunDiagnosesEachCalibratedRobotUnlessTold) {
+  const fs::path dir = TempDir("diagnosis");
+  const CliRun r = Twinbench("run " + kScenarios + "study_small.yaml --quiet --out " +
+                             (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::ifstream in(dir / "out" / "report.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  const nlohmann::json& d = j["robots"]["r2"]["diagnosis"];
+  ASSERT_TRUE(d["verdict"].is_string()) << d.dump();
+  const std::string verdict = d["verdict"];
+  EXPECT_TRUE(verdict == "consistent_with_noise" || verdict == "effects_added" ||
+              verdict == "unexplained")
+      << verdict;
+  EXPECT_EQ(d["data"], "optical_axes");
+  EXPECT_NE(d["noise_floor"]["source"].get<std::string>().find("each sample's own"),
+            std::string::npos)
+      << d["noise_floor"].dump();
+  EXPECT_GT(d["noise_floor"]["depth_sigma_mm"].get<double>(), 0.0);
+  EXPECT_TRUE(j["robots"]["r2"]["truth_position_error_mm_physical"].contains("poses"))
+      << j["robots"]["r2"]["truth_position_error_mm_physical"].dump();
+  EXPECT_NE(r.output.find("diagnosis"), std::string::npos) << r.output;
+
+  const CliRun skip = Twinbench("run " + kScenarios + "study_small.yaml --quiet --no-diagnosis "
+                                "--out " + (dir / "skip").string());
+  ASSERT_EQ(skip.code, 0) << skip.output;
+  std::ifstream in2(dir / "skip" / "report.json");
+  const nlohmann::json k = nlohmann::json::parse(in2);
+  EXPECT_TRUE(k["robots"]["r2"]["diagnosis"]["verdict"].is_null());
+  EXPECT_EQ(k["robots"]["r2"]["diagnosis"]["skipped"], "--no-diagnosis");
+}
+
+TEST(CalibrationCli, BadDiagnosisSettingsAndBoardMassNameFileLineAndKey) {
+  const fs::path dir = TempDir("baddiag");
+  std::ifstream in(kScenarios + "study_small.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  for (std::string::size_type p; (p = yaml.find("../models/")) != std::string::npos;) {
+    yaml.replace(p, 10, std::string(TWIN_SOURCE_DIR) + "/models/");
+  }
+  const std::string anchor = "    calibration_axes: 3\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"    diagnosis: {alpha: 0.9}\n", "alpha"},
+      {"    diagnosis: {candidates: [joint_compliance:9]}\n", "candidates"},
+      {"    diagnosis: {depth_sigma_mm: -1}\n", "depth_sigma_mm"},
+      {"    diagnosis: {folds: 5, foldz: 3}\n", "foldz"},
+      {"    board_mass_kg: 500\n", "board_mass_kg"}};
+  for (const auto& [insert, key] : cases) {
+    std::ofstream(dir / "bad.yaml") << testing::Replaced(yaml, anchor, anchor + insert);
+    const CliRun r = Twinbench("run " + (dir / "bad.yaml").string() + " --out " +
+                               (dir / "out").string());
+    EXPECT_EQ(r.code, 2) << insert << r.output;
+    EXPECT_NE(r.output.find("bad.yaml:"), std::string::npos) << insert << r.output;
+    EXPECT_NE(r.output.find(key), std::string::npos) << insert << r.output;
+    EXPECT_FALSE(fs::exists(dir / "out")) << insert;
+  }
 }
 
 // A recording as `twinbench run` writes it, from the synthetic optical-axis data: exact joint

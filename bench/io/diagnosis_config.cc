@@ -1,0 +1,61 @@
+#include "bench/io/diagnosis_config.h"
+
+#include "bench/io/term_spec_text.h"
+#include "calib/common/errors.h"
+#include "calib/model/error_term.h"
+
+namespace twin {
+
+void ParseDiagnosisSection(const YamlReader& r, const YamlField& field,
+                           const KinematicModel& nominal, DiagnosisConfig* c,
+                           DiscoveryOptions* o, bool optical_axes) {
+  static const YamlKeys kKeys = {"enabled", "alpha",      "min_gain_percent", "max_effects",
+                                 "folds",   "truth_poses", "candidates"};
+  static const YamlKeys kOpticalKeys = {"enabled",     "alpha",      "min_gain_percent",
+                                        "max_effects", "folds",      "truth_poses",
+                                        "candidates",  "perpendicular_sigma_mm",
+                                        "depth_sigma_mm", "encoder_sigma_deg"};
+  const YamlMap d(r, field, optical_axes ? kOpticalKeys : kKeys);
+  // Stated noise: a sigma below 0.1 um is no camera's, above 10 mm no calibration's.
+  const auto sigma_mm = [&](const char* key, double* out) {
+    if (const auto v = d.Find(key, false)) {
+      const double mm = r.Number(*v);
+      if (!(mm >= 1e-4 && mm <= 10.0)) r.Fail(*v, "expected 0.0001 to 10 mm");
+      *out = mm / 1000.0;
+    }
+  };
+  sigma_mm("perpendicular_sigma_mm", &o->axis_set.sigma_perpendicular);
+  sigma_mm("depth_sigma_mm", &o->axis_set.sigma_depth);
+  if (const auto v = d.Find("encoder_sigma_deg", false)) {
+    const double deg = r.Number(*v);
+    if (!(deg >= 0.0 && deg <= 0.5)) r.Fail(*v, "expected 0 to 0.5 deg");
+    o->joint_sigma_rad = deg * 3.14159265358979323846 / 180.0;
+  }
+  if (const auto v = d.Find("enabled", false)) c->enabled = r.Bool(*v);
+  if (const auto v = d.Find("alpha", false)) o->alpha = r.Number(*v);
+  if (const auto v = d.Find("min_gain_percent", false)) o->min_gain_percent = r.Number(*v);
+  if (const auto v = d.Find("max_effects", false)) o->max_effects = r.Integer(*v);
+  if (const auto v = d.Find("folds", false)) o->folds = r.Integer(*v);
+  if (const auto v = d.Find("candidates", false)) {
+    if (!v->node.IsSequence() || v->node.size() == 0) {
+      r.Fail(*v, "expected a non-empty list of terms TYPE[:JOINT[:ORDERS]]");
+    }
+    for (std::size_t k = 0; k < v->node.size(); ++k) {
+      const YamlField item = v->Item(k);
+      const TermSpec spec = ParseTermSpec(r.String(item), r.Where(item));
+      MakeErrorTerm(spec, nominal, "check", r.Where(item));
+      o->candidates.push_back(spec);
+    }
+  }
+  if (const auto v = d.Find("truth_poses", false)) {
+    c->truth_poses = r.Integer(*v);
+    if (c->truth_poses < 10 || c->truth_poses > 10000) r.Fail(*v, "expected 10 to 10000");
+  }
+  try {
+    ValidateDiscoveryOptions(*o);
+  } catch (const InputError& e) {
+    r.Fail(field, e.what());
+  }
+}
+
+}  // namespace twin
