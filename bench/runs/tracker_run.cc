@@ -40,7 +40,9 @@ namespace {
 
 const YamlKeys kTrackerCalibrationKeys = {"robot",    "told_reflector_mm", "poses",
                                           "max_attempts", "joint_margin_deg", "holdout",
-                                          "tracker_sigma_mm", "encoder_sigma_deg", "diagnosis"};
+                                          "tracker_sigma_mm", "encoder_sigma_deg", "diagnosis",
+                                          "payload"};
+const YamlKeys kPayloadKeys = {"mass_kg", "xyz_mm"};
 
 struct TrackerRunConfig {
   int robot = 1;
@@ -50,6 +52,8 @@ struct TrackerRunConfig {
   bool diagnosis = true;
   DiscoveryOptions discovery;
   int truth_poses = 60;        // poses of the physical-truth scoring of the discovered model
+  double payload_kg = 0.0;     // told: weighed
+  Vector3 payload_p_F = Vector3::Zero();  // told: its centre of mass in the flange, by drawing
 };
 
 // The estimator's starting model: the nominal chain plus a term for every effect the scenario
@@ -142,6 +146,16 @@ TrackerRunConfig ParseTrackerRunConfig(const Scenario& sc) {
   c.procedure.calibration.seed = sc.seeds.estimator;
   c.discovery.seed = sc.seeds.estimator;
   c.discovery.set.default_sigma = c.told_sigma_m;
+  if (const auto f = m.Find("payload", false)) {
+    const YamlMap pm(r, *f, kPayloadKeys);
+    const YamlField mass = pm.Get("mass_kg");
+    c.payload_kg = r.Number(mass);
+    // A flange-mounted target with its bracket on an arm that also carries a reflector.
+    if (!(c.payload_kg >= 0.0 && c.payload_kg <= 50.0)) r.Fail(mass, "expected 0 to 50 kg");
+    const YamlField at = pm.Get("xyz_mm");
+    c.payload_p_F = r.Vector(at) / 1000.0;
+    if (!(c.payload_p_F.norm() <= 1.0)) r.Fail(at, "must lie within 1000 mm of the flange");
+  }
   if (const auto f = m.Find("diagnosis", false)) {
     DiagnosisConfig d;
     ParseDiagnosisSection(r, *f, sc.twin.robots[c.robot].model, &d, &c.discovery);
@@ -229,14 +243,15 @@ int RunTrackerScenario(const RunOptions& o) {
   // Told: the nominal model with the drawn reflector. Never the truth.
   KinematicModel nominal = WithReflector(sc.twin.robots[robot].model, config.told_p_F);
   nominal.name = name;
-  // The payload the engineer weighed and drew: the board and its bracket on this flange, its
-  // mass at the board frame's origin, on the tool link (whose frame is the reflector's, turned
-  // about z by the tool link's theta) so that the gravity torques of error terms see it.
-  if (sc.twin.board.robot == robot && sc.twin.board.mass_kg > 0.0) {
+  // The payload the engineer weighed and drew (tracker_calibration.payload, told; never the
+  // twin's board): its mass at its drawn centre of mass, on the tool link (whose frame is the
+  // reflector's, turned about z by the tool link's theta) so that the gravity torques of error
+  // terms see it.
+  if (config.payload_kg > 0.0) {
     Link& tool = nominal.tool();
     const Matrix3 R_FLt = Eigen::AngleAxisd(tool.dh.theta_offset, Vector3::UnitZ()).toRotationMatrix();
-    const Vector3 p_com_Lt = R_FLt.transpose() * (sc.twin.board.X_FT.translation() - config.told_p_F);
-    const double m0 = tool.inertia.mass, m1 = sc.twin.board.mass_kg;
+    const Vector3 p_com_Lt = R_FLt.transpose() * (config.payload_p_F - config.told_p_F);
+    const double m0 = tool.inertia.mass, m1 = config.payload_kg;
     tool.inertia.p_LiCom = (m0 * tool.inertia.p_LiCom + m1 * p_com_Lt) / (m0 + m1);
     tool.inertia.mass = m0 + m1;
   }

@@ -12,6 +12,9 @@
 //   tracker_sigma_mm: 0.01           # optional (0.01): the tracker's datasheet sigma per axis
 //   encoder_sigma_deg: 0.0006        # optional (0): the encoders' datasheet noise, for the
 //                                    # diagnosis's noise floor
+//   payload: {mass_kg: 0.2, xyz_mm: [0, 0, 40]}  # optional (none): what the flange carries
+//                                    # besides the reflector, as weighed and drawn (its centre
+//                                    # of mass in the flange frame), for the gravity terms
 //   diagnosis:                       # optional: model discovery (calib/diagnosis/)
 //     enabled: true                  #   false: skip it (as --no-diagnosis)
 //     alpha: 0.05                    #   level of the residual test and of each step

@@ -76,6 +76,12 @@ std::string EstimatorInputs(const Scenario& sc) {
      << p.camera_reach << " " << p.camera_height << " " << p.seed << "\n";
   os << "servo " << o.servo.tolerance_px << " " << o.servo.max_iterations << " "
      << o.servo.gain << "\n";
+  // The diagnosis: the told payload and its settings (stated noise, candidates, seed).
+  const DiscoveryOptions& d = c.discovery;
+  os << "board mass " << c.board_mass_kg << " diagnosis " << c.diagnosis.enabled << " "
+     << d.alpha << " " << d.min_gain_percent << " " << d.max_effects << " " << d.folds << " "
+     << d.axis_set.sigma_perpendicular << " " << d.axis_set.sigma_depth << " "
+     << d.joint_sigma_rad << " " << d.seed << " candidates " << d.candidates.size() << "\n";
 
   const HandclaspConfig h = ParseHandclaspConfig(sc);
   Put(os, "handclasp layout", h.rough_X_B1B2);
