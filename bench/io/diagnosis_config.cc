@@ -6,6 +6,12 @@
 
 namespace twin {
 
+void AddPointMass(double mass_kg, const Vector3& p_com_L, Link* link) {
+  const double m0 = link->inertia.mass;
+  link->inertia.p_LiCom = (m0 * link->inertia.p_LiCom + mass_kg * p_com_L) / (m0 + mass_kg);
+  link->inertia.mass = m0 + mass_kg;
+}
+
 void ParseDiagnosisSection(const YamlReader& r, const YamlField& field,
                            const KinematicModel& nominal, DiagnosisConfig* c,
                            DiscoveryOptions* o, bool optical_axes) {
@@ -29,7 +35,7 @@ void ParseDiagnosisSection(const YamlReader& r, const YamlField& field,
   if (const auto v = d.Find("encoder_sigma_deg", false)) {
     const double deg = r.Number(*v);
     if (!(deg >= 0.0 && deg <= 0.5)) r.Fail(*v, "expected 0 to 0.5 deg");
-    o->joint_sigma_rad = deg * 3.14159265358979323846 / 180.0;
+    o->joint_sigma_rad = DegToRad(deg);
   }
   if (const auto v = d.Find("enabled", false)) c->enabled = r.Bool(*v);
   if (const auto v = d.Find("alpha", false)) o->alpha = r.Number(*v);

@@ -23,6 +23,10 @@ struct DiagnosisConfig {
 /// Reads the section at `field` into `config` and `discovery` (its alpha, min_gain_percent,
 /// max_effects, folds, candidates); refuses unknown keys and bad values (ValidateDiscoveryOptions)
 /// naming the file, line and key.
+/// Adds a told payload (weighed mass [kg], its centre of mass `p_com_L` in the link's frame
+/// [m]) to `link`'s inertia as a point mass, so that the gravity terms of the diagnosis see it.
+void AddPointMass(double mass_kg, const Vector3& p_com_L, Link* link);
+
 void ParseDiagnosisSection(const YamlReader& reader, const YamlField& field,
                            const KinematicModel& nominal, DiagnosisConfig* config,
                            DiscoveryOptions* discovery, bool optical_axes = false);

@@ -236,10 +236,7 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
     // the board model's tool link (BoardRobotModel), so that gravity terms see it.
     KinematicModel model = rc.nominal;
     if (config.board_mass_kg > 0.0) {
-      Link& tool = model.tool();
-      const double m0 = tool.inertia.mass, m1 = config.board_mass_kg;
-      tool.inertia.p_LiCom = m0 * tool.inertia.p_LiCom / (m0 + m1);
-      tool.inertia.mass = m0 + m1;
+      AddPointMass(config.board_mass_kg, Vector3::Zero(), &model.tool());
     }
     try {
       diagnosis[rc.robot] = DiscoverOpticalAxisModel(MakeRobotModel(model), rc.samples, d);

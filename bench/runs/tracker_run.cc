@@ -250,10 +250,8 @@ int RunTrackerScenario(const RunOptions& o) {
   if (config.payload_kg > 0.0) {
     Link& tool = nominal.tool();
     const Matrix3 R_FLt = Eigen::AngleAxisd(tool.dh.theta_offset, Vector3::UnitZ()).toRotationMatrix();
-    const Vector3 p_com_Lt = R_FLt.transpose() * (config.payload_p_F - config.told_p_F);
-    const double m0 = tool.inertia.mass, m1 = config.payload_kg;
-    tool.inertia.p_LiCom = (m0 * tool.inertia.p_LiCom + m1 * p_com_Lt) / (m0 + m1);
-    tool.inertia.mass = m0 + m1;
+    AddPointMass(config.payload_kg, R_FLt.transpose() * (config.payload_p_F - config.told_p_F),
+                 &tool);
   }
 
   if (!o.quiet) {
