@@ -95,7 +95,9 @@ JointVector ParseJointsDeg(const std::string& text, const KinematicModel& model,
     const JointLimits& l = model.links[i].limits;
     if (q(i) < l.lower || q(i) > l.upper) {
       std::ostringstream os;
-      os << "joint " << i + 1 << " (" << model.links[i].name << ") at " << v[i]
+      const Link& link = model.links[i];
+      os << "joint " << i + 1 << " ("
+         << (link.joint_name.empty() ? link.name : "'" + link.joint_name + "'") << ") at " << v[i]
          << " deg is outside its limits [" << RadToDeg(l.lower) << ", " << RadToDeg(l.upper)
          << "] deg";
       throw InputError(option, os.str());
@@ -111,8 +113,8 @@ void PrintPose(const char* label, const Transform& X) {
               p.z(), RadToDeg(ypr(2)), RadToDeg(ypr(1)), RadToDeg(ypr(0)));
 }
 
-int RunInfo(const std::string& path) {
-  const KinematicModel m = LoadRobotModel(path);
+int RunInfo(const std::string& path, const ModelLinks& links) {
+  const KinematicModel m = LoadRobotModelAndWarn(path, links);
   std::printf("robot %s (%s)\n%-18s %12s\n", m.name.c_str(), path.c_str(), "parameter", "value");
   for (int i = 0; i < m.num_parameters(); ++i) {
     const double v = GetParameters(m)(i);
@@ -131,17 +133,17 @@ int RunInfo(const std::string& path) {
   return 0;
 }
 
-int RunFk(const std::string& path, const std::string& q_text) {
-  const KinematicModel m = LoadRobotModel(path);
+int RunFk(const std::string& path, const ModelLinks& links, const std::string& q_text) {
+  const KinematicModel m = LoadRobotModelAndWarn(path, links);
   const JointVector q = ParseJointsDeg(q_text, m, "--q");
   PrintPose("end frame", EndPose(m, q));
   std::printf("smallest Jacobian singular value: %.6f\n", SmallestJacobianSingularValue(m, q));
   return 0;
 }
 
-int RunIk(const std::string& path, const std::string& xyz, const std::string& rpy,
-          const std::string& seed, bool position_only) {
-  const KinematicModel m = LoadRobotModel(path);
+int RunIk(const std::string& path, const ModelLinks& links, const std::string& xyz,
+          const std::string& rpy, const std::string& seed, bool position_only) {
+  const KinematicModel m = LoadRobotModelAndWarn(path, links);
   const std::vector<double> p =
       ParseList(xyz, 3, "--xyz", 1e4, "millimetres; no arm reaches 10 m");
   const std::vector<double> r = ParseList(rpy, 3, "--rpy", 360.0, "degrees; angles are periodic");
@@ -163,9 +165,9 @@ int RunIk(const std::string& path, const std::string& xyz, const std::string& rp
   return 0;
 }
 
-int RunExportUrdf(const std::string& path, const std::string& out) {
+int RunExportUrdf(const std::string& path, const ModelLinks& links, const std::string& out) {
   ValidateOutputFile(out, "--out");
-  WriteFileAtomically(out, ModelToUrdf(LoadRobotModel(path)));
+  WriteFileAtomically(out, ModelToUrdf(LoadRobotModelAndWarn(path, links)));
   std::printf("wrote %s\n", out.c_str());
   return 0;
 }
@@ -220,21 +222,34 @@ int main(int argc, char** argv) {
   std::string model, q, xyz, rpy = "0,0,0", seed, out, model_dir = "models";
   bool position_only = false;
   int samples = 200;
+  // The chain of a URDF model: one pair for every verb that takes a model file.
+  ModelLinks links;
+  const auto add_links = [&links](CLI::App* sub) {
+    sub->add_option("--base-link", links.base_link,
+                    "URDF: link the arm starts at (default: the URDF's root link)");
+    sub->add_option("--tip-link", links.tip_link,
+                    "URDF: link the arm ends at, the end frame (default: the leaf link with the "
+                    "most moving joints above it)");
+  };
   unsigned rng_seed = 1;
 
   auto* info = app.add_subcommand("info", "print a robot model's parameters (mm, deg)");
   info->add_option("model", model, "model file (.yaml or .urdf)")->required();
+  add_links(info);
   auto* fk = app.add_subcommand("fk", "forward kinematics of a model at joint angles");
   fk->add_option("model", model, "model file (.yaml or .urdf)")->required();
+  add_links(fk);
   fk->add_option("--q", q, "joint angles in degrees, one per joint, comma-separated")->required();
   auto* ik = app.add_subcommand("ik", "inverse kinematics of a model for an end-frame pose");
   ik->add_option("model", model, "model file (.yaml or .urdf)")->required();
+  add_links(ik);
   ik->add_option("--xyz", xyz, "target position in mm, comma-separated")->required();
   ik->add_option("--rpy", rpy, "target roll,pitch,yaw in degrees (fixed axes)");
   ik->add_option("--seed", seed, "start joint angles in degrees (default: mid-range)");
   ik->add_flag("--position-only", position_only, "ignore the target orientation");
   auto* export_urdf = app.add_subcommand("export-urdf", "write a model as URDF");
   export_urdf->add_option("model", model, "model file (.yaml or .urdf)")->required();
+  add_links(export_urdf);
   export_urdf->add_option("--out", out, "output URDF path")->required();
   auto* demo = app.add_subcommand("demo", "kinematic demo on the two Reinovo-like models");
   demo->add_option("--model-dir", model_dir, "folder with reinovo_r{1,2}.{yaml,urdf}");
@@ -305,6 +320,7 @@ int main(int argc, char** argv) {
       "identify", "identify a robot's parameters from recorded measurements (no twin)");
   identify->add_option("--model", identify_options.model, "nominal model (.yaml/.urdf)")
       ->required();
+  add_links(identify);
   identify->add_option("--measurements", identify_options.measurements, "measurements.csv")
       ->required();
   identify->add_option("--robot", identify_options.robot,
@@ -347,6 +363,7 @@ int main(int argc, char** argv) {
       "synthesize-measurements",
       "write a synthetic optical-axis measurements.csv (benchmarks of `identify`)");
   synth->add_option("--model", synth_options.model, "nominal model (.yaml/.urdf)")->required();
+  add_links(synth);
   synth->add_option("--rows", synth_options.rows, "measurement rows (15 to 1000000)");
   synth->add_option("--seed", synth_options.seed, "seed of the true geometry and the noise");
   synth->add_option("--out", synth_options.out, "output CSV")->required();
@@ -355,6 +372,7 @@ int main(int argc, char** argv) {
   auto* kbench = app.add_subcommand(
       "benchmark-kinematics", "time the analytic end-point Jacobian against autodiff");
   kbench->add_option("model", kb_options.model, "model file (.yaml or .urdf)")->required();
+  add_links(kbench);
   kbench->add_option("--evaluations", kb_options.evaluations, "evaluations per figure");
 
   try {
@@ -373,10 +391,10 @@ int main(int argc, char** argv) {
       if (*sub) ValidateOutputFolder(*folder, "--out");
     }
     if (*check) return CheckScenario(check_scenario);
-    if (*info) return RunInfo(model);
-    if (*fk) return RunFk(model, q);
-    if (*ik) return RunIk(model, xyz, rpy, seed, position_only);
-    if (*export_urdf) return RunExportUrdf(model, out);
+    if (*info) return RunInfo(model, links);
+    if (*fk) return RunFk(model, links, q);
+    if (*ik) return RunIk(model, links, xyz, rpy, seed, position_only);
+    if (*export_urdf) return RunExportUrdf(model, links, out);
     if (*demo) return RunDemo(model_dir, samples, rng_seed);
     if (*render) return RunRender(render_options);
     if (*bench) return RunTwinBenchmark(bench_options);
@@ -396,6 +414,7 @@ int main(int argc, char** argv) {
       // A tracker file (x_m / x_mm columns) goes to the tracker identification.
       if (IsTrackerFile(identify_options.measurements)) {
         tracker_options.model = identify_options.model;
+        tracker_options.links = links;
         tracker_options.measurements = identify_options.measurements;
         tracker_options.out_dir = identify_options.out_dir;
         tracker_options.diagnosis = identify->count("--no-diagnosis") == 0;
@@ -416,10 +435,17 @@ int main(int argc, char** argv) {
                          "options of tracker files; " + identify_options.measurements +
                              " has no x_m/x_mm column");
       }
+      identify_options.links = links;
       return RunIdentify(identify_options);
     }
-    if (*synth) return RunSynthesizeMeasurements(synth_options);
-    if (*kbench) return RunKinematicsBenchmark(kb_options);
+    if (*synth) {
+      synth_options.links = links;
+      return RunSynthesizeMeasurements(synth_options);
+    }
+    if (*kbench) {
+      kb_options.links = links;
+      return RunKinematicsBenchmark(kb_options);
+    }
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitUserError;

@@ -18,10 +18,33 @@ bool EndsWith(const std::string& s, const std::string& tail) {
 
 }  // namespace
 
-KinematicModel LoadRobotModel(const std::string& path) {
-  if (EndsWith(path, ".yaml") || EndsWith(path, ".yml")) return LoadModelYaml(path);
-  if (EndsWith(path, ".urdf")) return LoadUrdf(path);
+KinematicModel LoadRobotModel(const std::string& path, const ModelLinks& links,
+                              std::vector<std::string>* warnings) {
+  if (EndsWith(path, ".yaml") || EndsWith(path, ".yml")) {
+    if (!links.base_link.empty() || !links.tip_link.empty()) {
+      throw InputError(path, "base_link / tip_link choose the chain of a URDF; a YAML model is "
+                             "already one chain (remove them or load the URDF)");
+    }
+    return LoadModelYaml(path);
+  }
+  if (EndsWith(path, ".urdf")) {
+    UrdfImportOptions options;
+    options.base_link = links.base_link;
+    options.tip_link = links.tip_link;
+    return LoadUrdf(path, options, warnings);
+  }
   throw InputError(path, "unknown model format; expected a .yaml, .yml or .urdf file");
+}
+
+KinematicModel LoadRobotModelAndWarn(const std::string& path, const ModelLinks& links) {
+  std::vector<std::string> warnings;
+  KinematicModel model = LoadRobotModel(path, links, &warnings);
+  PrintWarnings(warnings);
+  return model;
+}
+
+void PrintWarnings(const std::vector<std::string>& warnings) {
+  for (const std::string& w : warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
 }
 
 void PublishDirectory(const std::string& staging, const std::string& out) {

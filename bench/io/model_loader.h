@@ -2,13 +2,30 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "calib/kinematics/kinematic_model.h"
 
 namespace twin {
 
+/// Where a URDF's arm starts and ends (bench/io/urdf_model.h): `--base-link` / `--tip-link`
+/// of the CLI, `base_link` / `tip_link` of a scenario's robot entry. Empty: the URDF's root and
+/// its automatic tip. Given for a YAML model, they are an InputError (a YAML model is one chain).
+struct ModelLinks {
+  std::string base_link;
+  std::string tip_link;
+};
+
 /// Loads models/*.yaml or a URDF; any other extension is an InputError naming the path.
-KinematicModel LoadRobotModel(const std::string& path);
+/// `warnings` (optional) receives the URDF import's warnings (ParseUrdf).
+KinematicModel LoadRobotModel(const std::string& path, const ModelLinks& links = {},
+                              std::vector<std::string>* warnings = nullptr);
+
+/// Prints each warning to stderr as "warning: ...".
+void PrintWarnings(const std::vector<std::string>& warnings);
+
+/// LoadRobotModel, printing its warnings (the CLI verbs that take a model file).
+KinematicModel LoadRobotModelAndWarn(const std::string& path, const ModelLinks& links = {});
 
 /// Writes `text` to `path` atomically (a temporary file renamed into place), so a failure
 /// never leaves a half-written file. Throws InputError naming the path on failure.

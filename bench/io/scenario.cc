@@ -27,9 +27,10 @@ const Keys kScenarioKeys = {"name",    "seed",        "seeds",     "robots",
 const Keys kTrackerKeys = {"robot",    "pose",           "reflector_mm",  "sigma_mm",
                            "sigma_um_per_m", "drift_mm_per_h", "max_range_m"};
 const Keys kSeedsKeys = {"truth", "estimator"};
-const Keys kRobot1Keys = {"name", "model", "installation", "base", "initial_joints_deg"};
-const Keys kRobot2Keys = {"name", "model", "installation", "base_from_robot1",
+const Keys kRobot1Keys = {"name", "model", "base_link", "tip_link", "installation", "base",
                           "initial_joints_deg"};
+const Keys kRobot2Keys = {"name", "model", "base_link", "tip_link", "installation",
+                          "base_from_robot1", "initial_joints_deg"};
 const Keys kCameraKeys = {"robot", "hand_eye", "resolution", "fx",      "fy",    "cx",
                           "cy",    "distortion", "msaa",     "near_mm", "far_mm"};
 const Keys kBoardKeys = {"robot",        "squares", "square_mm", "margin_mm",
@@ -189,8 +190,18 @@ class ScenarioParser {
     const std::string model_text = r_.String(model_field);
     if (model_text.empty()) r_.Fail(model_field, "expected a model file path, got ''");
     out_.model_paths[i] = ResolvePath(model_text);
+    ModelLinks links;
+    for (auto [key, value] : {std::pair{"base_link", &links.base_link},
+                              std::pair{"tip_link", &links.tip_link}}) {
+      if (const auto field = m.Find(key, false)) {
+        *value = r_.String(*field);
+        if (value->empty()) r_.Fail(*field, std::string("expected a URDF link name, got ''"));
+      }
+    }
+    std::vector<std::string> warnings;
     try {
-      robot.model = LoadRobotModel(out_.model_paths[i]);
+      robot.model = LoadRobotModel(out_.model_paths[i], links, &warnings);
+      for (const std::string& w : warnings) out_.warnings.push_back("robot " + name + ": " + w);
     } catch (const InputError& e) {
       r_.Fail(model_field, "cannot load robot model '" + model_text + "' (resolved to " +
                                out_.model_paths[i] + "): " + e.what());
@@ -473,7 +484,10 @@ Scenario ParseScenario(const std::string& text, const std::string& source,
 
 Scenario LoadScenario(const std::string& path) {
   const std::string text = ReadTextFile(path);
-  return ParseScenario(text, path, std::filesystem::path(path).parent_path().string());
+  Scenario scenario =
+      ParseScenario(text, path, std::filesystem::path(path).parent_path().string());
+  PrintWarnings(scenario.warnings);
+  return scenario;
 }
 
 void ApplyTrial(int trial, Scenario* scenario) {

@@ -18,6 +18,9 @@
 //                                          # camera.robot, board.robot, tips and effects; it also
 //                                          # renames the loaded model (parameter-name prefix)
 //         model: ../models/reinovo_r1.yaml # required; LoadRobotModel (.yaml, .yml or .urdf)
+//         base_link: base_link             # optional, URDF only: where the arm starts and
+//         tip_link: tool0                  # ends (defaults: the root link; the leaf link with
+//                                          # the most moving joints above it)
 //         installation: floor              # required: floor | wall | ceiling
 //         base: {xyz_mm: [0, 0, 0], rpy_deg: [0, 0, 0]}   # optional X_WB1 (default identity)
 //         initial_joints_deg: [0, 34, -34, 0, 90, 90]    # required, 6 motor-side angles
@@ -98,6 +101,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "bench/io/yaml_util.h"
 #include "sim/world/twin_spec.h"
@@ -120,6 +124,9 @@ struct Scenario {
   int trial = 0;                                     ///< the trial (ApplyTrial), 0 as loaded
   std::array<std::string, kNumRobots> robot_names;   ///< robot names, in file order
   std::array<std::string, kNumRobots> model_paths;   ///< model files as resolved and loaded
+  std::vector<std::string> warnings;                 ///< the model imports' warnings, each
+                                                     ///< naming its robot (LoadScenario prints
+                                                     ///< them to stderr)
   /// The optional procedure sections, as written (node empty when absent); each procedure
   /// parses its own with YamlReader(path), so messages name file, line and key path:
   /// `calibration:` (optical-axis calibration, bench/io/calibration_config.h) and `handclasp:`
@@ -139,7 +146,7 @@ Scenario ParseScenario(const std::string& text, const std::string& source,
                        const std::string& base_dir);
 
 /// Reads and parses a scenario file; model paths are relative to the file's folder. A missing
-/// or unreadable file is an InputError naming it.
+/// or unreadable file is an InputError naming it. Prints the warnings to stderr.
 Scenario LoadScenario(const std::string& path);
 
 /// Makes `scenario` trial `trial` of a study: both seeds become the file's seeds + trial

@@ -4,6 +4,8 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <map>
@@ -19,6 +21,7 @@
 #include "calib/common/text_format.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
+#include "sim/world/mjcf_writer.h"
 
 namespace twin {
 namespace {
@@ -226,13 +229,51 @@ void CollectLeaves(const urdf::Link& link, std::vector<std::string>* leaves) {
   for (const auto& child : link.child_links) CollectLeaves(*child, leaves);
 }
 
-std::string DefaultTip(const urdf::Link& base, const std::string& source) {
+// Moving (non-fixed) joints between `base` and its descendant `leaf`.
+int MovingJointsAbove(const urdf::ModelInterface& urdf, const std::string& base,
+                      const std::string& leaf) {
+  int n = 0;
+  for (urdf::LinkConstSharedPtr link = urdf.getLink(leaf); link && link->name != base &&
+                                                           link->parent_joint;
+       link = urdf.getLink(link->parent_joint->parent_link_name)) {
+    if (link->parent_joint->type != urdf::Joint::FIXED) ++n;
+  }
+  return n;
+}
+
+// The end of the arm when no tip_link is given: the only leaf below base_link, or else the one
+// leaf with the most moving joints above it. Frames hung on fixed joints nearer the base (the
+// ROS-Industrial `base` frame beside `base_link`, a sensor on the forearm) are passed over,
+// with a warning naming them; a tie is refused.
+std::string DefaultTip(const urdf::ModelInterface& urdf, const urdf::Link& base,
+                       const std::string& source, std::vector<std::string>* warnings) {
   std::vector<std::string> leaves;
   CollectLeaves(base, &leaves);
   if (leaves.size() == 1 && leaves[0] != base.name) return leaves[0];
   if (leaves.size() == 1) throw InputError(source, "base_link '" + base.name + "' has no children");
-  throw InputError(source, "the URDF has several leaf links " + ListNames(leaves) +
-                               "; pass tip_link to choose the end of the arm");
+  std::vector<int> moving(leaves.size());
+  for (size_t k = 0; k < leaves.size(); ++k) {
+    moving[k] = MovingJointsAbove(urdf, base.name, leaves[k]);
+  }
+  const int most = *std::max_element(moving.begin(), moving.end());
+  std::vector<std::string> best, others;
+  for (size_t k = 0; k < leaves.size(); ++k) {
+    (moving[k] == most ? best : others)
+        .push_back(leaves[k] + " (" + std::to_string(moving[k]) + " moving joints)");
+  }
+  if (best.size() != 1) {
+    throw InputError(source, "the URDF has several leaf links " + ListNames(leaves) + ", " +
+                                 std::to_string(best.size()) + " of them " +
+                                 std::to_string(most) + " moving joints below base_link '" +
+                                 base.name + "'; pass tip_link to choose the end of the arm");
+  }
+  const std::string tip = best[0].substr(0, best[0].find(" ("));
+  if (warnings) {
+    warnings->push_back(source + ": tip_link not given: chose '" + tip + "', the leaf link with "
+                        "the most moving joints below base_link '" + base.name +
+                        "'; passed over " + ListNames(others) + " (pass tip_link to choose)");
+  }
+  return tip;
 }
 
 // All joints from base to tip (fixed ones included), base first.
@@ -459,6 +500,98 @@ void AssignInertias(const urdf::ModelInterface& urdf, const urdf::Link& base,
   model->tool().inertia = LinkInertia{};
 }
 
+// ---- Warnings -------------------------------------------------------------------------------
+
+bool IsFile(const std::filesystem::path& p) {
+  std::error_code ec;
+  return std::filesystem::is_regular_file(p, ec);
+}
+
+// Whether a mesh file name of the URDF names a file on this machine: package://pkg/rest under
+// a folder of ROS_PACKAGE_PATH (pkg itself or a folder holding it) or of AMENT_PREFIX_PATH
+// (share/pkg), file:// and plain paths as they are or relative to the URDF's folder.
+bool MeshResolves(const std::string& filename, const std::filesystem::path& urdf_dir) {
+  namespace fs = std::filesystem;
+  const std::string package = "package://", file = "file://";
+  if (filename.rfind(package, 0) == 0) {
+    const std::string rest = filename.substr(package.size());
+    const std::size_t slash = rest.find('/');
+    if (slash == std::string::npos) return false;
+    const std::string pkg = rest.substr(0, slash), inside = rest.substr(slash + 1);
+    for (const char* var : {"ROS_PACKAGE_PATH", "AMENT_PREFIX_PATH"}) {
+      const char* value = std::getenv(var);
+      if (!value) continue;
+      std::stringstream folders(value);
+      for (std::string folder; std::getline(folders, folder, ':');) {
+        if (folder.empty()) continue;
+        const fs::path f(folder);
+        if (IsFile(f / pkg / inside) || IsFile(f / "share" / pkg / inside) ||
+            (f.filename() == pkg && IsFile(f / inside))) {
+          return true;
+        }
+      }
+    }
+    return false;
+  }
+  const fs::path path(filename.rfind(file, 0) == 0 ? filename.substr(file.size()) : filename);
+  return IsFile(path) || (path.is_relative() && IsFile(urdf_dir / path));
+}
+
+// Warns about the meshes of the links below base_link that cannot be found (the twin never
+// loads meshes: it draws capsules along the links, so the rendered arm and its collisions are
+// capsules either way; an unresolved mesh also means the user's visual model is not here).
+void WarnMeshes(const urdf::Link& base, const std::string& source,
+                std::vector<std::string>* warnings) {
+  std::vector<std::string> unresolved;
+  int meshes = 0;
+  const std::filesystem::path dir = std::filesystem::path(source).parent_path();
+  std::vector<const urdf::Link*> stack = {&base};
+  while (!stack.empty()) {
+    const urdf::Link* link = stack.back();
+    stack.pop_back();
+    std::vector<urdf::GeometrySharedPtr> shapes;
+    for (const auto& v : link->visual_array) if (v) shapes.push_back(v->geometry);
+    for (const auto& c : link->collision_array) if (c) shapes.push_back(c->geometry);
+    for (const auto& g : shapes) {
+      if (!g || g->type != urdf::Geometry::MESH) continue;
+      ++meshes;
+      const std::string& name = static_cast<const urdf::Mesh&>(*g).filename;
+      if (!MeshResolves(name, dir)) unresolved.push_back(link->name + ": " + name);
+    }
+    for (const auto& child : link->child_links) stack.push_back(child.get());
+  }
+  if (unresolved.empty()) return;
+  std::sort(unresolved.begin(), unresolved.end());
+  unresolved.erase(std::unique(unresolved.begin(), unresolved.end()), unresolved.end());
+  std::string list;
+  for (size_t k = 0; k < unresolved.size() && k < 3; ++k) list += (k ? "; " : "") + unresolved[k];
+  if (unresolved.size() > 3) list += "; ...";
+  warnings->push_back(source + ": " + std::to_string(unresolved.size()) + " of " +
+                      std::to_string(meshes) + " mesh files cannot be resolved (" + list +
+                      "); package:// paths are looked up in ROS_PACKAGE_PATH and "
+                      "AMENT_PREFIX_PATH. The twin does not load meshes: it draws capsules "
+                      "along the links, for rendering and collisions");
+}
+
+// Warns about moving bodies without mass (no <inertial> on any link they carry).
+void WarnMassless(const KinematicModel& model, const std::vector<JointPtr>& moving,
+                  const std::string& source, std::vector<std::string>* warnings) {
+  std::vector<std::string> joints;
+  for (int k = 0; k < model.num_joints(); ++k) {
+    if (!(model.links[k].inertia.mass > 0.0)) joints.push_back(moving[k]->name);
+  }
+  if (joints.empty()) return;
+  std::ostringstream os;
+  os << source << ": no <inertial> on the links moved by joint"
+     << (joints.size() > 1 ? "s " : " ") << ListNames(joints)
+     << " (up to the next moving joint): the twin simulates each such link with a stand-in of "
+     << kFallbackLinkMassKg << " kg and " << kFallbackLinkInertiaKgm2
+     << " kg m^2 at its joint, and gravity-driven terms (joint compliance, the diagnosis's "
+        "gravity torques) see no mass there; add <inertial> elements for realistic gravity "
+        "effects";
+  warnings->push_back(os.str());
+}
+
 // ---- URDF writing ---------------------------------------------------------------------------
 
 // URDF rpy of R = Rz(yaw) Ry(pitch) Rx(roll); roll comes from the residual rotation so the
@@ -541,14 +674,16 @@ Transform RotZTransform(double angle) {
 }  // namespace
 
 KinematicModel ParseUrdf(const std::string& text, const std::string& source,
-                         const UrdfImportOptions& options) {
+                         const UrdfImportOptions& options, std::vector<std::string>* warnings) {
+  std::vector<std::string> ignored;
+  if (!warnings) warnings = &ignored;
   const urdf::ModelInterfaceSharedPtr urdf = ParseText(text, source);
   CheckPlausible(*urdf, text, source);
   const std::string base_name =
       options.base_link.empty() ? urdf->getRoot()->name : options.base_link;
   const urdf::LinkConstSharedPtr base = RequireLink(*urdf, base_name, "base_link", source);
   const std::string tip =
-      options.tip_link.empty() ? DefaultTip(*base, source) : options.tip_link;
+      options.tip_link.empty() ? DefaultTip(*urdf, *base, source, warnings) : options.tip_link;
   RequireLink(*urdf, tip, "tip_link", source);
 
   const std::vector<JointPtr> chain = JointsBetween(*urdf, base_name, tip, source);
@@ -561,14 +696,18 @@ KinematicModel ParseUrdf(const std::string& text, const std::string& source,
   BuildGeometry(axes, X_BT, moving, source, &model);
   for (int i = 0; i < model.num_joints(); ++i) {
     model.links[i].limits = LimitsOf(*moving[i], source);
+    model.links[i].joint_name = moving[i]->name;
   }
   AssignInertias(*urdf, *base, moving, &model);
   ValidateModel(model, source);
+  WarnMeshes(*base, source, warnings);
+  WarnMassless(model, moving, source, warnings);
   return model;
 }
 
-KinematicModel LoadUrdf(const std::string& path, const UrdfImportOptions& options) {
-  return ParseUrdf(ReadTextFile(path, kMaxUrdfBytes), path, options);
+KinematicModel LoadUrdf(const std::string& path, const UrdfImportOptions& options,
+                        std::vector<std::string>* warnings) {
+  return ParseUrdf(ReadTextFile(path, kMaxUrdfBytes), path, options, warnings);
 }
 
 std::string ModelToUrdf(const KinematicModel& model) {

@@ -701,7 +701,7 @@ int RunIdentify(const IdentifyOptions& o) {
   // Everything is validated before anything is written.
   ValidateOutputFolder(o.out_dir, "--out");
   if (!o.robot.empty()) RequireSafeName(o.robot, "--robot", "robot name");
-  KinematicModel model = LoadRobotModel(o.model);
+  KinematicModel model = LoadRobotModelAndWarn(o.model, o.links);
   Transform X_FT = Transform::Identity();  // documented nominal: the board at the flange
   if (!o.board_mount.empty()) {
     std::vector<double> v;

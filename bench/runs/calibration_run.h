@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/io/calibration_config.h"
+#include "bench/io/model_loader.h"
 #include "bench/io/scenario.h"
 #include "calib/diagnosis/model_discovery.h"
 #include "calib/procedures/optical_axis_procedure.h"
@@ -60,6 +61,7 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& scenario,
 /// Options of RunIdentify.
 struct IdentifyOptions {
   std::string model;          ///< nominal model file (.yaml/.urdf) of the calibrated robot
+  ModelLinks links;  ///< --base-link / --tip-link of a URDF model
   std::string measurements;   ///< measurements.csv as `twinbench run` writes it
   std::string robot;          ///< rows of this robot (default: the model's... the only one)
   std::string board_mount;    ///< "x,y,z,roll,pitch,yaw" in mm and deg (X_FT); default 0s

@@ -28,7 +28,7 @@ int RunKinematicsBenchmark(const KinematicsBenchmarkOptions& o) {
   if (o.evaluations < 1 || o.evaluations > 10000000) {
     throw InputError("--evaluations", "expected 1 to 10000000, got " + std::to_string(o.evaluations));
   }
-  const KinematicModel chain = LoadRobotModel(o.model);
+  const KinematicModel chain = LoadRobotModelAndWarn(o.model, o.links);
   const RobotModel model = MakeRobotModel(chain);
   std::mt19937_64 rng(1);
   std::vector<MeasurementContext> contexts;

@@ -5,10 +5,13 @@
 
 #include <string>
 
+#include "bench/io/model_loader.h"
+
 namespace twin {
 
 struct KinematicsBenchmarkOptions {
   std::string model;      ///< model file (.yaml/.urdf)
+  ModelLinks links;  ///< --base-link / --tip-link of a URDF model
   int evaluations = 20000;  ///< evaluations per figure
 };
 

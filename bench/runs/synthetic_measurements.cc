@@ -18,7 +18,7 @@ int RunSynthesizeMeasurements(const SynthesizeOptions& o) {
   if (o.rows < 3 * kAxes || o.rows > 1000000) {
     throw InputError("--rows", "expected 15 to 1000000 rows, got " + std::to_string(o.rows));
   }
-  const KinematicModel nominal = LoadRobotModel(o.model);
+  const KinematicModel nominal = LoadRobotModelAndWarn(o.model, o.links);
   std::mt19937_64 rng(o.seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   std::normal_distribution<double> noise(0.0, 1.0);

@@ -8,11 +8,14 @@
 #include <cstdint>
 #include <string>
 
+#include "bench/io/model_loader.h"
+
 namespace twin {
 
 /// Options of SynthesizeMeasurements.
 struct SynthesizeOptions {
   std::string model;        ///< nominal model file (.yaml/.urdf)
+  ModelLinks links;  ///< --base-link / --tip-link of a URDF model
   int rows = 5000;          ///< measurement rows (spread evenly over the 5 axes)
   std::uint64_t seed = 1;   ///< seed of the true geometry and the noise
   std::string out;          ///< output CSV path

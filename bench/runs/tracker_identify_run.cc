@@ -38,7 +38,7 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
     throw InputError("--holdout", "expected a fraction in (0, 0.5], got " +
                                       std::to_string(o.holdout_fraction));
   }
-  const KinematicModel chain = LoadRobotModel(o.model);
+  const KinematicModel chain = LoadRobotModelAndWarn(o.model, o.links);
   const TrackerFile file = ReadTrackerFile(o.measurements, chain, o.ignore_columns);
   TrackerFile validation;
   if (!o.validate.empty()) validation = ReadTrackerFile(o.validate, chain, o.ignore_columns);

@@ -7,10 +7,13 @@
 #include <string>
 #include <vector>
 
+#include "bench/io/model_loader.h"
+
 namespace twin {
 
 struct TrackerIdentifyOptions {
   std::string model;                        ///< nominal model (.yaml / .urdf), any joint count
+  ModelLinks links;  ///< --base-link / --tip-link of a URDF model
   std::string measurements;                 ///< the tracker file
   std::vector<std::string> ignore_columns;  ///< columns to drop (e.g. a constant torso axis)
   std::string validate;                     ///< optional second file: the region split's part

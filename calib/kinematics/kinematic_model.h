@@ -59,6 +59,7 @@ struct LinkInertia {
 /// One link: geometry, and for jointed links limits and inertia.
 struct Link {
   std::string name;          ///< e.g. "link3" (used in parameter names)
+  std::string joint_name;    ///< the source's name of the joint (URDF), empty when none
   DhParameters dh;           ///< eq. 2 parameters
   JointLimits limits;        ///< unused for the tool link
   LinkInertia inertia;       ///< mass properties (tool link: the mounted tool)

@@ -16,8 +16,6 @@ namespace {
 constexpr double kCameraMassKg = 0.3;           // camera body on the active flange
 constexpr double kCameraHalf[3] = {0.03, 0.025, 0.02};  // camera housing half sizes [m]
 constexpr double kCameraBackoff = 0.005;        // housing front face behind the lens [m]
-constexpr double kFallbackMassKg = 0.1;         // links given without mass (MuJoCo needs > 0)
-constexpr double kFallbackInertia = 1e-4;       // [kg m^2], with kFallbackMassKg
 constexpr double kBaseRadius = 0.09;            // base pedestal [m]
 constexpr double kBaseHeight = 0.06;            // [m]
 constexpr double kExcludeClearance = 0.01;      // [m], see NecessarilyTouch
@@ -80,8 +78,8 @@ std::string TipContact(int robot) {
 LinkInertia UsedInertia(const Link& link) {
   if (link.inertia.mass > 0.0) return link.inertia;
   LinkInertia fallback;
-  fallback.mass = kFallbackMassKg;
-  fallback.I_Com = kFallbackInertia * Matrix3::Identity();
+  fallback.mass = kFallbackLinkMassKg;
+  fallback.I_Com = kFallbackLinkInertiaKgm2 * Matrix3::Identity();
   return fallback;
 }
 

@@ -30,6 +30,11 @@ namespace twin {
 /// Name of the MJCF camera on the active robot's flange.
 constexpr const char* kHandCameraName = "hand_camera";
 
+/// Stand-in mass properties of a link whose model has no mass (a URDF without <inertial>):
+/// MuJoCo needs every body to have mass. [kg], [kg m^2] about each axis at the link origin.
+constexpr double kFallbackLinkMassKg = 0.1;
+constexpr double kFallbackLinkInertiaKgm2 = 1e-4;
+
 /// Radius of the flange disc (and of the last link's capsule) of an n-joint arm [m]; the disc
 /// is kFlangeThicknessM thick, behind the flange face (frame L_N) [m].
 double FlangeRadius(int num_joints);

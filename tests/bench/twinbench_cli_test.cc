@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -85,6 +86,58 @@ TEST(TwinbenchCli, IkOfAnFkPoseReproducesIt) {
   ASSERT_TRUE(ParsePose(back.output, pose2)) << back.output;
   // 2e-3 mm: the poses are printed with 4 decimals (mm, deg) and the joints with 6 (deg).
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(pose[i], pose2[i], 2e-3) << i;
+}
+
+TEST(TwinbenchCli, UrdfChainOptionsWarningsAndJointNames) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(::testing::TempDir()) / "cli_urdf_links";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  // reinovo_r1.urdf renamed as a vendor would (joint 2 "shoulder_lift") with a frame-only
+  // `base` leaf beside base_link (ROS-Industrial).
+  std::ifstream in(std::string(TWIN_SOURCE_DIR) + "/models/reinovo_r1.urdf");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (auto [from, to] : {std::pair<std::string, std::string>{"\"joint2\"", "\"shoulder_lift\""},
+                          {"<link name=\"base_link\"/>",
+                           "<link name=\"base_link\"/><link name=\"base\"/><joint "
+                           "name=\"b\" type=\"fixed\"><parent link=\"base_link\"/><child "
+                           "link=\"base\"/></joint>"}}) {
+    const size_t at = text.find(from);
+    ASSERT_NE(at, std::string::npos) << from;
+    text.replace(at, from.size(), to);
+  }
+  const std::string urdf = (dir / "arm.urdf").string();
+  std::ofstream(urdf) << text;
+
+  const CliRun automatic = Twinbench("fk " + urdf + " --q 10,20,30,40,50,60");
+  EXPECT_EQ(automatic.code, 0) << automatic.output;
+  EXPECT_NE(automatic.output.find("warning: " + urdf + ": tip_link not given: chose 'end'"),
+            std::string::npos) << automatic.output;
+  const CliRun from_yaml = Twinbench("fk " + kModel + " --q 10,20,30,40,50,60");
+  double a[6], b[6];
+  ASSERT_TRUE(ParsePose(automatic.output, a)) << automatic.output;
+  ASSERT_TRUE(ParsePose(from_yaml.output, b)) << from_yaml.output;
+  // The same arm: poses printed to 1e-4 mm / deg agree to their last digit.
+  for (int i = 0; i < 6; ++i) EXPECT_NEAR(a[i], b[i], 2e-4) << i;
+
+  const CliRun chosen = Twinbench("fk " + urdf + " --base-link base_link --tip-link end --q 0,0,0,0,0,0");
+  EXPECT_EQ(chosen.code, 0) << chosen.output;
+  EXPECT_EQ(chosen.output.find("warning:"), std::string::npos) << chosen.output;
+
+  const CliRun limits = Twinbench("fk " + urdf + " --tip-link end --q 0,200,0,0,0,0");
+  EXPECT_EQ(limits.code, 2) << limits.output;
+  EXPECT_NE(limits.output.find("joint 2 ('shoulder_lift') at 200 deg is outside its limits"),
+            std::string::npos) << limits.output;
+
+  const CliRun bad_tip = Twinbench("info " + urdf + " --tip-link nope");
+  EXPECT_EQ(bad_tip.code, 2) << bad_tip.output;
+  EXPECT_NE(bad_tip.output.find("tip_link 'nope' is not a link"), std::string::npos)
+      << bad_tip.output;
+  const CliRun yaml_tip = Twinbench("info " + kModel + " --tip-link tool");
+  EXPECT_EQ(yaml_tip.code, 2) << yaml_tip.output;
+  EXPECT_NE(yaml_tip.output.find("a YAML model is already one chain"), std::string::npos)
+      << yaml_tip.output;
+  fs::remove_all(dir);
 }
 
 TEST(TwinbenchCli, RenderWritesHandCameraAndOverviewPngs) {

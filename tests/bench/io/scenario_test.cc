@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "bench/io/model_loader.h"
 #include "calib/common/errors.h"
 #include "text_edit.h"
 #include "calib/kinematics/forward_kinematics.h"
@@ -310,6 +311,53 @@ TEST(ScenarioTest, ModelPathIsRelativeToTheScenarioFolder) {
   EXPECT_EQ(s.model_paths[0], (dir / "arms" / "left.yaml").string());
   EXPECT_EQ(s.model_paths[1], kRoot + "/models/reinovo_r2.yaml");  // absolute: as written
   EXPECT_EQ(s.twin.robots[0].model.name, "r1");
+  std::filesystem::remove_all(dir);
+}
+
+TEST(ScenarioTest, UrdfRobotsTakeBaseAndTipLinksAndTheirWarnings) {
+  // reinovo_r1.urdf with a frame-only `base` leaf beside base_link, as ROS-Industrial URDFs
+  // have: loads without tip_link (with a warning naming the robot); tip_link picks the chain.
+  const std::filesystem::path dir =
+      std::filesystem::path(::testing::TempDir()) / "scenario_test_links";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "r1.urdf") << Replaced(
+      ReadFile(kRoot + "/models/reinovo_r1.urdf"), "<link name=\"base_link\"/>",
+      "<link name=\"base_link\"/>\n  <link name=\"base\"/>\n  <joint name=\"base_link-base\" "
+      "type=\"fixed\"><parent link=\"base_link\"/><child link=\"base\"/></joint>");
+  const std::string text = Replaced(DemoText(), "model: ../models/reinovo_r1.yaml",
+                                    "model: " + (dir / "r1.urdf").string());
+  const Scenario automatic = ParseScenario(text, kSource, kScenarioDir);
+  bool named = false;
+  for (const std::string& w : automatic.warnings) {
+    named |= Contains(w, "robot r1: ") && Contains(w, "chose 'end'");
+  }
+  EXPECT_TRUE(named) << ::testing::PrintToString(automatic.warnings);
+  const KinematicModel yaml = LoadRobotModel(kRoot + "/models/reinovo_r1.yaml");
+  const JointVector q = Deg(10, 40, -30, 20, 70, -15);
+  // The committed URDF equals the YAML model to 1e-9 m (ModelFiles test); so does this one.
+  EXPECT_LT((EndPose(automatic.twin.robots[0].model, q).translation() -
+             EndPose(yaml, q).translation()).norm(), 1e-9);
+
+  // tip_link: tool ends the chain before the fixed tool-to-end transform.
+  const std::string with_tip =
+      Replaced(text, "model: " + (dir / "r1.urdf").string(),
+               "model: " + (dir / "r1.urdf").string() + "\n      base_link: base_link\n"
+               "      tip_link: tool");
+  const Scenario chosen = ParseScenario(with_tip, kSource, kScenarioDir);
+  EXPECT_TRUE(chosen.warnings.empty()) << ::testing::PrintToString(chosen.warnings);
+  const KinematicModel& m = chosen.twin.robots[0].model;
+  EXPECT_LT((EndPose(m, q).translation() -
+             (EndPose(yaml, q) * yaml.X_LtE.inverse()).translation()).norm(), 1e-9);
+
+  // A wrong link name is refused at the model's line, naming the link.
+  const std::string bad = Replaced(with_tip, "tip_link: tool", "tip_link: tool9");
+  EXPECT_TRUE(Contains(ParseError(bad), "tip_link 'tool9' is not a link"));
+  EXPECT_TRUE(Contains(ParseError(bad), "scenario.robots[0].model"));
+  // base_link / tip_link of a YAML model.
+  const std::string yaml_tip = Replaced(DemoText(), "model: ../models/reinovo_r1.yaml",
+                                        "model: ../models/reinovo_r1.yaml\n      tip_link: tool");
+  EXPECT_TRUE(Contains(ParseError(yaml_tip), "a YAML model is already one chain"));
   std::filesystem::remove_all(dir);
 }
 

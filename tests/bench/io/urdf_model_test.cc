@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <iomanip>
@@ -11,6 +12,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <urdf_parser/urdf_parser.h>
 
 #include "calib/common/errors.h"
@@ -622,7 +624,8 @@ TEST(UrdfModelErrors, MalformedXmlNamesSource) {
   EXPECT_NE(msg.find("not a valid URDF"), std::string::npos) << msg;
 }
 
-TEST(UrdfModelErrors, TwoLeavesNeedTipLink) {
+// A six-joint chain base_link - l1 - ... - l6 with fixed frame-only leaves {name, parent link}.
+std::string ChainWithLeaves(const std::vector<std::pair<std::string, std::string>>& leaves) {
   std::vector<std::string> links = {"base_link"};
   std::vector<JointSpec> joints;
   for (int i = 1; i <= 6; ++i) {
@@ -632,19 +635,153 @@ TEST(UrdfModelErrors, TwoLeavesNeedTipLink) {
     j.axis = i % 2 ? Vector3::UnitZ() : Vector3::UnitY();
     joints.push_back(j);
   }
-  links.push_back("camera");
-  joints.push_back(JointSpec{"camera_joint", "fixed", "l4", "camera"});
-  const std::string text = UrdfText(links, {}, joints);
+  for (const auto& [name, on] : leaves) {
+    links.push_back(name);
+    joints.push_back(JointSpec{name + "_joint", "fixed", on, name});
+  }
+  return UrdfText(links, {}, joints);
+}
+
+TEST(UrdfModelErrors, TwoLeavesWithAsManyMovingJointsNeedTipLink) {
+  // camera and tool0 both end the arm.
+  const std::string text = ChainWithLeaves({{"camera", "l6"}, {"tool0", "l6"}});
   const std::string msg = ErrorOf([&] { ParseUrdf(text, "leaves.urdf"); });
   EXPECT_NE(msg.find("camera"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("l6"), std::string::npos) << msg;
   EXPECT_NE(msg.find("tip_link"), std::string::npos) << msg;
   UrdfImportOptions opt;
-  opt.tip_link = "l6";
+  EXPECT_NE(msg.find("tool0"), std::string::npos) << msg;
+  opt.tip_link = "tool0";
+  EXPECT_NO_THROW(ParseUrdf(text, "leaves.urdf", opt));
+  opt.tip_link = "camera";
   EXPECT_NO_THROW(ParseUrdf(text, "leaves.urdf", opt));
   opt.tip_link = "nope";
   EXPECT_NE(ErrorOf([&] { ParseUrdf(text, "leaves.urdf", opt); }).find("tip_link 'nope'"),
             std::string::npos);
+}
+
+TEST(UrdfModel, ALeafNearerTheBaseIsPassedOverWithAWarning) {
+  // A sensor frame on link 4 is not the end of the arm: l6 has more moving joints above it.
+  const std::string text = ChainWithLeaves({{"camera", "l4"}});
+  std::vector<std::string> warnings;
+  const KinematicModel m = ParseUrdf(text, "leaves.urdf", {}, &warnings);
+  UrdfImportOptions opt;
+  opt.tip_link = "l6";
+  const KinematicModel explicit_tip = ParseUrdf(text, "leaves.urdf", opt);
+  std::mt19937 rng(3);
+  const JointVector q = RandomJoints(m, rng);
+  // Same parse of the same chain: bit-identical poses are expected; 1e-12 m allows nothing
+  // but rounding.
+  EXPECT_LT(Compare(EndPose(m, q), EndPose(explicit_tip, q)).position, 1e-12);
+  bool named = false;
+  for (const std::string& w : warnings) {
+    named |= w.find("chose 'l6'") != std::string::npos &&
+             w.find("camera (4 moving joints)") != std::string::npos &&
+             w.find("leaves.urdf") != std::string::npos;
+  }
+  EXPECT_TRUE(named) << ::testing::PrintToString(warnings);
+}
+
+// kUr5Like as ROS-Industrial support packages write arms: a frame-only `base` link beside
+// base_link (the robot controller's base frame), and mesh visuals.
+std::string RosIndustrialLike(const std::string& mesh) {
+  std::string text = Replaced(kUr5Like, "<link name=\"tool0\">",
+                              "<link name=\"base\"/>\n  <joint name=\"base_link-base\" "
+                              "type=\"fixed\"><parent link=\"base_link\"/><child "
+                              "link=\"base\"/><origin xyz=\"0 0 0\" rpy=\"0 0 3.14159265\"/>"
+                              "</joint>\n  <link name=\"tool0\">");
+  return Replaced(text, "<link name=\"shoulder_link\">",
+                  "<link name=\"shoulder_link\"><visual><geometry><mesh filename=\"" + mesh +
+                      "\"/></geometry></visual>");
+}
+
+TEST(UrdfModel, RosIndustrialBaseFrameLeafLoadsWithoutTipLink) {
+  const std::string text = RosIndustrialLike("package://no_such_support/meshes/link_1.stl");
+  std::vector<std::string> warnings;
+  const KinematicModel m = ParseUrdf(text, "ros_i.urdf", {}, &warnings);
+  std::mt19937 rng(5);
+  // The independent reference (urdfdom's joints composed directly) to tool0.
+  const Deviation dev = CompareWithReference(text, "tool0", m, 50, rng);
+  EXPECT_LT(dev.position, kPosTol);
+  EXPECT_LT(dev.rotation, kRotTol);
+  bool chose = false, mesh = false;
+  for (const std::string& w : warnings) {
+    chose |= w.find("chose 'tool0'") != std::string::npos &&
+             w.find("base (0 moving joints)") != std::string::npos;
+    mesh |= w.find("1 of 1 mesh files cannot be resolved") != std::string::npos &&
+            w.find("shoulder_link: package://no_such_support/meshes/link_1.stl") !=
+                std::string::npos &&
+            w.find("capsules") != std::string::npos;
+  }
+  EXPECT_TRUE(chose) << ::testing::PrintToString(warnings);
+  EXPECT_TRUE(mesh) << ::testing::PrintToString(warnings);
+  // kUr5Like has every <inertial>: no mass warning.
+  for (const std::string& w : warnings) EXPECT_EQ(w.find("<inertial>"), std::string::npos) << w;
+  // The URDF joint names stay with the model (messages name them).
+  EXPECT_EQ(m.links[1].joint_name, "shoulder_lift_joint");
+}
+
+TEST(UrdfModel, BaseLinkStartsTheChainThere) {
+  // A `world` root with base_link 0.5 m up and turned: from base_link the arm's pose is the
+  // world one seen from base_link.
+  std::string text = Replaced(kUr5Like, "<link name=\"base_link\">",
+                              "<link name=\"world\"/>\n  <joint name=\"world_joint\" "
+                              "type=\"fixed\"><parent link=\"world\"/><child "
+                              "link=\"base_link\"/><origin xyz=\"0.1 0 0.5\" rpy=\"0 0 0.7\"/>"
+                              "</joint>\n  <link name=\"base_link\">");
+  const KinematicModel from_world = ParseUrdf(text, "world.urdf");
+  UrdfImportOptions opt;
+  opt.base_link = "base_link";
+  const KinematicModel from_base = ParseUrdf(text, "world.urdf", opt);
+  Transform X_WB = Transform::Identity();
+  X_WB.translation() = Vector3(0.1, 0.0, 0.5);
+  X_WB.linear() = Eigen::AngleAxisd(0.7, Vector3::UnitZ()).matrix();
+  std::mt19937 rng(7);
+  for (int k = 0; k < 20; ++k) {
+    const JointVector q = RandomJoints(from_base, rng);
+    const PoseError e = Compare(X_WB * EndPose(from_base, q), EndPose(from_world, q));
+    EXPECT_LT(e.position, kPosTol);
+    EXPECT_LT(e.rotation, kRotTol);
+  }
+  opt.base_link = "tool0";  // below the tip: no chain
+  EXPECT_NE(ErrorOf([&] { ParseUrdf(text, "world.urdf", opt); }).find("base_link 'tool0'"),
+            std::string::npos);
+}
+
+TEST(UrdfModel, MeshesThatResolveGiveNoMeshWarning) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("urdf_mesh_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "meshes");
+  std::ofstream(dir / "meshes" / "link_1.stl") << "solid x\nendsolid x\n";
+  const std::string path = (dir / "arm.urdf").string();
+  std::ofstream(path) << RosIndustrialLike("meshes/link_1.stl");  // relative to the URDF
+  std::vector<std::string> warnings;
+  LoadUrdf(path, {}, &warnings);
+  for (const std::string& w : warnings) {
+    EXPECT_EQ(w.find("cannot be resolved"), std::string::npos) << w;
+  }
+  // The same file under another folder: the relative mesh no longer resolves.
+  const std::filesystem::path other = dir / "elsewhere";
+  std::filesystem::create_directories(other);
+  std::filesystem::copy_file(path, other / "arm.urdf");
+  warnings.clear();
+  LoadUrdf((other / "arm.urdf").string(), {}, &warnings);
+  bool mesh = false;
+  for (const std::string& w : warnings) mesh |= w.find("cannot be resolved") != std::string::npos;
+  EXPECT_TRUE(mesh) << ::testing::PrintToString(warnings);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(UrdfModel, MissingInertialsAreNamedWithTheStandIn) {
+  std::vector<std::string> warnings;
+  ParseUrdf(SimpleChain({"revolute", "revolute", "revolute", "revolute", "revolute", "revolute"}),
+            "massless.urdf", {}, &warnings);
+  bool named = false;
+  for (const std::string& w : warnings) {
+    named |= w.find("massless.urdf") != std::string::npos &&
+             w.find("[j1, j2, j3, j4, j5, j6]") != std::string::npos &&
+             w.find("0.1 kg") != std::string::npos;
+  }
+  EXPECT_TRUE(named) << ::testing::PrintToString(warnings);
 }
 
 TEST(UrdfModelErrors, MissingFileNamesPath) {
