@@ -417,7 +417,8 @@ TEST(ScenarioErrorTest, Robot2TakesItsBaseRelativeToRobot1) {
   const std::string text = Replaced(DemoText(), "base_from_robot1:", "base:");
   const std::string msg = ParseError(text);
   EXPECT_TRUE(Contains(msg, "scenario.robots[1].base: unknown key 'base' (allowed: name, model, "
-                            "installation, base_from_robot1, initial_joints_deg)"));
+                            "base_link, tip_link, installation, base_from_robot1, "
+                            "initial_joints_deg)"));
 }
 
 TEST(ScenarioErrorTest, MissingKeyIsNamed) {
