@@ -5,7 +5,7 @@
 # how often something else was added, and the physical-truth RMS (rigid gauge, the twin's
 # reflector with every effect against the model at the same readings) of the geometric-only
 # model, of the discovered one and of the same trials without the effect (*_clean.yaml).
-# Usage: scripts/discovery_table.sh [TRIALS] [OUT_DIR] [tracker|optical]
+# Usage: [SCENARIOS="clean other ..."] scripts/discovery_table.sh [TRIALS] [OUT_DIR] [tracker|optical]
 #   tracker (default): the laser-tracker scenarios; optical: the optical-axis ones (robot r2,
 #   the board's feature point instead of the reflector). Needs a build: scripts/build.sh.
 set -euo pipefail
@@ -23,19 +23,22 @@ declare -A INJECTED=(
   [tracker_compliance_j2_declared]=""
   [tracker_transmission_j1]="transmission_error (joint 1, order 1)"
   [tracker_backlash_j3]="backlash (joint 3)"
+  [tracker_thermal_drift]="thermal_"   # thermal_drift or thermal_warmup (any time constant)
   [optical_clean]=""
   [optical_compliance_j2]="joint_compliance (joint 2)"
 )
 case "$PROCEDURE" in
   tracker)
     ORDER=(tracker_clean tracker_compliance_j2 tracker_transmission_j1 tracker_backlash_j3
-           tracker_compliance_j2_declared)
+           tracker_thermal_drift tracker_compliance_j2_declared)
     PREFIX="" ;;
   optical)
     ORDER=(optical_clean optical_compliance_j2)
     PREFIX="robots.r2." ;;
   *) echo "discovery_table: procedure must be tracker or optical, got '$PROCEDURE'" >&2; exit 2 ;;
 esac
+# SCENARIOS="a b ...": only these (the clean one of the procedure first), e.g. to add a row.
+if [ -n "${SCENARIOS:-}" ]; then read -r -a ORDER <<< "$SCENARIOS"; fi
 CLEAN="${ORDER[0]}"
 for s in "${ORDER[@]}"; do
   "$BIN" study "scenarios/discovery/$s.yaml" --trials "$TRIALS" --jobs 2 --out "$OUT/$s" >&2
@@ -55,7 +58,8 @@ for s in "${ORDER[@]}"; do
   rows "$s" > "$OUT/$s.tsv"
   join -t $'\t' "$OUT/$s.tsv" "$OUT/clean.tsv" | awk -F'\t' -v inj="${INJECTED[$s]}" -v name="$s" '
     { n++; named += (inj != "" && index($2, inj) > 0);
-      split($2, added, ";"); for (k in added) if (added[k] != "" && added[k] != inj) { other++; break }
+      split($2, added, ";")
+      for (k in added) if (added[k] != "" && (inj == "" || index(added[k], inj) == 0)) { other++; break }
       g += $3; d += $4; f += $6; within += ($4 <= 1.2 * $6) }
     END { printf "| %s | %s | %s | %d of %d | %.4f | %.4f | %.4f | %d of %d |\n", name,
           (inj == "" ? "none" : inj), (inj == "" ? "-" : named " of " n), other, n, g / n, d / n,

@@ -38,12 +38,15 @@ TermSpec ParseTermSpec(const std::string& text, const std::string& where) {
   }
   TermSpec spec;
   spec.type = parts[0];
-  if (parts.size() >= 2) spec.joint = WholeNumber(parts[1], "joint", text, where) - 1;
+  // An empty joint before orders: a whole-robot term with an order (thermal_warmup::30).
+  if (parts.size() >= 2 && !(parts.size() == 3 && parts[1].empty())) {
+    spec.joint = WholeNumber(parts[1], "joint", text, where) - 1;
+  }
   if (parts.size() == 3) {
     std::stringstream os(parts[2]);
     std::string order;
     while (std::getline(os, order, ',')) {
-      spec.orders.push_back(WholeNumber(order, "harmonic order", text, where));
+      spec.orders.push_back(WholeNumber(order, "order", text, where));
     }
   }
   return spec;

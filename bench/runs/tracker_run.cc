@@ -77,7 +77,7 @@ RobotModel DeclaredModel(const Scenario& sc, int robot, const KinematicModel& no
     } else if (e.type == "transmission_error") {
       const auto h = e.params.find("harmonic");
       per_joint(e.type, {h != e.params.end() ? static_cast<int>(std::lround(h->second)) : 1});
-    } else if (e.type == "mount_deflection") {
+    } else if (e.type == "mount_deflection" || e.type == "thermal_drift") {
       specs.push_back({e.type, -1, {}});
     } else if (e.type == "thermal_growth") {
       notes->push_back("declared thermal_growth is not modelled: the tracker procedure records "

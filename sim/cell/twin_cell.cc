@@ -109,8 +109,83 @@ struct TwinCell::Impl {
   Intrinsics canvas;
   std::unique_ptr<OffscreenRenderer> hand_renderer, overview_renderer;
   int last_steps = 0;
+  // Drifting link lengths (thermal drift): the model entries that move with a robot's length
+  // scale, each with its value at scale 1 and its slope per unit of scale.
+  struct DriftEntry {
+    mjtNum* value;
+    mjtNum base, slope;
+    int robot;
+  };
+  std::vector<DriftEntry> drift;
 
   int Joints(int robot) const { return models[robot].num_joints(); }
+
+  // Product of the drifting effects' length scales of robot k at the twin's time t.
+  double LengthScale(int k, double t) const {
+    double scale = 1.0;
+    for (const auto& e : effects) {
+      if (e->DriftsLengths(k)) scale *= e->LengthScaleAt(k, t);
+    }
+    return scale;
+  }
+
+  // Finds the drift entries: for each drifting robot, a second world built with its d and a
+  // scaled by 1 + kProbe; every position and size that differs between the two is linear in
+  // the scale (translations along the links: d z + a x), so the world at any scale is
+  // base + slope (scale - 1), exactly. Frames must not turn with the scale (they do not: a
+  // uniform growth keeps every direction); a structural difference is our bug.
+  void SetUpDrift() {
+    drift.clear();
+    constexpr double kProbe = 1e-3;
+    for (int k = 0; k < kNumRobots; ++k) {
+      bool drifts = false;
+      for (const auto& e : effects) drifts = drifts || e->DriftsLengths(k);
+      if (!drifts) continue;
+      std::array<KinematicModel, kNumRobots> probe_models = models;
+      for (Link& link : probe_models[k].links) {
+        link.dh.d *= 1.0 + kProbe;
+        link.dh.a *= 1.0 + kProbe;
+      }
+      const MjModelPtr p = LoadMjcfFromString(WriteTwinMjcf(spec, probe_models, drives, mounts));
+      if (p->nbody != m->nbody || p->ngeom != m->ngeom || p->nsite != m->nsite ||
+          p->ncam != m->ncam || p->njnt != m->njnt) {
+        throw std::logic_error("thermal drift: the probe world differs in structure");
+      }
+      const auto linear = [&](mjtNum* a, const mjtNum* b, int count) {
+        for (int i = 0; i < count; ++i) {
+          if (b[i] != a[i]) drift.push_back({a + i, a[i], (b[i] - a[i]) / kProbe, k});
+        }
+      };
+      linear(m->body_pos, p->body_pos, 3 * m->nbody);
+      linear(m->body_ipos, p->body_ipos, 3 * m->nbody);
+      linear(m->jnt_pos, p->jnt_pos, 3 * m->njnt);
+      linear(m->geom_pos, p->geom_pos, 3 * m->ngeom);
+      linear(m->geom_size, p->geom_size, 3 * m->ngeom);
+      linear(m->geom_rbound, p->geom_rbound, m->ngeom);
+      linear(m->site_pos, p->site_pos, 3 * m->nsite);
+      linear(m->cam_pos, p->cam_pos, 3 * m->ncam);
+      const auto same = [&](const mjtNum* a, const mjtNum* b, int count, const char* what) {
+        for (int i = 0; i < count; ++i) {
+          if (std::abs(a[i] - b[i]) > 1e-12) {
+            throw std::logic_error(std::string("thermal drift turns ") + what);
+          }
+        }
+      };
+      same(m->body_quat, p->body_quat, 4 * m->nbody, "a body");
+      same(m->geom_quat, p->geom_quat, 4 * m->ngeom, "a geom");
+      same(m->site_quat, p->site_quat, 4 * m->nsite, "a site");
+      same(m->cam_quat, p->cam_quat, 4 * m->ncam, "the camera");
+    }
+  }
+
+  // Moves the drifting robots' bodies to their lengths at the twin's time (call before
+  // stepping or mj_forward).
+  void ApplyDrift() {
+    if (drift.empty()) return;
+    std::array<double, kNumRobots> scale;
+    for (int k = 0; k < kNumRobots; ++k) scale[k] = LengthScale(k, d->time);
+    for (const DriftEntry& e : drift) *e.value = e.base + e.slope * (scale[e.robot] - 1.0);
+  }
 
   // Link-side joint angles of robot k now (MuJoCo's qpos).
   JointVector LinkAngles(int k) const {
@@ -241,6 +316,7 @@ struct TwinCell::Impl {
         ramp_done = t >= ramp_time;
         motor[robot] = ramp_done ? target : JointVector(start + (t / ramp_time) * delta);
       }
+      ApplyDrift();
       mj_step1(m.get(), d.get());
       if (const mjContact* c = Collision(tolerated)) {
         result.status = MoveStatus::kCollision;
@@ -260,6 +336,7 @@ struct TwinCell::Impl {
       calm = ramp_done && MaxSpeed(robot) < ph.settle_speed ? calm + 1 : 0;
       if (calm >= ph.settle_steps) break;
     }
+    ApplyDrift();
     mj_forward(m.get(), d.get());  // kinematics, cameras and contacts of the final state
     if (result.status == MoveStatus::kSettled) {
       if (const mjContact* c = Collision(tolerated)) {
@@ -329,6 +406,7 @@ struct TwinCell::Impl {
     }
     camera = Id(mjOBJ_CAMERA, kHandCameraName);
     board_body = Id(mjOBJ_BODY, Prefix(spec.board.robot) + "board");
+    SetUpDrift();
   }
 
   OffscreenRenderer& HandRenderer() {
@@ -450,6 +528,7 @@ MoveResult TwinCell::ExchangeTools() {
     std::swap(s.spec.camera.robot, s.spec.board.robot);
     s.Build();
     s.d->time = time;
+    s.ApplyDrift();
     for (int k = 0; k < kNumRobots; ++k) {
       for (int i = 0; i < s.Joints(k); ++i) s.d->qpos[s.qadr[k][i]] = link[k](i);
     }
@@ -712,11 +791,13 @@ TwinTruth TwinCell::Truth() const {
   const Impl& s = *impl_;
   TwinTruth t;
   t.models = s.models;
+  t.time_s = s.d->time;
   t.camera = s.spec.camera;
   t.board = s.spec.board;
   t.tracker = s.spec.tracker;
   for (int k = 0; k < kNumRobots; ++k) {
     t.X_WB[k] = s.spec.robots[k].X_WB;
+    t.length_scale[k] = s.LengthScale(k, s.d->time);
     t.q_link[k] = s.LinkAngles(k);
     t.q_motor[k] = s.motor[k];
     t.p_WTip[k] = Vector3(s.d->site_xpos + 3 * s.site_tip[k]);

@@ -16,7 +16,12 @@ namespace twin {
 
 /// What only the twin knows; bench/ reads it for scoring after a procedure, never calib/.
 struct TwinTruth {
-  std::array<KinematicModel, kNumRobots> models;   ///< true geometry, effects applied
+  std::array<KinematicModel, kNumRobots> models;   ///< true geometry, effects applied; a
+                                                   ///< drifting one (thermal_drift) as at
+                                                   ///< time 0, the start of the session
+  std::array<double, kNumRobots> length_scale{1.0, 1.0};  ///< factor on d and a of every link
+                                                   ///< of `models` now (drift; 1 without)
+  double time_s = 0.0;                             ///< the twin's clock now [s]
   std::array<Transform, kNumRobots> X_WB;          ///< base poses in the world
   std::array<JointVector, kNumRobots> q_link;      ///< current link-side joint angles [rad]
   std::array<JointVector, kNumRobots> q_motor;     ///< current motor-side angles [rad]

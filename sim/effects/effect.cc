@@ -6,6 +6,8 @@ namespace twin {
 
 // The do-nothing defaults: an effect overrides only the hooks it acts through.
 void Effect::ApplyToGeometry(int, KinematicModel*, std::mt19937_64*) const {}
+bool Effect::DriftsLengths(int) const { return false; }
+double Effect::LengthScaleAt(int, double) const { return 1.0; }
 void Effect::ApplyToDrive(int, std::vector<JointDrive>*) const {}
 void Effect::ApplyToMount(int, MountCompliance*) const {}
 void Effect::ApplyToTransmission(int, const JointVector&, const JointVector&,

@@ -36,6 +36,12 @@ class Effect {
   virtual const EffectSpec& spec() const = 0;
   /// Static change of robot `robot`'s true geometry, before the world is built.
   virtual void ApplyToGeometry(int robot, KinematicModel* model, std::mt19937_64* rng) const;
+  /// True if this effect changes robot `robot`'s link lengths over time (LengthScaleAt).
+  virtual bool DriftsLengths(int robot) const;
+  /// Factor on d and a of every link of robot `robot`'s true geometry at the twin's time
+  /// `time_s` [s], on top of the static geometry (1 at time 0 and for effects that do not
+  /// drift). The twin moves its bodies accordingly as its clock runs.
+  virtual double LengthScaleAt(int robot, double time_s) const;
   /// Compliance of the target mount on robot `robot`'s flange.
   virtual void ApplyToMount(int robot, MountCompliance* mount) const;
   /// Drive settings of robot `robot`'s joints.

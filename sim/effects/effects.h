@@ -15,6 +15,8 @@ namespace twin::effects {
 std::unique_ptr<Effect> MakeGeometryErrors(const EffectSpec& spec);
 /// "thermal_growth": d and a of every link scaled by 1 + coefficient * delta_T.
 std::unique_ptr<Effect> MakeThermalGrowth(const EffectSpec& spec);
+/// "thermal_drift": d and a of every link grow over the twin's clock (the arm warming up).
+std::unique_ptr<Effect> MakeThermalDrift(const EffectSpec& spec);
 /// "joint_compliance": finite drive stiffness without gravity feed-forward.
 std::unique_ptr<Effect> MakeJointCompliance(const EffectSpec& spec);
 /// "transmission_error": periodic link-minus-motor error.

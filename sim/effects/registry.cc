@@ -18,6 +18,7 @@ struct Registration {
 constexpr Registration kRegistry[] = {
     {"geometry_errors", effects::MakeGeometryErrors},
     {"thermal_growth", effects::MakeThermalGrowth},
+    {"thermal_drift", effects::MakeThermalDrift},
     {"joint_compliance", effects::MakeJointCompliance},
     {"transmission_error", effects::MakeTransmissionError},
     {"backlash", effects::MakeBacklash},

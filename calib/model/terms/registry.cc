@@ -16,6 +16,7 @@ enum class Scope {
   kJoint,          ///< one joint (spec.joint required)
   kJointPeriodic,  ///< one joint and harmonic orders
   kRobot,          ///< the whole robot (spec.joint must be -1)
+  kRobotTimeConstant,  ///< the whole robot, one order: a time constant in minutes
 };
 
 struct Registration {
@@ -24,6 +25,10 @@ struct Registration {
   std::shared_ptr<const ErrorTerm> (*make)(const terms::TermInput& in);
 };
 
+// Time constants of the warm-up candidates [min]: doubling from 10 min (a light arm, a short
+// duty cycle) to 80 min (a heavy one); industrial arms settle thermally in one to a few hours.
+constexpr int kWarmupCandidateMinutes[] = {10, 20, 40, 80};
+constexpr int kMaxTimeConstantMinutes = 24 * 60;
 constexpr int kMaxHarmonicOrder = 8;  // a gear error above 8 cycles per turn is not a geometric
                                       // model's business (and aliases with sparse poses)
 
@@ -33,6 +38,7 @@ constexpr Registration kRegistry[] = {
     {"backlash", Scope::kJoint, terms::MakeBacklash},
     {"thermal_growth", Scope::kRobot, terms::MakeThermalGrowth},
     {"thermal_drift", Scope::kRobot, terms::MakeThermalDrift},
+    {"thermal_warmup", Scope::kRobotTimeConstant, terms::MakeThermalWarmup},
     {"mount_deflection", Scope::kRobot, terms::MakeMountDeflection},
 };
 
@@ -70,7 +76,7 @@ std::shared_ptr<const ErrorTerm> MakeErrorTerm(const TermSpec& spec, const Kinem
                                                const std::string& where) {
   const Registration& r = Find(spec.type, where);
   const int n = nominal.num_joints();
-  if (r.scope == Scope::kRobot) {
+  if (r.scope == Scope::kRobot || r.scope == Scope::kRobotTimeConstant) {
     if (spec.joint != -1) {
       throw InputError(where, spec.type + " acts on the whole robot; it takes no joint");
     }
@@ -87,6 +93,14 @@ std::shared_ptr<const ErrorTerm> MakeErrorTerm(const TermSpec& spec, const Kinem
                                             "from 1 to " + std::to_string(kMaxHarmonicOrder) +
                                     ", got " + std::to_string(h));
       }
+    }
+  } else if (r.scope == Scope::kRobotTimeConstant) {
+    if (spec.orders.size() != 1 || spec.orders[0] < 1 ||
+        spec.orders[0] > kMaxTimeConstantMinutes) {
+      throw InputError(where, spec.type + " needs one order, its time constant in whole minutes "
+                                          "from 1 to " +
+                                  std::to_string(kMaxTimeConstantMinutes) +
+                                  " (e.g. thermal_warmup::30)");
     }
   } else if (!spec.orders.empty()) {
     throw InputError(where, spec.type + " takes no harmonic orders");
@@ -107,6 +121,9 @@ std::vector<TermSpec> CandidateTermSpecs(const KinematicModel& nominal) {
       case Scope::kRobot:
         out.push_back({r.type, -1, {}});
         break;
+      case Scope::kRobotTimeConstant:
+        for (int minutes : kWarmupCandidateMinutes) out.push_back({r.type, -1, {minutes}});
+        break;
       case Scope::kJoint:
         for (int j = 0; j < nominal.num_joints(); ++j) out.push_back({r.type, j, {}});
         break;
@@ -122,6 +139,9 @@ std::vector<TermSpec> CandidateTermSpecs(const KinematicModel& nominal) {
 
 std::string TermLabel(const TermSpec& spec) {
   std::string label = spec.type;
+  if (spec.type == "thermal_warmup" && spec.orders.size() == 1 && spec.joint < 0) {
+    return label + " (time constant " + std::to_string(spec.orders[0]) + " min)";
+  }
   if (spec.joint >= 0 || !spec.orders.empty()) {
     label += " (";
     if (spec.joint >= 0) label += "joint " + std::to_string(spec.joint + 1);

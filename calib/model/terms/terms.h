@@ -24,6 +24,7 @@ std::shared_ptr<const ErrorTerm> MakeTransmissionError(const TermInput& in);
 std::shared_ptr<const ErrorTerm> MakeBacklash(const TermInput& in);
 std::shared_ptr<const ErrorTerm> MakeThermalGrowth(const TermInput& in);
 std::shared_ptr<const ErrorTerm> MakeThermalDrift(const TermInput& in);
+std::shared_ptr<const ErrorTerm> MakeThermalWarmup(const TermInput& in);
 std::shared_ptr<const ErrorTerm> MakeMountDeflection(const TermInput& in);
 
 /// "r1.joint2" for joint index 1 (0-based) of robot r1.

@@ -60,6 +60,7 @@ std::map<std::string, EffectSpec> ValidSpecs() {
                                                    {"sigma_angle_deg", 0.02},
                                                    {"link3.alpha_deg", 0.05}})},
       {"thermal_growth", Spec("thermal_growth", {{"delta_T_K", 10.0}})},
+      {"thermal_drift", Spec("thermal_drift", {{"delta_T_K", 8.0}, {"time_constant_s", 900}})},
       {"joint_compliance", Spec("joint_compliance", {{"stiffness_Nm_per_rad", 5e4}}, 0, 1)},
       {"transmission_error",
        Spec("transmission_error", {{"amplitude_deg", 0.01}, {"harmonic", 2}}, 1, 3)},
@@ -274,6 +275,30 @@ TEST(GeometryErrors, RandomSigmaGivesMatchingSampleStd) {
   // Zero mean within 5 standard errors sigma/sqrt(N).
   EXPECT_LT(std::abs(mean_l), 5.0 * sigma_length / std::sqrt(28000.0));
   EXPECT_LT(std::abs(mean_a), 5.0 * sigma_angle / std::sqrt(42000.0));
+}
+
+TEST(ThermalDrift, WarmsUpWithItsTimeConstantAndOnlyOnItsRobot) {
+  const auto effect = MakeEffect(Spec("thermal_drift", {{"coefficient_per_K", 2.3e-5},
+                                                        {"delta_T_K", 10.0},
+                                                        {"time_constant_s", 600.0}}, 1));
+  EXPECT_TRUE(effect->DriftsLengths(1));
+  EXPECT_FALSE(effect->DriftsLengths(0));
+  EXPECT_EQ(effect->LengthScaleAt(1, 0.0), 1.0);  // the static geometry is the start
+  // One time constant: 1 - 1/e of the final growth 2.3e-4; 1e-15 is a few ulps of 1.
+  EXPECT_NEAR(effect->LengthScaleAt(1, 600.0), 1.0 + 2.3e-4 * (1.0 - std::exp(-1.0)), 1e-15);
+  EXPECT_NEAR(effect->LengthScaleAt(1, 1e6), 1.0 + 2.3e-4, 1e-15);  // settled
+  EXPECT_EQ(effect->LengthScaleAt(0, 600.0), 1.0);
+  // The static geometry is untouched (the twin moves its bodies as its clock runs).
+  KinematicModel model = testing::ReinovoLikeModel();
+  const KinematicModel before = model;
+  effect->ApplyToGeometry(1, &model, nullptr);
+  EXPECT_EQ(model.links[2].dh.a, before.links[2].dh.a);
+  // Defaults: steel, 5 K, 30 min.
+  const auto defaults = MakeEffect(Spec("thermal_drift", {}));
+  EXPECT_NEAR(defaults->LengthScaleAt(0, 1800.0), 1.0 + 6e-5 * (1.0 - std::exp(-1.0)), 1e-15);
+  ExpectInputError(Spec("thermal_drift", {{"time_constant_s", 1.0}}), {"time_constant_s"});
+  ExpectInputError(Spec("thermal_drift", {{"delta_T_K", 300.0}}), {"delta_T_K"});
+  ExpectInputError(Spec("thermal_drift", {{"delta_T_K", 5.0}}, 0, 2), {"every link"});
 }
 
 TEST(ThermalGrowth, ScalesLengthsAndNotAngles) {

@@ -35,17 +35,18 @@ MeasurementContext FullContext(const KinematicModel& m, std::mt19937_64& rng) {
 std::vector<TermSpec> ExampleSpecs() {
   return {{"joint_compliance", 1, {}},   {"transmission_error", 3, {1, 2}},
           {"backlash", 2, {}},           {"thermal_growth", -1, {}},
-          {"thermal_drift", -1, {}},     {"mount_deflection", -1, {}}};
+          {"thermal_drift", -1, {}},     {"mount_deflection", -1, {}},
+          {"thermal_warmup", -1, {30}}};
 }
 
 RobotModel ModelWithAllTerms(const KinematicModel& chain, std::mt19937_64& rng) {
   RobotModel m = MakeRobotModel(chain);
   for (const TermSpec& s : ExampleSpecs()) m = WithTerm(m, MakeErrorTerm(s, chain, chain.name));
   // Realistic magnitudes: compliance 1e-5 rad/(N m), gear errors 0.01 deg, backlash 0.005 deg,
-  // 1.2e-5 /K, 1e-9 /s, mount deflection 0.05 mm.
+  // 1.2e-5 /K, 1e-9 /s, mount deflection 0.05 mm, a warm-up growth of 1e-4.
   std::uniform_real_distribution<double> u(0.5, 1.5);
   const double values[] = {1e-5,  2e-4, -1e-4, 1e-4, 5e-5, -9e-5, 1.2e-5,
-                           1e-9,  5e-5, -3e-5, 4e-5};
+                           1e-9,  5e-5, -3e-5, 4e-5, 1e-4};
   for (int i = 0; i < m.term_values.size(); ++i) m.term_values(i) = values[i] * u(rng);
   return m;
 }
@@ -78,6 +79,9 @@ TEST(ErrorTermRegistry, ParametersAreNamedAfterRobotJointAndOrder) {
   EXPECT_EQ(MakeErrorTerm({"thermal_growth", -1, {}}, chain, "r1")->parameters()[0].unit, "1/K");
   EXPECT_EQ(TermLabel({"transmission_error", 3, {1, 2}}), "transmission_error (joint 4, order 1, 2)");
   EXPECT_EQ(TermLabel({"thermal_drift", -1, {}}), "thermal_drift");
+  EXPECT_EQ(TermLabel({"thermal_warmup", -1, {20}}), "thermal_warmup (time constant 20 min)");
+  EXPECT_EQ(MakeErrorTerm({"thermal_warmup", -1, {20}}, chain, "r1")->parameters()[0].name,
+            "r1.thermal.warmup_growth");
 }
 
 TEST(ErrorTermRegistry, BadSpecsAreInputErrorsNamingWhatIsWrong) {
@@ -100,6 +104,10 @@ TEST(ErrorTermRegistry, BadSpecsAreInputErrorsNamingWhatIsWrong) {
   EXPECT_NE(message({"transmission_error", 1, {2, 2}}).find("distinct"), std::string::npos);
   EXPECT_NE(message({"backlash", 1, {2}}).find("takes no harmonic orders"), std::string::npos);
   EXPECT_NE(message({"backlash", 1, {2}}).find("diagnosis.terms[0]"), std::string::npos);
+  EXPECT_NE(message({"thermal_warmup", -1, {}}).find("time constant in whole minutes"),
+            std::string::npos);
+  EXPECT_NE(message({"thermal_warmup", -1, {0}}).find("from 1 to 1440"), std::string::npos);
+  EXPECT_NE(message({"thermal_warmup", 2, {30}}).find("takes no joint"), std::string::npos);
 }
 
 TEST(ErrorTermRegistry, CandidatesCoverEveryJointAndOrdersOneAndTwo) {
@@ -116,7 +124,10 @@ TEST(ErrorTermRegistry, CandidatesCoverEveryJointAndOrdersOneAndTwo) {
   EXPECT_EQ(compliance, 6);
   EXPECT_EQ(harmonics, 12);  // 6 joints x orders {1}, {2}
   EXPECT_EQ(backlash, 6);
-  EXPECT_EQ(robot, 3);       // thermal growth, thermal drift, mount deflection
+  EXPECT_EQ(robot, 7);  // thermal growth, thermal drift, mount deflection, 4 warm-up times
+  int warmups = 0;
+  for (const TermSpec& s : c) warmups += s.type == "thermal_warmup" && s.orders.size() == 1;
+  EXPECT_EQ(warmups, 4);
 }
 
 TEST(ErrorTermJacobian, AutodiffOfEveryTermMatchesCentralFiniteDifferences) {
