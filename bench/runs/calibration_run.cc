@@ -546,6 +546,17 @@ void ScorePhysicalTruth(TwinCell& cell, const Scenario& sc, const CalibrationCon
 
 }  // namespace
 
+void ApplyRunOptions(const RunOptions& o, CalibrationConfig* config) {
+  if (!o.diagnosis) {
+    config->diagnosis.enabled = false;
+    config->diagnosis_skip_reason = "--no-diagnosis";
+  }
+  if (!o.plan_cache.empty()) {
+    config->options.plan_store = std::make_shared<FilePlanStore>(o.plan_cache);
+  }
+  if (!o.images) config->options.kept_images = 0;
+}
+
 int RunCalibrationScenario(const RunOptions& o) {
   const auto t_start = Clock::now();
   Scenario sc = LoadScenario(o.scenario);
@@ -559,14 +570,7 @@ int RunCalibrationScenario(const RunOptions& o) {
   // Everything is validated before anything is written: the sections, the output paths and
   // the cell itself (its initial pose must settle without collisions).
   CalibrationConfig config = ParseCalibrationConfig(sc);
-  if (!o.diagnosis) {
-    config.diagnosis.enabled = false;
-    config.diagnosis_skip_reason = "--no-diagnosis";
-  }
-  if (!o.plan_cache.empty()) {
-    config.options.plan_store = std::make_shared<FilePlanStore>(o.plan_cache);
-  }
-  if (!o.images) config.options.kept_images = 0;
+  ApplyRunOptions(o, &config);
   const Acceptance acceptance = ParseAcceptance(sc);
   ValidateOutputFolder(o.out_dir, "--out");
   if (!o.junit.empty()) ValidateOutputFile(o.junit, "--junit");

@@ -44,6 +44,10 @@ nlohmann::json ScenarioJson(const Scenario& scenario);
 /// bad input and for a refused procedure, naming the scenario file (nothing is written then).
 int RunCalibrationScenario(const RunOptions& options);
 
+/// The run options that reach the optical-axis calibration's config (in a plain run and in the
+/// dual-arm workflow alike): --no-diagnosis, --plan-cache, and images (studies leave them out).
+void ApplyRunOptions(const RunOptions& options, CalibrationConfig* config);
+
 /// One optical-axis stage on an existing cell (also a step of the dual-arm workflow): runs the
 /// procedure with `config`, scores it against the cell's truth, writes servo_*.png,
 /// measurements.csv and identified_<robot>.yaml into `staging` and sets the report keys

@@ -85,6 +85,7 @@ int RunWorkflowScenario(const RunOptions& o) {
                          std::to_string(handclasp.trials));
   }
   CalibrationConfig config = ParseCalibrationConfig(sc);
+  ApplyRunOptions(o, &config);  // --no-diagnosis, --plan-cache, images
   const Acceptance acceptance = ParseAcceptance(sc);
   ValidateOutputFolder(o.out_dir, "--out");
   if (!o.junit.empty()) ValidateOutputFile(o.junit, "--junit");

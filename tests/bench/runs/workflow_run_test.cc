@@ -114,10 +114,15 @@ TEST(WorkflowRun, AReducedRunReportsBothStagesAndTheCalibratedOneIsBetter) {
   const std::string path = WriteScenario("wf_reduced.yaml", s);
   const std::string out = ::testing::TempDir() + "/wf_reduced_out";
   std::filesystem::remove_all(out);
-  const CliRun r = Twinbench("run " + path + " --out " + out);
+  // --no-diagnosis reaches the workflow's calibration stage (and keeps this test short).
+  const CliRun r = Twinbench("run " + path + " --out " + out + " --no-diagnosis");
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream in(out + "/report.json");
   const nlohmann::json j = nlohmann::json::parse(in);
+  for (const char* robot : {"r1", "r2"}) {
+    EXPECT_EQ(j["robots"][robot]["diagnosis"]["skipped"], "--no-diagnosis")
+        << j["robots"][robot]["diagnosis"].dump();
+  }
   const nlohmann::json& w = j["base_frame"]["workflow"];
   const double nominal = w["nominal_kinematics"]["e_tran_mm"].get<double>();
   const double calibrated = w["calibrated_kinematics"]["e_tran_mm"].get<double>();
