@@ -15,7 +15,8 @@ const YamlKeys kKeys = {"robots",           "rough_base_from_robot1", "rough_han
                         "board_mount",      "board_squares",          "board_square_mm",
                         "intrinsics_views", "planning",               "servo",
                         "calibration_axes", "scoring",                "calibration_split",
-                        "refit_all_axes",   "diagnosis",              "board_mass_kg"};
+                        "refit_all_axes",   "diagnosis",              "board_mass_kg",
+                        "intrinsics_distortion"};
 const YamlKeys kPlanningKeys = {"axes",
                                 "positions_per_axis",
                                 "swarm_size",
@@ -144,6 +145,16 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
   if (const auto f = m.Find("intrinsics_views", false)) {
     o.intrinsics_views = BoundedInteger(r, *f, 3, 500, "Zhang's method needs 3 views; 500 "
                                                        "rendered views are minutes of frames");
+  }
+  if (const auto f = m.Find("intrinsics_distortion", false)) {
+    const std::string v = r.String(*f);
+    if (v == "brown") {
+      o.intrinsics.fix_all_distortion = false;
+    } else if (v == "none") {
+      o.intrinsics.fix_all_distortion = true;
+    } else {
+      r.Fail(*f, "must be brown (k1, k2, p1, p2 estimated) or none (pinhole), got '" + v + "'");
+    }
   }
   PosePlannerOptions& p = o.planner;
   if (const auto f = m.Find("planning", false)) {

@@ -14,6 +14,11 @@
 //                                      # not told); a point mass at the feature point in the
 //                                      # models of the diagnosis, whose gravity terms need it
 //     intrinsics_views: 25             # board views for Zhang's method
+//     intrinsics_distortion: brown     # the lens model Zhang's method estimates: brown (k1, k2,
+//                                      # p1, p2; k3 held at 0; the default) or none (a pinhole,
+//                                      # as the paper's K of section VI.A; for a lens known to
+//                                      # be distortion-free, where a 4x4 board's few corners
+//                                      # let distortion trade against fx)
 //     planning:                        # section IV and eq. 50 (defaults: the paper's)
 //       axes: 5                        # q
 //       positions_per_axis: 10         # p

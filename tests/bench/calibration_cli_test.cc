@@ -115,7 +115,8 @@ TEST(CalibrationCli, BadDiagnosisSettingsAndBoardMassNameFileLineAndKey) {
       {"    diagnosis: {candidates: [joint_compliance:9]}\n", "candidates"},
       {"    diagnosis: {depth_sigma_mm: -1}\n", "depth_sigma_mm"},
       {"    diagnosis: {folds: 5, foldz: 3}\n", "foldz"},
-      {"    board_mass_kg: 500\n", "board_mass_kg"}};
+      {"    board_mass_kg: 500\n", "board_mass_kg"},
+      {"    intrinsics_distortion: fisheye\n", "intrinsics_distortion"}};
   for (const auto& [insert, key] : cases) {
     std::ofstream(dir / "bad.yaml") << testing::Replaced(yaml, anchor, anchor + insert);
     const CliRun r = Twinbench("run " + (dir / "bad.yaml").string() + " --out " +

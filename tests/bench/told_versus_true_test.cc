@@ -67,7 +67,8 @@ std::string EstimatorInputs(const Scenario& sc) {
   os << "\nintrinsics_views " << o.intrinsics_views << " calibration_axes "
      << o.calibration_axes << " split " << static_cast<int>(o.split) << " refit "
      << o.refit_all_axes << " carry " << o.carry_correction << " kept_images "
-     << o.kept_images << "\n";
+     << o.kept_images << " intrinsics fix_k3 " << o.intrinsics.fix_k3 << " pinhole "
+     << o.intrinsics.fix_all_distortion << "\n";
   const PosePlannerOptions& p = o.planner;
   os << "planner " << p.num_axes << " " << p.positions_per_axis << " " << p.swarm_size << " "
      << p.iterations << " " << p.runs << " " << p.min_joint_limit_distance << " "
@@ -175,6 +176,7 @@ TEST(ToldVersusTrue, ChangingAToldValueChangesTheEstimatorInputs) {
            {"rough_hand_eye: {xyz_mm: [60, -60, -26]", "rough_hand_eye: {xyz_mm: [61, -60, -26]"},
            {"board_mount: {xyz_mm: [80, 0, 40]", "board_mount: {xyz_mm: [80, 0, 41]"},
            {"board_square_mm: 20", "board_square_mm: 21"},
+           {"board_square_mm: 20", "board_square_mm: 20\n    intrinsics_distortion: none"},
            {"r1: {xyz_mm: [-60, 60, 100], rpy_deg: [0, 0, 0]}",
             "r1: {xyz_mm: [-60, 60, 101], rpy_deg: [0, 0, 0]}"},
            {"rough_base_from_robot1: {xyz_mm: [1200, 0, 0], zyz_deg: [180, 0, 0]}\n    tips",
