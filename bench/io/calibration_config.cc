@@ -16,7 +16,8 @@ const YamlKeys kKeys = {"robots",           "rough_base_from_robot1", "rough_han
                         "intrinsics_views", "planning",               "servo",
                         "calibration_axes", "scoring",                "calibration_split",
                         "refit_all_axes",   "diagnosis",              "board_mass_kg",
-                        "intrinsics_distortion"};
+                        "intrinsics_distortion", "intrinsics_target"};
+const YamlKeys kTargetKeys = {"squares", "square_mm"};
 const YamlKeys kPlanningKeys = {"axes",
                                 "positions_per_axis",
                                 "swarm_size",
@@ -68,6 +69,25 @@ double BoundedNumber(const YamlReader& r, const YamlField& f, double lo, double 
   return v;
 }
 
+// A printed chessboard by drawing: its squares (even counts, so that a centre inner corner
+// exists) and the printed square side [mm].
+BoardGeometry ReadPlate(const YamlReader& r, const YamlField& squares, const YamlField& square) {
+  const std::vector<int> n = r.Integers(squares, 2);
+  for (std::size_t k = 0; k < 2; ++k) {
+    if (n[k] < 2 || n[k] > 30 || n[k] % 2 != 0) {
+      r.Fail(squares.Item(k), "expected an even number of squares from 2 to 30 (the feature "
+                              "point is the centre inner corner; larger patterns are beyond "
+                              "any flange-mounted target), got " + std::to_string(n[k]));
+    }
+  }
+  const double mm = r.Number(square);
+  if (!(mm >= 1.0 && mm <= 500.0)) {
+    r.Fail(square, "expected a square side in [1, 500] mm (a printed square of a flange-"
+                   "mounted board), got " + DescribeNode(square.node));
+  }
+  return BoardGeometry{n[0], n[1], mm / 1000.0};
+}
+
 }  // namespace
 
 CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
@@ -89,23 +109,10 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
                                   "a flange tool's bracket is shorter than a metre");
   c.knowledge.X_FT = ReadPoseWithin(r, m.Get("board_mount"), kMaxToldToolOffsetM,
                                   "a flange tool's bracket is shorter than a metre");
-  {
-    const YamlField squares = m.Get("board_squares");
-    const std::vector<int> n = r.Integers(squares, 2);
-    for (std::size_t k = 0; k < 2; ++k) {
-      if (n[k] < 2 || n[k] > 30 || n[k] % 2 != 0) {
-        r.Fail(squares.Item(k), "expected an even number of squares from 2 to 30 (the feature "
-                                "point is the centre inner corner; larger patterns are beyond "
-                                "any flange-mounted target), got " + std::to_string(n[k]));
-      }
-    }
-    const YamlField square = m.Get("board_square_mm");
-    const double mm = r.Number(square);
-    if (!(mm >= 1.0 && mm <= 500.0)) {
-      r.Fail(square, "expected a square side in [1, 500] mm (a printed square of a flange-"
-                     "mounted board), got " + DescribeNode(square.node));
-    }
-    c.knowledge.board = BoardGeometry{n[0], n[1], mm / 1000.0};
+  c.knowledge.board = ReadPlate(r, m.Get("board_squares"), m.Get("board_square_mm"));
+  if (const auto f = m.Find("intrinsics_target", false)) {
+    const YamlMap t(r, *f, kTargetKeys);
+    c.knowledge.intrinsics_target = ReadPlate(r, t.Get("squares"), t.Get("square_mm"));
   }
   if (const auto f = m.Find("board_mass_kg", false)) {
     c.board_mass_kg = r.Number(*f);

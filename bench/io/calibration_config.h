@@ -13,6 +13,11 @@
 //     board_mass_kg: 0.2               # the board with its bracket, as weighed (default 0:
 //                                      # not told); a point mass at the feature point in the
 //                                      # models of the diagnosis, whose gravity terms need it
+//     intrinsics_target: {squares: [10, 8], square_mm: 12}  # a larger chessboard, by
+//                                      # drawing, that the operator mounts on the board's
+//                                      # bracket for Zhang's method and takes off after (the
+//                                      # cell must have one: scenario.intrinsics_target);
+//                                      # absent: the board itself (even counts, 2..30)
 //     intrinsics_views: 25             # board views for Zhang's method
 //     intrinsics_distortion: brown     # the lens model Zhang's method estimates: brown (k1, k2,
 //                                      # p1, p2; k3 held at 0; the default) or none (a pinhole,

@@ -23,7 +23,7 @@ const Keys kRootKeys = {"scenario"};
 const Keys kScenarioKeys = {"name",    "seed",        "seeds",     "robots",
                             "camera",  "board",       "tips",      "physics",
                             "effects", "calibration", "handclasp", "acceptance",
-                            "tracker", "tracker_calibration"};
+                            "tracker", "tracker_calibration", "intrinsics_target"};
 const Keys kTrackerKeys = {"robot",    "pose",           "reflector_mm",  "sigma_mm",
                            "sigma_um_per_m", "drift_mm_per_h", "max_range_m"};
 const Keys kSeedsKeys = {"truth", "estimator"};
@@ -35,6 +35,8 @@ const Keys kCameraKeys = {"robot", "hand_eye", "resolution", "fx",      "fy",   
                           "cy",    "distortion", "msaa",     "near_mm", "far_mm"};
 const Keys kBoardKeys = {"robot",        "squares", "square_mm", "margin_mm",
                          "thickness_mm", "mass_kg", "mount"};
+const Keys kTargetKeys = {"squares", "square_mm", "margin_mm", "thickness_mm", "mass_kg",
+                          "mount"};
 const Keys kPoseKeys = {"xyz_mm", "rpy_deg", "zyz_deg"};
 const Keys kTipKeys = {"xyz_mm", "rpy_deg", "zyz_deg", "length_mm", "radius_mm"};
 const Keys kPhysicsKeys = {"timestep_s",   "stiffness_Nm_per_rad", "armature_kgm2",
@@ -93,6 +95,7 @@ class ScenarioParser {
     ParseRobots(m.Get("robots"));
     ParseCamera(m.Get("camera"));
     ParseBoard(m.Get("board"));
+    if (const auto f = m.Find("intrinsics_target", false)) ParseIntrinsicsTarget(*f);
     if (const auto f = m.Find("tips", false)) ParseTips(*f);
     if (const auto f = m.Find("physics", false)) ParsePhysics(*f);
     if (const auto f = m.Find("effects", false)) ParseEffects(*f);
@@ -289,34 +292,57 @@ class ScenarioParser {
     Locate("board", f);
     const YamlMap m(r_, f, kBoardKeys);
     BoardSpec& b = out_.twin.board;
-
     const YamlField robot = m.Get("robot");
     b.robot = RobotIndex(robot);
     Locate("board.robot", robot);
-    const YamlField squares = m.Get("squares");
-    const std::vector<int> n = r_.Integers(squares, 2);
-    b.squares_x = n[0];
-    b.squares_y = n[1];
-    Locate("board.squares_x", squares.Item(0));
-    Locate("board.squares_y", squares.Item(1));
-    const YamlField square = m.Get("square_mm");
-    b.square_m = MmToM(r_.Number(square));
-    Locate("board.square_m", square);
-    if (const auto v = m.Find("margin_mm", false)) {
-      b.margin_m = MmToM(r_.Number(*v));
-      Locate("board.margin_m", *v);
-    }
-    if (const auto v = m.Find("thickness_mm", false)) {
-      b.thickness_m = MmToM(r_.Number(*v));
-      Locate("board.thickness_m", *v);
-    }
-    if (const auto v = m.Find("mass_kg", false)) {
-      b.mass_kg = r_.Number(*v);
-      Locate("board.mass_kg", *v);
-    }
+    ParsePlate(m, "board", &b);
     const YamlField mount = m.Get("mount");
     b.X_FT = Pose(mount);
     Locate("board.X_FT", mount);
+  }
+
+  // The larger chessboard for the intrinsics step, mounted on the board's bracket in its place
+  // (twin side: what the cell has; the calibration section says what the estimator is told).
+  // Its mount defaults to the board's.
+  void ParseIntrinsicsTarget(const YamlField& f) {
+    Locate("intrinsics_target", f);
+    const YamlMap m(r_, f, kTargetKeys);
+    BoardSpec t;
+    t.robot = out_.twin.board.robot;
+    t.mass_kg = out_.twin.board.mass_kg;
+    t.X_FT = out_.twin.board.X_FT;
+    ParsePlate(m, "intrinsics_target", &t);
+    if (const auto mount = m.Find("mount", false)) {
+      t.X_FT = Pose(*mount);
+      Locate("intrinsics_target.X_FT", *mount);
+    }
+    out_.twin.intrinsics_target = t;
+  }
+
+  // The printed plate of a board or target: squares, square_mm (required), margin, thickness
+  // and mass (optional); spec fields located under `field`.
+  void ParsePlate(const YamlMap& m, const std::string& field, BoardSpec* b) {
+    const YamlField squares = m.Get("squares");
+    const std::vector<int> n = r_.Integers(squares, 2);
+    b->squares_x = n[0];
+    b->squares_y = n[1];
+    Locate(field + ".squares_x", squares.Item(0));
+    Locate(field + ".squares_y", squares.Item(1));
+    const YamlField square = m.Get("square_mm");
+    b->square_m = MmToM(r_.Number(square));
+    Locate(field + ".square_m", square);
+    if (const auto v = m.Find("margin_mm", false)) {
+      b->margin_m = MmToM(r_.Number(*v));
+      Locate(field + ".margin_m", *v);
+    }
+    if (const auto v = m.Find("thickness_mm", false)) {
+      b->thickness_m = MmToM(r_.Number(*v));
+      Locate(field + ".thickness_m", *v);
+    }
+    if (const auto v = m.Find("mass_kg", false)) {
+      b->mass_kg = r_.Number(*v);
+      Locate(field + ".mass_kg", *v);
+    }
   }
 
   // The laser tracker (truth): sim/world/twin_spec.h, TrackerSpec.

@@ -180,6 +180,7 @@ class TimedCell : public Cell {
   }
   MoveResult ExchangeTools() override { return cell_.ExchangeTools(); }
   int CameraRobot() override { return cell_.CameraRobot(); }
+  MoveResult MountTarget(BracketTarget target) override { return cell_.MountTarget(target); }
 
   double move_s = 0, grab_s = 0;
   int moves = 0, frames = 0, region_frames = 0;
@@ -188,6 +189,14 @@ class TimedCell : public Cell {
  private:
   Cell& cell_;
 };
+
+// The printed plate Zhang's method saw: the intrinsics target when the cell was told one.
+json PlateJson(const CellKnowledge& k) {
+  const BoardGeometry& p = k.intrinsics_target ? *k.intrinsics_target : k.board;
+  return json{{"squares", {p.squares_x, p.squares_y}},
+              {"square_mm", p.square_m * 1e3},
+              {"dedicated_target", k.intrinsics_target.has_value()}};
+}
 
 }  // namespace
 
@@ -260,7 +269,9 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
       {"error_px",
        {{"fx", ei.fx - ti.fx}, {"fy", ei.fy - ti.fy}, {"cx", ei.cx - ti.cx}, {"cy", ei.cy - ti.cy}}},
       {"rms_reprojection_px", result.intrinsics.rms_px},
-      {"views_used", result.intrinsics.views_used}};
+      {"views_used", result.intrinsics.views_used},
+      {"views_skipped", result.intrinsics.skipped},
+      {"plate", PlateJson(config.knowledge)}};
   int csv_joints = 0;
   for (const RobotCalibration& rc : result.robots) {
     csv_joints = std::max(csv_joints, rc.nominal.num_joints());

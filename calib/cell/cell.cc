@@ -23,6 +23,14 @@ const char* ToString(TrackerStatus status) {
   return "unknown";
 }
 
+const char* ToString(BracketTarget target) {
+  switch (target) {
+    case BracketTarget::kFeatureBoard: return "feature_board";
+    case BracketTarget::kIntrinsicsTarget: return "intrinsics_target";
+  }
+  return "unknown";
+}
+
 cv::Mat Cell::GrabImageRegion(const cv::Rect& roi) {
   const cv::Mat frame = GrabImage();
   const cv::Rect r = roi & cv::Rect(0, 0, frame.cols, frame.rows);

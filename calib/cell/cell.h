@@ -49,6 +49,15 @@ struct TrackerReading {
   double time_s = 0;               ///< when it was measured (the cell's clock) [s]
 };
 
+/// What the board robot's bracket holds.
+enum class BracketTarget {
+  kFeatureBoard,      ///< the small calibration board whose centre corner is the feature point
+  kIntrinsicsTarget,  ///< a larger chessboard for the camera's intrinsic calibration only
+};
+
+/// Name of a target for messages ("feature_board", "intrinsics_target").
+const char* ToString(BracketTarget target);
+
 /// A cell with two robots (indices 0 and 1) and one hand camera.
 class Cell {
  public:
@@ -83,6 +92,20 @@ class Cell {
     result.status = MoveStatus::kInvalidInput;
     result.reason = "this cell has no handclasp (robot " + std::to_string(jogged_robot) +
                     " cannot be jogged onto the other tip)";
+    return result;
+  }
+  /// Asks the operator to mount `target` on the board robot's bracket, in place of what it
+  /// holds (the robots hold still; on hardware the operator swaps the plates and confirms).
+  /// The feature board is mounted at the start. Mounting what is already there does nothing.
+  /// Fails with a status and a reason, nothing changed (kInvalidInput: the cell has no such
+  /// target; kCollision: the other plate would hit something where the robots stand). The
+  /// default is a cell with the feature board only.
+  virtual MoveResult MountTarget(BracketTarget target) {
+    MoveResult result;
+    if (target != BracketTarget::kFeatureBoard) {
+      result.status = MoveStatus::kInvalidInput;
+      result.reason = "this cell has no intrinsics target (only the feature board)";
+    }
     return result;
   }
   /// Measures the reflector (SMR) on robot `robot`'s flange with the laser tracker, the robot

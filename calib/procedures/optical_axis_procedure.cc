@@ -374,6 +374,9 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
                                             const OpticalAxisOptions& options) {
   ValidateOpticalAxisOptions(options);
   ValidateBoardGeometry(knowledge.board, "CellKnowledge.board");
+  if (knowledge.intrinsics_target) {
+    ValidateBoardGeometry(*knowledge.intrinsics_target, "CellKnowledge.intrinsics_target");
+  }
   for (int k = 0; k < 2; ++k) ValidateModel(knowledge.nominal[k], "CellKnowledge.nominal[" + std::to_string(k) + "]");
   auto say = [&](const std::string& line) {
     if (options.progress) options.progress(line);
@@ -417,11 +420,31 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
                               options.plan_store, cancel);
   }
 
-  // 1. Intrinsics (section VI.A), board views around the start pose.
+  // 1. Intrinsics (section VI.A), board views around the start pose. With an intrinsics
+  // target the operator swaps it onto the board's bracket first and back afterwards: Zhang's
+  // method then sees many corners over a large part of the image in every view, where the
+  // feature board gives it 3 x 3 corners over a few per cent of the image, which leaves the
+  // focal length, and with it the scale of every measured depth, a few 1e-4 off.
   {
     const auto t0 = Clock::now();
     const int board_robot = 1 - cell.CameraRobot();
-    say("intrinsics: " + std::to_string(options.intrinsics_views) + " board views (Zhang)");
+    const bool dedicated = knowledge.intrinsics_target.has_value();
+    const BoardGeometry& plate = dedicated ? *knowledge.intrinsics_target : knowledge.board;
+    const auto mount = [&](BracketTarget target) {
+      const MoveResult m = cell.MountTarget(target);
+      if (m.status != MoveStatus::kSettled) {
+        throw InputError("intrinsics", std::string("cannot mount the ") + ToString(target) +
+                                           ": " + ToString(m.status) + ": " + m.reason);
+      }
+    };
+    if (dedicated) {
+      say("intrinsics: mounting the intrinsics target (" + std::to_string(plate.squares_x) +
+          " x " + std::to_string(plate.squares_y) + " squares of " +
+          Fixed(plate.square_m * 1e3, 1) + " mm)");
+      mount(BracketTarget::kIntrinsicsTarget);
+    }
+    say("intrinsics: " + std::to_string(options.intrinsics_views) + " " +
+        (dedicated ? "target" : "board") + " views (Zhang)");
     // Views designed in the camera frame (spread over the image, tilted) from the rough
     // knowledge: the camera in the board robot's base.
     const int camera_robot = 1 - board_robot;
@@ -432,10 +455,13 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
         knowledge.X_FC;
     const std::vector<JointVector> views = PlannedIntrinsicsViews(
         BoardRobotModel(knowledge.nominal[board_robot], knowledge.X_FT), home[board_robot], X_BbC,
-        options.intrinsics_views, options.seed);
-    out.intrinsics = CalibrateIntrinsics(cell, board_robot, views, knowledge.board,
-                                         options.intrinsics);
+        options.intrinsics_views, options.seed, IntrinsicsViewSpecFor(plate));
+    out.intrinsics = CalibrateIntrinsics(cell, board_robot, views, plate, options.intrinsics);
     go_home(board_robot);
+    if (dedicated) {
+      mount(BracketTarget::kFeatureBoard);
+      say("intrinsics: feature board mounted again");
+    }
     out.intrinsics_s = Seconds(t0);
     if (out.intrinsics.status != IntrinsicsStatus::kSuccess) {
       throw InputError("intrinsics", std::string(ToString(out.intrinsics.status)) + ": " +

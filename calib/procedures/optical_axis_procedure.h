@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,9 @@ struct CellKnowledge {
                                              ///< the feature point, z out of the face) in the
                                              ///< flange; link 7 of the passive model
   BoardGeometry board;                       ///< the printed board
+  /// A larger printed chessboard for the intrinsics step (Cell::MountTarget), by drawing;
+  /// absent: Zhang's method uses the board's few corners.
+  std::optional<BoardGeometry> intrinsics_target;
 };
 
 /// Options of RunOpticalAxisCalibration. Defaults are the paper's where it gives them.

@@ -169,6 +169,20 @@ std::vector<JointVector> IntrinsicsViewPoses(const KinematicModel& board_model,
   return poses;
 }
 
+IntrinsicsViewSpec IntrinsicsViewSpecFor(const BoardGeometry& plate) {
+  IntrinsicsViewSpec spec;
+  const double side = std::max(plate.squares_x, plate.squares_y) * plate.square_m;
+  constexpr double kDefaultSide = 0.16;  // the largest plate the defaults keep in view [m]
+  if (side <= kDefaultSide) return spec;
+  spec.min_depth_m = std::max(spec.min_depth_m, 1.43 * side);
+  spec.max_depth_m = std::max(spec.max_depth_m, 2.14 * side);
+  spec.half_angle_x *= kDefaultSide / side;
+  spec.half_angle_y *= kDefaultSide / side;
+  spec.min_tilt = DegToRad(40.0);
+  spec.max_tilt = DegToRad(60.0);
+  return spec;
+}
+
 std::vector<JointVector> PlannedIntrinsicsViews(const KinematicModel& board_model,
                                                 const JointVector& q_seed,
                                                 const Transform& X_BbC, int n, std::uint64_t seed,

@@ -83,6 +83,15 @@ struct IntrinsicsViewSpec {
   double max_tilt = DegToRad(55.0);          ///< [rad]
 };
 
+/// The default view spec for a plate of this size, s its larger printed side: the defaults
+/// above (made for the 4 x 4 board of 20 mm squares) for s up to 0.16 m; for a larger target
+/// depths [1.43 s, 2.14 s] (never nearer than the defaults), board centres within
+/// 0.16 / s of the default directions (so the target stays in view), tilts 40-60 deg. For a
+/// 14 x 10 target of 20 mm squares (0.28 m): 0.4-0.6 m, +-9.7 x 6.9 deg. Simulated with
+/// 0.045 px corner noise (the twin's RMS), 40 such views give an fx error of 5e-5 RMS, the
+/// defaults with the 4 x 4 board 1.4e-3 (120 views: 7e-4).
+IntrinsicsViewSpec IntrinsicsViewSpecFor(const BoardGeometry& plate);
+
 /// n board poses designed in the camera frame for Zhang's method: board centres spread over
 /// the field of view (a jittered grid of directions) at depths over [min, max], each board
 /// tilted by min..max_tilt about a random in-plane axis and turned randomly about its normal;

@@ -105,6 +105,7 @@ struct TwinCell::Impl {
   std::array<std::vector<int>, kNumRobots> site_L;
   std::array<int, kNumRobots> site_tip;
   int camera = -1, board_body = -1;
+  BracketTarget mounted = BracketTarget::kFeatureBoard;  // what spec.board is now
   std::optional<DistortionMapper> distortion;     // only when the lens distorts
   Intrinsics canvas;
   std::unique_ptr<OffscreenRenderer> hand_renderer, overview_renderer;
@@ -516,16 +517,18 @@ MoveResult TwinCell::MoveTo(int robot, const JointVector& q_target) {
   return s.Run(robot, q_target);
 }
 
-MoveResult TwinCell::ExchangeTools() {
+// Re-mounts tools while the robots hold still: `change` edits the spec, the world is rebuilt
+// with the robots where they stand (link angles, clock and drift carry over), and when the
+// rebuilt world has a contact, `change` is applied again (it must undo itself: a swap) so a
+// cell never stays in an inconsistent state; then the robots settle under the new payload.
+MoveResult TwinCell::RemountTools(const std::function<void()>& change, const std::string& what,
+                                  const std::string& refused) {
   Impl& s = *impl_;
-  // The operator re-mounts both tools on the same brackets while the robots hold still: the
-  // state (link angles, motor commands) carries over to the rebuilt world.
   std::array<JointVector, kNumRobots> link;
   for (int k = 0; k < kNumRobots; ++k) link[k] = s.LinkAngles(k);
   const double time = s.d->time;
-  // Swap the tools and rebuild the world with the robots where they stand.
-  const auto swap_tools = [&]() {
-    std::swap(s.spec.camera.robot, s.spec.board.robot);
+  const auto rebuild = [&]() {
+    change();
     s.Build();
     s.d->time = time;
     s.ApplyDrift();
@@ -534,18 +537,54 @@ MoveResult TwinCell::ExchangeTools() {
     }
     mj_forward(s.m.get(), s.d.get());
   };
-  swap_tools();
+  rebuild();
   MoveResult result;
   if (const mjContact* c = s.Collision({})) {
     // The contact lives in the data the rebuild below replaces: its text first.
     const std::string contact = s.ContactText(*c);
-    swap_tools();  // the tools back: a cell never stays in an inconsistent state
+    rebuild();
     result.status = MoveStatus::kCollision;
-    result.reason = "after exchanging the tools " + contact +
-                    "; tools left where they were (move the robots apart first)";
+    result.reason = "after " + what + " " + contact + "; " + refused;
     return result;
   }
-  result = s.Run(-1, JointVector());
+  return s.Run(-1, JointVector());
+}
+
+MoveResult TwinCell::ExchangeTools() {
+  Impl& s = *impl_;
+  // The operator re-mounts both tools on the same brackets while the robots hold still.
+  return RemountTools([&s]() { std::swap(s.spec.camera.robot, s.spec.board.robot); },
+                      "exchanging the tools",
+                      "tools left where they were (move the robots apart first)");
+}
+
+MoveResult TwinCell::MountTarget(BracketTarget target) {
+  Impl& s = *impl_;
+  if (target == s.mounted) return MoveResult{};
+  MoveResult result;
+  if (target == BracketTarget::kIntrinsicsTarget && !s.spec.intrinsics_target) {
+    result.status = MoveStatus::kInvalidInput;
+    result.reason = "this cell has no intrinsics target (the scenario names none)";
+    return result;
+  }
+  if (target != BracketTarget::kFeatureBoard && target != BracketTarget::kIntrinsicsTarget) {
+    result.status = MoveStatus::kInvalidInput;
+    result.reason = "unknown bracket target " + std::to_string(static_cast<int>(target));
+    return result;
+  }
+  // The plates change places on the board's bracket: spec.board is always what is mounted
+  // (the world, the truth and the payload follow it), the other waits in intrinsics_target.
+  const auto swap_plates = [&s]() {
+    BoardSpec& other = *s.spec.intrinsics_target;
+    std::swap(other.robot, s.spec.board.robot);  // the robot stays with the bracket
+    std::swap(other, s.spec.board);
+  };
+  result = RemountTools(swap_plates, std::string("mounting the ") + ToString(target),
+                        "the plate left as it was (check the target's size and mount, or "
+                        "turn the wrist away from it)");
+  if (result.status == MoveStatus::kSettled || result.status == MoveStatus::kNotSettled) {
+    s.mounted = target;
+  }
   return result;
 }
 

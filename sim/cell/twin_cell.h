@@ -3,6 +3,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <random>
 #include <string>
@@ -51,6 +52,11 @@ class TwinCell : public Cell {
   cv::Mat GrabImageRegion(const cv::Rect& roi) override;
   MoveResult ExchangeTools() override;
   int CameraRobot() override;
+  /// Swaps the plate on the board's bracket (TwinSpec::intrinsics_target) and rebuilds the
+  /// world with the robots where they stand, as ExchangeTools does; Truth().board is then the
+  /// mounted plate. kInvalidInput when the spec has no intrinsics target; kCollision (nothing
+  /// changed) when the other plate would touch something.
+  MoveResult MountTarget(BracketTarget target) override;
   /// The simulated operator's handclasp (Gan et al. 2014, section 3): using the true
   /// kinematics (a person looking at the tips), robot `jogged_robot` is driven by settled moves
   /// to a stand-off in front of the other tip, then along the common tip axis, then by small
@@ -91,6 +97,8 @@ class TwinCell : public Cell {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+  MoveResult RemountTools(const std::function<void()>& change, const std::string& what,
+                          const std::string& refused);
 };
 
 }  // namespace twin

@@ -288,37 +288,39 @@ void CheckCamera(const Checker& c, const CameraSpec& cam) {
   }
 }
 
-void CheckBoard(const Checker& c, const BoardSpec& b, const CameraSpec& cam) {
-  c.IntRange(b.robot, "board.robot", 0, kNumRobots - 1);
-  c.IntRange(b.squares_x, "board.squares_x", 2, kMaxBoardSquares);
-  c.IntRange(b.squares_y, "board.squares_y", 2, kMaxBoardSquares);
-  c.Positive(b.square_m, "board.square_m", " m");
+// `field` names the spec field ("board" or "intrinsics_target"); only the board's robot counts.
+void CheckBoard(const Checker& c, const BoardSpec& b, const CameraSpec& cam,
+                const std::string& field = "board") {
+  if (field == "board") c.IntRange(b.robot, "board.robot", 0, kNumRobots - 1);
+  c.IntRange(b.squares_x, field + ".squares_x", 2, kMaxBoardSquares);
+  c.IntRange(b.squares_y, field + ".squares_y", 2, kMaxBoardSquares);
+  c.Positive(b.square_m, field + ".square_m", " m");
   // At kBoardViewDistanceM a square of s images to fx s / D pixels; the view is
   // D width / fx by D height / fy.
   const Intrinsics& k = cam.intrinsics;
   if (k.fx > 0.0 && k.fy > 0.0) {
     const double smallest = kBoardViewDistanceM / std::min(k.fx, k.fy);
     const double view = kBoardViewDistanceM * std::min(k.width / k.fx, k.height / k.fy);
-    c.Within(b.square_m, "board.square_m", smallest, view, " m",
+    c.Within(b.square_m, field + ".square_m", smallest, view, " m",
              "at 2 m from the camera a square must image to at least one pixel and fit in "
              "the view");
     const double side = std::max(b.squares_x, b.squares_y) * b.square_m + 2.0 * b.margin_m;
     if (side > view) {
-      c.Fail("board.square_m", "makes the board " + Checker::Num(side) + " m across, larger "
+      c.Fail(field + ".square_m", "makes the board " + Checker::Num(side) + " m across, larger "
                                "than the camera's view at 2 m (" + Checker::Num(view) +
                                " m): it is never seen whole");
     }
   }
-  c.NonNegative(b.margin_m, "board.margin_m", " m");
-  c.Within(b.margin_m, "board.margin_m", 0.0, kMaxBoardMarginM, " m",
+  c.NonNegative(b.margin_m, field + ".margin_m", " m");
+  c.Within(b.margin_m, field + ".margin_m", 0.0, kMaxBoardMarginM, " m",
            "a white border, not a wall");
-  c.Positive(b.thickness_m, "board.thickness_m", " m");
-  c.Within(b.thickness_m, "board.thickness_m", 0.0, kMaxBoardThicknessM, " m",
+  c.Positive(b.thickness_m, field + ".thickness_m", " m");
+  c.Within(b.thickness_m, field + ".thickness_m", 0.0, kMaxBoardThicknessM, " m",
            "a plate, not a block");
-  c.NonNegative(b.mass_kg, "board.mass_kg", " kg");
-  c.Within(b.mass_kg, "board.mass_kg", 0.0, kMaxToolMassKg, " kg",
+  c.NonNegative(b.mass_kg, field + ".mass_kg", " kg");
+  c.Within(b.mass_kg, field + ".mass_kg", 0.0, kMaxToolMassKg, " kg",
            "flange payloads of such arms are 5-20 kg");
-  c.Rigid(b.X_FT, "board.X_FT");
+  c.Rigid(b.X_FT, field + ".X_FT");
 }
 
 void CheckPhysics(const Checker& c, const PhysicsSpec& p) {
@@ -410,6 +412,9 @@ void ValidateTwinSpec(const TwinSpec& spec, const std::string& where) {
   CheckTracker(c, spec.tracker);
   CheckCamera(c, spec.camera);
   CheckBoard(c, spec.board, spec.camera);
+  if (spec.intrinsics_target) {
+    CheckBoard(c, *spec.intrinsics_target, spec.camera, "intrinsics_target");
+  }
   const Vector3 p_B1B2 =
       (spec.robots[0].X_WB.inverse() * spec.robots[1].X_WB).translation();
   if (p_B1B2.norm() > kMaxBaseDistanceM) {
@@ -423,6 +428,10 @@ void ValidateTwinSpec(const TwinSpec& spec, const std::string& where) {
                   "the camera's optical centre");
   CheckFlangeTool(c, spec, spec.board.robot, spec.board.X_FT, "board.X_FT",
                   "the board's feature point");
+  if (spec.intrinsics_target) {
+    CheckFlangeTool(c, spec, spec.board.robot, spec.intrinsics_target->X_FT,
+                    "intrinsics_target.X_FT", "the intrinsics target's centre");
+  }
   if (spec.camera.robot == spec.board.robot) {
     c.Fail("board.robot", "must differ from camera.robot (the camera and the board are on "
                           "different robots), got both " + std::to_string(spec.board.robot));

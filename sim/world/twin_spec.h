@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -121,6 +122,10 @@ struct TwinSpec {
   std::array<RobotSpec, kNumRobots> robots;
   CameraSpec camera;
   BoardSpec board;
+  /// A larger chessboard the operator can mount on the board's bracket in place of the board
+  /// for the camera's intrinsic calibration (TwinCell::MountTarget); its robot field is
+  /// ignored (it goes where the board is). Absent: the cell has only the board.
+  std::optional<BoardSpec> intrinsics_target;
   std::array<TipSpec, kNumRobots> tips;
   PhysicsSpec physics;
   std::vector<EffectSpec> effects;

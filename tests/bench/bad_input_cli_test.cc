@@ -81,6 +81,13 @@ TEST(BadInputCli, AbsurdScenarioValuesAreRefusedWithFileLineKeyAndLimit) {
        "inside the flange"},
       {"base_from_robot1: {xyz_mm: [1200", "base_from_robot1: {xyz_mm: [1e9",
        "scenario.robots[1].base_from_robot1", "a few metres"},
+      // The intrinsics target: the board's checks, under its own name.
+      {"  effects:\n", "  intrinsics_target: {squares: [14, 10], square_mm: 900}\n  effects:\n",
+       "scenario.intrinsics_target.square_mm", "view at 2 m"},
+      {"  effects:\n",
+       "  intrinsics_target: {squares: [14, 10], square_mm: 20, mount: {xyz_mm: [5, 5, -3], "
+       "rpy_deg: [0, 0, 0]}}\n  effects:\n",
+       "scenario.intrinsics_target.mount", "inside the flange"},
   };
   for (const Case& c : cases) {
     const std::string text = Replaced(demo, c.from, c.to);

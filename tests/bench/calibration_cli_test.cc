@@ -116,7 +116,10 @@ TEST(CalibrationCli, BadDiagnosisSettingsAndBoardMassNameFileLineAndKey) {
       {"    diagnosis: {depth_sigma_mm: -1}\n", "depth_sigma_mm"},
       {"    diagnosis: {folds: 5, foldz: 3}\n", "foldz"},
       {"    board_mass_kg: 500\n", "board_mass_kg"},
-      {"    intrinsics_distortion: fisheye\n", "intrinsics_distortion"}};
+      {"    intrinsics_distortion: fisheye\n", "intrinsics_distortion"},
+      {"    intrinsics_target: {squares: [13, 10], square_mm: 20}\n", "intrinsics_target"},
+      {"    intrinsics_target: {squares: [14, 10]}\n", "square_mm"},
+      {"    intrinsics_target: {squares: [14, 10], square_mm: 20, size: 3}\n", "size"}};
   for (const auto& [insert, key] : cases) {
     std::ofstream(dir / "bad.yaml") << testing::Replaced(yaml, anchor, anchor + insert);
     const CliRun r = Twinbench("run " + (dir / "bad.yaml").string() + " --out " +
@@ -126,6 +129,29 @@ TEST(CalibrationCli, BadDiagnosisSettingsAndBoardMassNameFileLineAndKey) {
     EXPECT_NE(r.output.find(key), std::string::npos) << insert << r.output;
     EXPECT_FALSE(fs::exists(dir / "out")) << insert;
   }
+}
+
+// Told of an intrinsics target the cell does not have: the run stops at the intrinsics step
+// with the reason (the cell's refusal), exit 2, and writes nothing.
+TEST(CalibrationCli, AToldIntrinsicsTargetTheCellLacksStopsTheRunAndWritesNothing) {
+  const fs::path dir = TempDir("notarget");
+  std::ifstream in(kScenarios + "study_small.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  for (std::string::size_type p; (p = yaml.find("../models/")) != std::string::npos;) {
+    yaml.replace(p, 10, std::string(TWIN_SOURCE_DIR) + "/models/");
+  }
+  const std::string anchor = "    calibration_axes: 3\n";
+  std::ofstream(dir / "s.yaml") << testing::Replaced(
+      yaml, anchor, anchor + "    intrinsics_target: {squares: [14, 10], square_mm: 20}\n");
+  const CliRun r = Twinbench("run " + (dir / "s.yaml").string() + " --quiet --out " +
+                             (dir / "out").string());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("cannot mount the intrinsics_target"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("no intrinsics target"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out"));
+  EXPECT_FALSE(fs::exists(dir / "out.partial"));
 }
 
 // A recording as `twinbench run` writes it, from the synthetic optical-axis data: exact joint

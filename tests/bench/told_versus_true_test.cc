@@ -61,6 +61,10 @@ std::string EstimatorInputs(const Scenario& sc) {
   Put(os, "board X_FT", k.X_FT);
   os << "board " << k.board.squares_x << " " << k.board.squares_y << " " << k.board.square_m
      << "\n";
+  if (k.intrinsics_target) {
+    os << "intrinsics target " << k.intrinsics_target->squares_x << " "
+       << k.intrinsics_target->squares_y << " " << k.intrinsics_target->square_m << "\n";
+  }
   const OpticalAxisOptions& o = c.options;
   os << "robots";
   for (int r : o.robots) os << " " << r;
@@ -102,6 +106,17 @@ std::string EstimatorInputs(const Scenario& sc) {
   return os.str();
 }
 
+// The scenario with an intrinsics target: the cell has one (twin side, before the effects) and
+// the estimator is told its drawing.
+std::string WithTarget(std::string t) {
+  t = Replaced(t, "  effects:\n",
+               "  intrinsics_target: {squares: [14, 10], square_mm: 20, margin_mm: 10, "
+               "thickness_mm: 5, mass_kg: 0.6}\n  effects:\n");
+  return Replaced(t, "    board_square_mm: 20\n",
+                  "    board_square_mm: 20\n    intrinsics_target: {squares: [14, 10], "
+                  "square_mm: 20}\n");
+}
+
 Scenario Parse(const std::string& text) {
   return ParseScenario(text, "told_versus_true.yaml", kScenarioDir);
 }
@@ -126,6 +141,11 @@ std::string TrueChanged(std::string t) {
   t = Replaced(t, "squares: [4, 4]", "squares: [6, 6]");
   t = Replaced(t, "square_mm: 20\n    margin_mm: 10\n    thickness_mm: 4\n    mass_kg: 0.2",
                "square_mm: 18\n    margin_mm: 12\n    thickness_mm: 5\n    mass_kg: 0.3");
+  t = Replaced(t, "  intrinsics_target: {squares: [14, 10], square_mm: 20, margin_mm: 10, "
+                  "thickness_mm: 5, mass_kg: 0.6}",
+               "  intrinsics_target: {squares: [12, 10], square_mm: 22, margin_mm: 14, "
+               "thickness_mm: 6, mass_kg: 0.7, mount: {xyz_mm: [80.6, 0.4, 42], "
+               "rpy_deg: [0.2, 0, 0]}}");
   t = Replaced(t, "mount: {xyz_mm: [80, 0, 40], rpy_deg: [0, 0, 0]}",
                "mount: {xyz_mm: [81.2, -0.7, 41.1], rpy_deg: [0.3, -0.2, 0.5]}");
   t = Replaced(t, "r1: {xyz_mm: [-60, 60, 100], rpy_deg: [0, 0, 0], length_mm: 90, radius_mm: 4}",
@@ -154,7 +174,7 @@ std::string TrueChanged(std::string t) {
 }
 
 TEST(ToldVersusTrue, EstimatorInputsDoNotDependOnAnyTruthOnlyValue) {
-  const std::string text = ReadFile(kScenarioDir + "/workflow_dual.yaml");
+  const std::string text = WithTarget(ReadFile(kScenarioDir + "/workflow_dual.yaml"));
   const Scenario original = Parse(text);
   const Scenario changed = Parse(TrueChanged(text));
   // The change reached the truth (the comparison below is not vacuous) ...
@@ -165,18 +185,24 @@ TEST(ToldVersusTrue, EstimatorInputsDoNotDependOnAnyTruthOnlyValue) {
   EXPECT_NE(original.twin.robots[1].X_WB.translation(), changed.twin.robots[1].X_WB.translation());
   EXPECT_NE(original.twin.camera.X_FC.translation(), changed.twin.camera.X_FC.translation());
   EXPECT_EQ(changed.twin.effects.size(), original.twin.effects.size() + 1);
+  ASSERT_TRUE(original.twin.intrinsics_target && changed.twin.intrinsics_target);
+  EXPECT_NE(original.twin.intrinsics_target->squares_x, changed.twin.intrinsics_target->squares_x);
+  EXPECT_NE(original.twin.intrinsics_target->X_FT.translation(),
+            changed.twin.intrinsics_target->X_FT.translation());
   // ... and none of it reached the estimator.
   EXPECT_EQ(EstimatorInputs(original), EstimatorInputs(changed));
 }
 
 TEST(ToldVersusTrue, ChangingAToldValueChangesTheEstimatorInputs) {
-  const std::string text = ReadFile(kScenarioDir + "/workflow_dual.yaml");
+  const std::string text = WithTarget(ReadFile(kScenarioDir + "/workflow_dual.yaml"));
   const std::string inputs = EstimatorInputs(Parse(text));
   for (const auto& [from, to] : std::vector<std::pair<std::string, std::string>>{
            {"rough_hand_eye: {xyz_mm: [60, -60, -26]", "rough_hand_eye: {xyz_mm: [61, -60, -26]"},
            {"board_mount: {xyz_mm: [80, 0, 40]", "board_mount: {xyz_mm: [80, 0, 41]"},
            {"board_square_mm: 20", "board_square_mm: 21"},
            {"board_square_mm: 20", "board_square_mm: 20\n    intrinsics_distortion: none"},
+           {"intrinsics_target: {squares: [14, 10], square_mm: 20}",
+            "intrinsics_target: {squares: [14, 10], square_mm: 21}"},
            {"r1: {xyz_mm: [-60, 60, 100], rpy_deg: [0, 0, 0]}",
             "r1: {xyz_mm: [-60, 60, 101], rpy_deg: [0, 0, 0]}"},
            {"rough_base_from_robot1: {xyz_mm: [1200, 0, 0], zyz_deg: [180, 0, 0]}\n    tips",

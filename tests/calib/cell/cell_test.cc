@@ -37,5 +37,18 @@ TEST(CellTest, DefaultRegionGrabIsAClippedCropOfAFrame) {
   EXPECT_EQ(cell.frames, 3);  // one frame per region grab
 }
 
+TEST(CellTest, DefaultCellHasTheFeatureBoardOnly) {
+  GradientCell cell;
+  const MoveResult board = cell.MountTarget(BracketTarget::kFeatureBoard);
+  EXPECT_EQ(board.status, MoveStatus::kSettled);
+  EXPECT_TRUE(board.reason.empty()) << board.reason;
+  const MoveResult target = cell.MountTarget(BracketTarget::kIntrinsicsTarget);
+  EXPECT_EQ(target.status, MoveStatus::kInvalidInput);
+  EXPECT_NE(target.reason.find("no intrinsics target"), std::string::npos) << target.reason;
+  EXPECT_STREQ(ToString(BracketTarget::kIntrinsicsTarget), "intrinsics_target");
+  EXPECT_STREQ(ToString(BracketTarget::kFeatureBoard), "feature_board");
+  EXPECT_EQ(cell.frames, 0);
+}
+
 }  // namespace
 }  // namespace twin

@@ -362,6 +362,71 @@ TEST(TwinCellTools, ExchangeSwapsTheToolsAndBackAndARefusalNamesTheRealContact) 
   std::printf("[ measured ] refused exchange: %s\n", r.reason.c_str());
 }
 
+// Inner corners the detector finds in the hand camera's frame for a board of squares nx x ny.
+bool SeesPattern(TwinCell& cell, int nx, int ny) {
+  cv::Mat grey;
+  cv::cvtColor(cell.GrabImage(), grey, cv::COLOR_BGR2GRAY);
+  std::vector<cv::Point2f> corners;
+  return cv::findChessboardCorners(grey, cv::Size(nx - 1, ny - 1), corners);
+}
+
+// The demo cell with a 14 x 10 target of 20 mm squares for the board's bracket.
+TwinSpec SpecWithIntrinsicsTarget() {
+  TwinSpec spec = testing::DemoTwinSpec();
+  BoardSpec target = spec.board;
+  target.squares_x = 14;
+  target.squares_y = 10;
+  target.square_m = 0.02;
+  target.mass_kg = 0.6;
+  spec.intrinsics_target = target;
+  return spec;
+}
+
+TEST(TwinCellTools, MountTargetSwapsThePlateOnTheBoardBracketAndBack) {
+  TwinCell cell(SpecWithIntrinsicsTarget());
+  const JointVector q1 = cell.Truth().q_link[1];
+  ASSERT_TRUE(SeesPattern(cell, 4, 4));
+  MoveResult r = cell.MountTarget(BracketTarget::kIntrinsicsTarget);
+  ASSERT_EQ(r.status, MoveStatus::kSettled) << r.reason;
+  // The world, the truth and the picture follow the mounted plate; the robots held still
+  // (the drive holds the links at their targets under the heavier plate: no compliance).
+  EXPECT_EQ(cell.Truth().board.squares_x, 14);
+  EXPECT_EQ(cell.Truth().board.robot, 1);
+  EXPECT_TRUE(SeesPattern(cell, 14, 10));
+  EXPECT_FALSE(SeesPattern(cell, 4, 4));
+  EXPECT_LT((cell.Truth().q_link[1] - q1).cwiseAbs().maxCoeff(), 1e-6);
+  // Mounting what is there does nothing.
+  r = cell.MountTarget(BracketTarget::kIntrinsicsTarget);
+  EXPECT_EQ(r.status, MoveStatus::kSettled) << r.reason;
+  EXPECT_EQ(cell.Truth().board.squares_x, 14);
+  r = cell.MountTarget(BracketTarget::kFeatureBoard);
+  ASSERT_EQ(r.status, MoveStatus::kSettled) << r.reason;
+  EXPECT_EQ(cell.Truth().board.squares_x, 4);
+  EXPECT_TRUE(SeesPattern(cell, 4, 4));
+}
+
+TEST(TwinCellTools, MountTargetWithoutOneOrIntoTheArmIsRefusedAndChangesNothing) {
+  TwinCell plain(testing::DemoTwinSpec());
+  MoveResult r = plain.MountTarget(BracketTarget::kIntrinsicsTarget);
+  EXPECT_EQ(r.status, MoveStatus::kInvalidInput);
+  EXPECT_NE(r.reason.find("no intrinsics target"), std::string::npos) << r.reason;
+  EXPECT_EQ(plain.MountTarget(BracketTarget::kFeatureBoard).status, MoveStatus::kSettled);
+  EXPECT_TRUE(SeesPattern(plain, 4, 4));
+  // A target mounted edge-on (turned 90 deg about the flange's x): its centre is in front of
+  // the flange, but the plate reaches 11 cm back along the wrist: refused, the board stays.
+  TwinSpec spec = SpecWithIntrinsicsTarget();
+  spec.intrinsics_target->X_FT =
+      testing::Pose(Vector3(0.0, 0.0, 0.012), Vector3::UnitX(), kPi / 2);
+  TwinCell cell(spec);
+  r = cell.MountTarget(BracketTarget::kIntrinsicsTarget);
+  ASSERT_EQ(r.status, MoveStatus::kCollision) << r.reason;
+  EXPECT_NE(r.reason.find("mounting the intrinsics_target"), std::string::npos) << r.reason;
+  std::printf("[ measured ] refused mount: %s\n", r.reason.c_str());
+  EXPECT_EQ(cell.Truth().board.squares_x, 4);
+  EXPECT_TRUE(SeesPattern(cell, 4, 4));
+  EXPECT_EQ(cell.MountTarget(BracketTarget::kFeatureBoard).status, MoveStatus::kSettled);
+}
+
 }  // namespace
 }  // namespace twin
 

@@ -11,6 +11,8 @@
 #include <gtest/gtest.h>
 
 #include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
+#include "calib/procedures/optical_axis_procedure.h"
 #include "sim/world/mujoco_handles.h"
 #include "sim/cell/twin_cell.h"
 #include "tests/sim/test_twin_specs.h"
@@ -106,6 +108,41 @@ TEST_F(IntrinsicsCalibrationTest, RecoversIntrinsicsWithRadialDistortion) {
   EXPECT_LT(e.fy, 0.01);
   EXPECT_LT(e.cx_px, 10.0);
   EXPECT_LT(e.cy_px, 10.0);
+}
+
+// The dedicated target (Cell::MountTarget): a 14 x 10 chessboard of 20 mm squares swapped
+// onto the board's bracket, 40 views planned for its size (IntrinsicsViewSpecFor). Over the
+// paper scenario's 21 study trials (README) fx came within 1e-4 of the truth every time; 3e-4
+// is stated here for another cell (fx != fy, off-centre) and seed, still 3 to 30 times below
+// what the 4 x 4 board gives (1e-3..1e-2 with 25 views, RecoversPinholeIntrinsics).
+TEST_F(IntrinsicsCalibrationTest, AnIntrinsicsTargetPinsTheFocalLength) {
+  TwinSpec spec = SpecWithIntrinsics(0.0, 0.0);
+  BoardSpec target = spec.board;
+  target.squares_x = 14;
+  target.squares_y = 10;
+  target.square_m = 0.02;
+  target.mass_kg = 0.6;
+  spec.intrinsics_target = target;
+  TwinCell cell(spec, "intrinsics_calibration_test");
+  ASSERT_EQ(cell.MountTarget(BracketTarget::kIntrinsicsTarget).status, MoveStatus::kSettled);
+  const BoardGeometry plate{14, 10, 0.02};
+  // The camera in the board robot's base at the demo pose, from the spec's models (a test
+  // shortcut for the rough knowledge the procedure uses; the views need only be well spread).
+  const Transform X_B1B0 = spec.robots[1].X_WB.inverse() * spec.robots[0].X_WB;
+  const Transform X_B1C =
+      X_B1B0 * ForwardKinematics(spec.robots[0].model, DemoPose()).flange() * spec.camera.X_FC;
+  const std::vector<JointVector> poses =
+      PlannedIntrinsicsViews(BoardRobotModel(spec.robots[1].model, spec.board.X_FT), DemoPose(),
+                             X_B1C, 40, 5, IntrinsicsViewSpecFor(plate));
+  const IntrinsicsResult r = CalibrateIntrinsics(cell, 1, poses, plate, {});
+  ASSERT_EQ(r.status, IntrinsicsStatus::kSuccess) << r.reason;
+  const Errors e = Compare(r, spec.camera.intrinsics, "14x10 target");
+  EXPECT_GE(r.views_used, 20);
+  EXPECT_LT(r.rms_px, 0.3);
+  EXPECT_LT(e.fx, 3e-4);
+  EXPECT_LT(e.fy, 3e-4);
+  EXPECT_LT(e.cx_px, 1.0);  // 0.2 px or better in the study; 1 px is 50x the board's bound / 10
+  EXPECT_LT(e.cy_px, 1.0);
 }
 
 TEST_F(IntrinsicsCalibrationTest, FewerViewsThanMinViewsIsReported) {

@@ -153,7 +153,11 @@ bool Detect(const cv::Mat& bgr, const BoardSpec& board, std::vector<cv::Point2f>
 struct ErrorStats {
   double sum_sq = 0, max = 0;
   int n = 0, poses = 0, missed = 0;
+  // The least-squares scale s of detected - projected = s (projected - principal point): how
+  // much larger the rendered picture is than K says (a focal-length error of the twin).
+  double radial_num = 0, radial_den = 0;
   double Rms() const { return n ? std::sqrt(sum_sq / n) : 0.0; }
+  double Scale() const { return radial_den > 0 ? radial_num / radial_den : 0.0; }
   void Print(const char* what) const {
     std::printf("[ measured ] %s: RMS %.4f px, max %.4f px over %d corners in %d poses "
                 "(%d not detected)\n", what, Rms(), max, n, poses, missed);
@@ -163,7 +167,8 @@ struct ErrorStats {
 // Matches each detected corner to its nearest projected one (OpenCV's order is not the
 // board's) and accumulates the distances; the match must be one-to-one and within 2 px.
 void AddMatched(const std::vector<cv::Point2d>& detected,
-                const std::vector<cv::Point2d>& projected, ErrorStats* stats) {
+                const std::vector<cv::Point2d>& projected, const cv::Point2d& centre,
+                ErrorStats* stats) {
   ASSERT_EQ(detected.size(), projected.size());
   std::vector<bool> used(projected.size(), false);
   for (const cv::Point2d& d : detected) {
@@ -175,6 +180,9 @@ void AddMatched(const std::vector<cv::Point2d>& detected,
     EXPECT_FALSE(used[best]) << "two detections share a corner";
     EXPECT_LT(e, 2.0) << "detection far from every projected corner";  // squares are >20 px
     used[best] = true;
+    const cv::Point2d r = projected[best] - centre;
+    stats->radial_num += (d - projected[best]).dot(r);
+    stats->radial_den += r.dot(r);
     stats->sum_sq += e * e;
     stats->max = std::max(stats->max, e);
     ++stats->n;
@@ -207,7 +215,8 @@ void MeasurePose(Scene* scene, OffscreenRenderer* renderer, const BoardSpec& boa
                         cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 100,
                                          1e-12));
   }
-  AddMatched(detected, Project(K, X_CT, BoardInnerCorners(board)), stats);
+  AddMatched(detected, Project(K, X_CT, BoardInnerCorners(board)), cv::Point2d(K.cx, K.cy),
+             stats);
 }
 
 ErrorStats MeasureRandomPoses(const Intrinsics& K, const BoardSpec& board, int poses,
@@ -267,6 +276,28 @@ TEST(OffscreenRenderer, DistortedImageUndistortsToAnalyticProjection) {
   EXPECT_EQ(s.missed, 0);
   // Same budget as without distortion: the remap adds interpolation blur, not bias.
   EXPECT_LE(s.Rms(), kMaxRmsPx);
+}
+
+// The rendered picture has the scale K says: a twin whose images were 1e-4 larger than its
+// true fx would bias every depth the estimator measures by as much. Detected corners of a
+// 10 x 8 target of 12 mm squares (63 corners per view over much of the image) against the
+// analytic projection, fitted as detected - projected = s (projected - principal point). The
+// bound: 3e-5 is a tenth of the fx errors Zhang's method showed on the twin (1e-4..3.5e-4),
+// so a scale error of the twin that size would be seen, and it is 4x above the fit's own
+// spread (0.05 px RMS corner errors over ~3000 corners at ~250 px radius: about 1e-5 per
+// 50 poses when the errors are independent).
+TEST(OffscreenRenderer, RenderedPictureHasTheScaleOfK) {
+  BoardSpec target;
+  target.squares_x = 10;
+  target.squares_y = 8;
+  target.square_m = 0.012;
+  for (const Intrinsics& K : {PaperIntrinsics(), AnisotropicIntrinsics()}) {
+    const ErrorStats s = MeasureRandomPoses(K, target, kPoses, 31);
+    s.Print("10x8 target");
+    std::printf("[ measured ] radial scale of the detections: %.2e\n", s.Scale());
+    EXPECT_EQ(s.missed, 0);
+    EXPECT_LT(std::abs(s.Scale()), 3e-5);
+  }
 }
 
 TEST(OffscreenRenderer, OddAndNonSquareBoards) {
