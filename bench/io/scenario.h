@@ -50,6 +50,13 @@
 //       thickness_mm: 4                    # optional (default 4)
 //       mass_kg: 0.2                       # optional (default 0.2)
 //       mount: {xyz_mm: [0, 0, 40], rpy_deg: [0, 0, 0]}      # required X_FT
+//     intrinsics_target:                   # optional: a larger chessboard the operator swaps
+//       squares: [14, 10]                  # onto the board's bracket for the intrinsics step
+//       square_mm: 20                      # (Cell::MountTarget); required in it: squares,
+//       margin_mm: 10                      # square_mm; margin, thickness, mass and mount as
+//       thickness_mm: 5                    # the board's (defaults: 10 mm, 4 mm, the board's
+//       mass_kg: 0.6                       # mass and the board's mount); the estimator is
+//                                          # told it by calibration.intrinsics_target
 //     tips:                                # optional, keyed by robot name; each entry optional
 //       r1: {xyz_mm: [0, 0, 80], rpy_deg: [0, 0, 0], length_mm: 80, radius_mm: 4}
 //                                          # pose X_FTip (if given, xyz_mm and a rotation), and
