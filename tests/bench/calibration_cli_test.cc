@@ -100,8 +100,9 @@ TEST(CalibrationCli, RunDiagnosesEachCalibratedRobotUnlessTold) {
   EXPECT_EQ(k["robots"]["r2"]["diagnosis"]["skipped"], "--no-diagnosis");
 }
 
-TEST(CalibrationCli, BadDiagnosisSettingsAndBoardMassNameFileLineAndKey) {
-  const fs::path dir = TempDir("baddiag");
+// scenarios/study_small.yaml with its model paths pointing into the source tree, so that an
+// edited copy can be written anywhere.
+std::string StudySmallWithAbsoluteModels() {
   std::ifstream in(kScenarios + "study_small.yaml");
   std::stringstream text;
   text << in.rdbuf();
@@ -109,6 +110,12 @@ TEST(CalibrationCli, BadDiagnosisSettingsAndBoardMassNameFileLineAndKey) {
   for (std::string::size_type p; (p = yaml.find("../models/")) != std::string::npos;) {
     yaml.replace(p, 10, std::string(TWIN_SOURCE_DIR) + "/models/");
   }
+  return yaml;
+}
+
+TEST(CalibrationCli, BadDiagnosisSettingsAndBoardMassNameFileLineAndKey) {
+  const fs::path dir = TempDir("baddiag");
+  const std::string yaml = StudySmallWithAbsoluteModels();
   const std::string anchor = "    calibration_axes: 3\n";
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"    diagnosis: {alpha: 0.9}\n", "alpha"},
@@ -135,13 +142,7 @@ TEST(CalibrationCli, BadDiagnosisSettingsAndBoardMassNameFileLineAndKey) {
 // with the reason (the cell's refusal), exit 2, and writes nothing.
 TEST(CalibrationCli, AToldIntrinsicsTargetTheCellLacksStopsTheRunAndWritesNothing) {
   const fs::path dir = TempDir("notarget");
-  std::ifstream in(kScenarios + "study_small.yaml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
-  for (std::string::size_type p; (p = yaml.find("../models/")) != std::string::npos;) {
-    yaml.replace(p, 10, std::string(TWIN_SOURCE_DIR) + "/models/");
-  }
+  const std::string yaml = StudySmallWithAbsoluteModels();
   const std::string anchor = "    calibration_axes: 3\n";
   std::ofstream(dir / "s.yaml") << testing::Replaced(
       yaml, anchor, anchor + "    intrinsics_target: {squares: [14, 10], square_mm: 20}\n");

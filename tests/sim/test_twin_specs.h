@@ -64,4 +64,15 @@ inline TwinSpec DemoTwinSpec(Installation installation = Installation::kFloor) {
   return spec;
 }
 
+/// A 14 x 10 chessboard of 20 mm squares (0.6 kg) for `board`'s bracket: the intrinsics
+/// target of the paper scenario, mounted as the board is.
+inline BoardSpec IntrinsicsTarget(const BoardSpec& board) {
+  BoardSpec target = board;
+  target.squares_x = 14;
+  target.squares_y = 10;
+  target.square_m = 0.02;
+  target.mass_kg = 0.6;
+  return target;
+}
+
 }  // namespace twin::testing

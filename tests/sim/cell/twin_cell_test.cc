@@ -373,12 +373,7 @@ bool SeesPattern(TwinCell& cell, int nx, int ny) {
 // The demo cell with a 14 x 10 target of 20 mm squares for the board's bracket.
 TwinSpec SpecWithIntrinsicsTarget() {
   TwinSpec spec = testing::DemoTwinSpec();
-  BoardSpec target = spec.board;
-  target.squares_x = 14;
-  target.squares_y = 10;
-  target.square_m = 0.02;
-  target.mass_kg = 0.6;
-  spec.intrinsics_target = target;
+  spec.intrinsics_target = testing::IntrinsicsTarget(spec.board);
   return spec;
 }
 

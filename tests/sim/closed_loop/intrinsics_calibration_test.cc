@@ -117,12 +117,7 @@ TEST_F(IntrinsicsCalibrationTest, RecoversIntrinsicsWithRadialDistortion) {
 // what the 4 x 4 board gives (1e-3..1e-2 with 25 views, RecoversPinholeIntrinsics).
 TEST_F(IntrinsicsCalibrationTest, AnIntrinsicsTargetPinsTheFocalLength) {
   TwinSpec spec = SpecWithIntrinsics(0.0, 0.0);
-  BoardSpec target = spec.board;
-  target.squares_x = 14;
-  target.squares_y = 10;
-  target.square_m = 0.02;
-  target.mass_kg = 0.6;
-  spec.intrinsics_target = target;
+  spec.intrinsics_target = testing::IntrinsicsTarget(spec.board);
   TwinCell cell(spec, "intrinsics_calibration_test");
   ASSERT_EQ(cell.MountTarget(BracketTarget::kIntrinsicsTarget).status, MoveStatus::kSettled);
   const BoardGeometry plate{14, 10, 0.02};
