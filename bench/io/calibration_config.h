@@ -13,7 +13,7 @@
 //     board_mass_kg: 0.2               # the board with its bracket, as weighed (default 0:
 //                                      # not told); a point mass at the feature point in the
 //                                      # models of the diagnosis, whose gravity terms need it
-//     intrinsics_target: {squares: [10, 8], square_mm: 12}  # a larger chessboard, by
+//     intrinsics_target: {squares: [14, 10], square_mm: 20}  # a larger chessboard, by
 //                                      # drawing, that the operator mounts on the board's
 //                                      # bracket for Zhang's method and takes off after (the
 //                                      # cell must have one: scenario.intrinsics_target);

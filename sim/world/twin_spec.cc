@@ -288,10 +288,9 @@ void CheckCamera(const Checker& c, const CameraSpec& cam) {
   }
 }
 
-// `field` names the spec field ("board" or "intrinsics_target"); only the board's robot counts.
+// The plate of a board or target: `field` names the spec field ("board", "intrinsics_target").
 void CheckBoard(const Checker& c, const BoardSpec& b, const CameraSpec& cam,
-                const std::string& field = "board") {
-  if (field == "board") c.IntRange(b.robot, "board.robot", 0, kNumRobots - 1);
+                const std::string& field) {
   c.IntRange(b.squares_x, field + ".squares_x", 2, kMaxBoardSquares);
   c.IntRange(b.squares_y, field + ".squares_y", 2, kMaxBoardSquares);
   c.Positive(b.square_m, field + ".square_m", " m");
@@ -411,7 +410,8 @@ void ValidateTwinSpec(const TwinSpec& spec, const std::string& where) {
   for (int i = 0; i < kNumRobots; ++i) CheckRobot(c, spec.robots[i], i, where);
   CheckTracker(c, spec.tracker);
   CheckCamera(c, spec.camera);
-  CheckBoard(c, spec.board, spec.camera);
+  c.IntRange(spec.board.robot, "board.robot", 0, kNumRobots - 1);  // the target's is ignored
+  CheckBoard(c, spec.board, spec.camera, "board");
   if (spec.intrinsics_target) {
     CheckBoard(c, *spec.intrinsics_target, spec.camera, "intrinsics_target");
   }

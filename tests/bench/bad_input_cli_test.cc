@@ -37,12 +37,9 @@ fs::path Fresh(const std::string& name) {
 }
 
 // A shipped scenario's text with its model paths made absolute, edited, written to dir/file.
-std::string WriteScenario(const fs::path& dir, const std::string& file, std::string text) {
-  for (std::size_t p; (p = text.find("../models/")) != std::string::npos;) {
-    text.replace(p, 10, kSource + "/models/");
-  }
+std::string WriteScenario(const fs::path& dir, const std::string& file, const std::string& text) {
   const fs::path path = dir / file;
-  std::ofstream(path) << text;
+  std::ofstream(path) << testing::AbsoluteModels(text);
   return path.string();
 }
 

@@ -47,16 +47,10 @@ TEST(CalibrationCli, ScenarioWithoutCalibrationSectionExitsTwoAndWritesNothing) 
 
 TEST(CalibrationCli, UnknownCalibrationKeyNamesFileLineAndKey) {
   const fs::path dir = TempDir("badkey");
-  std::ifstream in(kScenarios + "paper_reinovo.yaml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
   // Scenario paths are relative to the file: point the models back at the source tree.
-  yaml = testing::Replaced(yaml, "servo: {tolerance_px: 0.1,", "servo: {tolerance_pix: 0.1,");
-  for (std::string::size_type p; (p = yaml.find("../models/")) != std::string::npos;) {
-    yaml.replace(p, 10, std::string(TWIN_SOURCE_DIR) + "/models/");
-  }
-  std::ofstream(dir / "bad.yaml") << yaml;
+  std::ofstream(dir / "bad.yaml") << testing::Replaced(
+      testing::AbsoluteModels(testing::ReadFile(kScenarios + "paper_reinovo.yaml")),
+      "servo: {tolerance_px: 0.1,", "servo: {tolerance_pix: 0.1,");
   const CliRun r = Twinbench("run " + (dir / "bad.yaml").string() + " --out " +
                              (dir / "out").string());
   EXPECT_EQ(r.code, 2) << r.output;
@@ -100,22 +94,9 @@ TEST(CalibrationCli, RunDiagnosesEachCalibratedRobotUnlessTold) {
   EXPECT_EQ(k["robots"]["r2"]["diagnosis"]["skipped"], "--no-diagnosis");
 }
 
-// scenarios/study_small.yaml with its model paths pointing into the source tree, so that an
-// edited copy can be written anywhere.
-std::string StudySmallWithAbsoluteModels() {
-  std::ifstream in(kScenarios + "study_small.yaml");
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string yaml = text.str();
-  for (std::string::size_type p; (p = yaml.find("../models/")) != std::string::npos;) {
-    yaml.replace(p, 10, std::string(TWIN_SOURCE_DIR) + "/models/");
-  }
-  return yaml;
-}
-
 TEST(CalibrationCli, BadDiagnosisSettingsAndBoardMassNameFileLineAndKey) {
   const fs::path dir = TempDir("baddiag");
-  const std::string yaml = StudySmallWithAbsoluteModels();
+  const std::string yaml = testing::AbsoluteModels(testing::ReadFile(kScenarios + "study_small.yaml"));
   const std::string anchor = "    calibration_axes: 3\n";
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"    diagnosis: {alpha: 0.9}\n", "alpha"},
@@ -142,7 +123,7 @@ TEST(CalibrationCli, BadDiagnosisSettingsAndBoardMassNameFileLineAndKey) {
 // with the reason (the cell's refusal), exit 2, and writes nothing.
 TEST(CalibrationCli, AToldIntrinsicsTargetTheCellLacksStopsTheRunAndWritesNothing) {
   const fs::path dir = TempDir("notarget");
-  const std::string yaml = StudySmallWithAbsoluteModels();
+  const std::string yaml = testing::AbsoluteModels(testing::ReadFile(kScenarios + "study_small.yaml"));
   const std::string anchor = "    calibration_axes: 3\n";
   std::ofstream(dir / "s.yaml") << testing::Replaced(
       yaml, anchor, anchor + "    intrinsics_target: {squares: [14, 10], square_mm: 20}\n");

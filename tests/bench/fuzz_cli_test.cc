@@ -55,12 +55,7 @@ std::uint64_t EnvNumber(const char* name, std::uint64_t fallback) {
   return std::strtoull(v, nullptr, 10);
 }
 
-std::string AbsoluteModels(std::string text) {
-  for (std::size_t p; (p = text.find("../models/")) != std::string::npos;) {
-    text.replace(p, 10, kSource + "/models/");
-  }
-  return text;
-}
+using testing::AbsoluteModels;
 
 // A measurements.csv as `twinbench run` writes it, from the synthetic recording (exact joint
 // angles and depths; 5 axes x 10 positions).

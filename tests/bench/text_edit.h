@@ -28,6 +28,15 @@ inline std::string Replaced(std::string text, const std::string& from, const std
   return text.replace(pos, from.size(), to);
 }
 
+/// A shipped scenario's text with its model paths ("../models/...", relative to scenarios/)
+/// pointing into the source tree, so an edited copy can be written anywhere.
+inline std::string AbsoluteModels(std::string text) {
+  for (std::size_t p; (p = text.find("../models/")) != std::string::npos;) {
+    text.replace(p, 10, std::string(TWIN_SOURCE_DIR) + "/models/");
+  }
+  return text;
+}
+
 /// 1-based line of the first occurrence of needle in text.
 inline int LineOf(const std::string& text, const std::string& needle) {
   const std::size_t pos = text.find(needle);
