@@ -20,7 +20,8 @@ const std::vector<std::string> kTopLevel = {"scenario", "intrinsics", "robots", 
                                             "base_frame", "status", "procedure",
     "truth_position_error_mm", "heldout", "identifiable_combinations", "tracker",
     "condition_number", "truth_position_error_mm_physical",
-    "truth_position_error_mm_discovered_model", "diagnosis"};
+    "truth_position_error_mm_discovered_model", "truth_position_error_mm_covered_region",
+    "diagnosis"};
 // More criteria than this are no longer a CI verdict but a second report.
 constexpr std::size_t kMaxCriteria = 100;
 

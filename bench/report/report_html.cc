@@ -450,7 +450,29 @@ std::string RobotSection(const std::string& name, const json& r, int index) {
       Row(o, {kind, NumText(At(k, {"before", "rms"})), NumText(At(k, {"after", "rms"})),
               NumText(At(k, {"before", "max"})), NumText(At(k, {"after", "max"}))});
     }
-    o << "</table><p>configurations: " << NumText(Find(truth, "configurations")) << "</p></div>\n";
+    o << "</table><p>configurations: " << NumText(Find(truth, "configurations"))
+      << " (whole joint space)</p></div>\n";
+  }
+  if (const json* region = Find(&r, "truth_position_error_mm_covered_region")) {
+    o << "<div><h3>Position error vs truth over the covered region [mm]</h3><table>\n";
+    Row(o, {"alignment", "RMS before", "RMS after", "max before", "max after"}, true);
+    for (const char* kind : {"raw", "rigid", "similarity"}) {
+      const json* k = Find(region, kind);
+      if (k == nullptr) continue;
+      Row(o, {kind, NumText(At(k, {"before", "rms"})), NumText(At(k, {"after", "rms"})),
+              NumText(At(k, {"before", "max"})), NumText(At(k, {"after", "max"}))});
+    }
+    o << "</table><table>\n";
+    Row(o, {"joint", "lower [deg]", "upper [deg]"}, true);
+    if (const json* joints = Find(region, "joint_box_deg"); joints && joints->is_array()) {
+      for (const json& j : *joints) {
+        Row(o, {NumText(Find(&j, "joint")), NumText(Find(&j, "lower_deg")),
+                NumText(Find(&j, "upper_deg"))});
+      }
+    }
+    o << "</table><p>" << NumText(Find(region, "configurations"))
+      << " configurations drawn inside the joint ranges of the " << NumText(Find(region, "poses"))
+      << " poses the model was identified from</p></div>\n";
   }
   if (const json* scale = Find(&r, "scale")) {
     auto e = Num(Find(scale, "estimated")), t = Num(Find(scale, "true"));

@@ -33,6 +33,8 @@ const char* const kHeadlines[] = {
     "truth_position_error_mm.rigid.after.rms",
     "truth_position_error_mm.similarity.after.rms",
     "truth_position_error_mm.raw.after.rms",
+    "truth_position_error_mm_covered_region.rigid.after.rms",
+    "truth_position_error_mm_covered_region.similarity.after.rms",
     "misaligned_error_mm.validation.after",
     "misaligned_error_mm.calibration.after",
     "identifiable_combinations.rms_error",

@@ -379,6 +379,37 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                                 {"validation", Misaligned(rc.validation_error)},
                                 {"per_axis", per_axis}};
     r["truth_position_error_mm"] = Gauges(score);
+    // The same over the region the delivered model's poses covered (their joint-space box):
+    // what the calibration can vouch for, beside the whole joint space above.
+    {
+      std::vector<JointVector> used;
+      for (const AlignedPose& p : rc.aligned) {
+        const bool cal = std::find(rc.calibration_axes.begin(), rc.calibration_axes.end(),
+                                   p.axis) != rc.calibration_axes.end();
+        if (rc.refit || cal) used.push_back(p.q_passive);
+      }
+      if (!used.empty()) {
+        const JointBox box = CoveredJointBox(used);
+        const RegionScore region =
+            ScoreRegion(rc.nominal, rc.identified, true_model, box,
+                        config.scoring_configurations, config.scoring_seed);
+        json joints = json::array();
+        for (int i = 0; i < box.lower.size(); ++i) {
+          joints.push_back({{"joint", i + 1}, {"lower_deg", RadToDeg(box.lower(i))},
+                            {"upper_deg", RadToDeg(box.upper(i))}});
+        }
+        r["truth_position_error_mm_covered_region"] = {
+            {"configurations", region.configurations},
+            {"poses", used.size()},
+            {"joint_box_deg", joints},
+            {"raw", {{"before", Stats(region.before.raw)}, {"after", Stats(region.after.raw)}}},
+            {"rigid",
+             {{"before", Stats(region.before.rigid)}, {"after", Stats(region.after.rigid)}}},
+            {"similarity",
+             {{"before", Stats(region.before.similarity)},
+              {"after", Stats(region.after.similarity)}}}};
+      }
+    }
     if (rc.refit) {
       // The calibration-set model too, so that the refit's gain is visible.
       const RobotScore held = ScoreRobot(rc.nominal, rc.holdout, true_model, obs,
@@ -634,6 +665,14 @@ int RunCalibrationScenario(const RunOptions& o) {
                     (std::string("truth RMS ") + gauge).c_str(), D(g["before"]["rms"]),
                     D(g["after"]["rms"]), D(g["before"]["max"]),
                     D(g["after"]["max"]));
+      }
+      if (r.contains("truth_position_error_mm_covered_region")) {
+        const json& c = r["truth_position_error_mm_covered_region"];
+        std::printf("%-6s covered region (%d poses' joint box): truth RMS rigid %.4f -> %.4f, "
+                    "similarity %.4f -> %.4f\n",
+                    name.c_str(), c["poses"].get<int>(), D(c["rigid"]["before"]["rms"]),
+                    D(c["rigid"]["after"]["rms"]), D(c["similarity"]["before"]["rms"]),
+                    D(c["similarity"]["after"]["rms"]));
       }
       if (r.contains("truth_position_error_mm_calibration_set_model")) {
         const json& h = r["truth_position_error_mm_calibration_set_model"];

@@ -62,6 +62,47 @@ std::vector<JointVector> RandomJointConfigurations(const KinematicModel& model, 
   return qs;
 }
 
+JointBox CoveredJointBox(const std::vector<JointVector>& poses) {
+  if (poses.empty()) throw std::logic_error("CoveredJointBox: no poses");
+  JointBox box{poses[0], poses[0]};
+  for (const JointVector& q : poses) {
+    if (q.size() != box.lower.size()) throw std::logic_error("CoveredJointBox: joint counts differ");
+    box.lower = box.lower.cwiseMin(q);
+    box.upper = box.upper.cwiseMax(q);
+  }
+  return box;
+}
+
+std::vector<JointVector> RandomJointConfigurationsIn(const JointBox& box, int n,
+                                                     std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<JointVector> qs;
+  for (int c = 0; c < n; ++c) {
+    JointVector q(box.lower.size());
+    for (int i = 0; i < q.size(); ++i) {
+      q(i) = std::uniform_real_distribution<double>(box.lower(i), box.upper(i))(rng);
+    }
+    qs.push_back(q);
+  }
+  return qs;
+}
+
+RegionScore ScoreRegion(const KinematicModel& nominal, const KinematicModel& identified,
+                        const KinematicModel& truth, const JointBox& box, int n,
+                        std::uint64_t seed) {
+  RegionScore s;
+  s.configurations = n;
+  std::vector<Vector3> p_nom, p_id, p_true;
+  for (const JointVector& q : RandomJointConfigurationsIn(box, n, seed)) {
+    p_nom.push_back(EndPose(nominal, q).translation());
+    p_id.push_back(EndPose(identified, q).translation());
+    p_true.push_back(EndPose(truth, q).translation());
+  }
+  s.before = CompareInGauges(p_nom, p_true);
+  s.after = CompareInGauges(p_id, p_true);
+  return s;
+}
+
 RobotScore ScoreRobot(const KinematicModel& nominal, const KinematicModel& identified,
                       const KinematicModel& truth, const ObservabilityReport& observability,
                       int configurations, std::uint64_t seed) {

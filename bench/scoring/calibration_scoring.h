@@ -56,6 +56,30 @@ struct RobotScore {
 std::vector<JointVector> RandomJointConfigurations(const KinematicModel& model, int n,
                                                    std::uint64_t seed, double margin);
 
+/// The joint-space region a calibration covered: per joint the smallest and largest angle
+/// over its poses [rad].
+struct JointBox {
+  JointVector lower, upper;
+};
+
+/// The per-joint bounding box of `poses` (at least one; all of one arm's joint count).
+JointBox CoveredJointBox(const std::vector<JointVector>& poses);
+
+/// `n` joint vectors drawn uniformly inside `box` (seeded as RandomJointConfigurations).
+std::vector<JointVector> RandomJointConfigurationsIn(const JointBox& box, int n,
+                                                     std::uint64_t seed);
+
+/// Position errors of `nominal` and `identified` against `truth` over `n` configurations drawn
+/// inside `box` (the region the calibration poses covered), in the three gauges, each gauge
+/// fitted over these configurations alone.
+struct RegionScore {
+  int configurations = 0;
+  GaugeErrors before, after;
+};
+RegionScore ScoreRegion(const KinematicModel& nominal, const KinematicModel& identified,
+                        const KinematicModel& truth, const JointBox& box, int n,
+                        std::uint64_t seed);
+
 RobotScore ScoreRobot(const KinematicModel& nominal, const KinematicModel& identified,
                       const KinematicModel& truth, const ObservabilityReport& observability,
                       int configurations, std::uint64_t seed);
