@@ -441,28 +441,28 @@ std::string RobotSection(const std::string& name, const json& r, int index) {
       << "; validation axes: " << AxisList(At(&r, {"split", "validation_axes"})) << "</p></div>\n";
   }
   // Position error against the truth, after raw / rigid / similarity alignment.
-  if (const json* truth = Find(&r, "truth_position_error_mm")) {
-    o << "<div><h3>Position error vs truth [mm]</h3><table>\n";
+  // One table of raw / rigid / similarity errors, before and after.
+  const auto gauge_table = [&o](const json* gauges) {
+    o << "<table>\n";
     Row(o, {"alignment", "RMS before", "RMS after", "max before", "max after"}, true);
     for (const char* kind : {"raw", "rigid", "similarity"}) {
-      const json* k = Find(truth, kind);
+      const json* k = Find(gauges, kind);
       if (k == nullptr) continue;
       Row(o, {kind, NumText(At(k, {"before", "rms"})), NumText(At(k, {"after", "rms"})),
               NumText(At(k, {"before", "max"})), NumText(At(k, {"after", "max"}))});
     }
-    o << "</table><p>configurations: " << NumText(Find(truth, "configurations"))
+    o << "</table>";
+  };
+  if (const json* truth = Find(&r, "truth_position_error_mm")) {
+    o << "<div><h3>Position error vs truth [mm]</h3>";
+    gauge_table(truth);
+    o << "<p>configurations: " << NumText(Find(truth, "configurations"))
       << " (whole joint space)</p></div>\n";
   }
   if (const json* region = Find(&r, "truth_position_error_mm_covered_region")) {
-    o << "<div><h3>Position error vs truth over the covered region [mm]</h3><table>\n";
-    Row(o, {"alignment", "RMS before", "RMS after", "max before", "max after"}, true);
-    for (const char* kind : {"raw", "rigid", "similarity"}) {
-      const json* k = Find(region, kind);
-      if (k == nullptr) continue;
-      Row(o, {kind, NumText(At(k, {"before", "rms"})), NumText(At(k, {"after", "rms"})),
-              NumText(At(k, {"before", "max"})), NumText(At(k, {"after", "max"}))});
-    }
-    o << "</table><table>\n";
+    o << "<div><h3>Position error vs truth over the covered region [mm]</h3>";
+    gauge_table(region);
+    o << "<table>\n";
     Row(o, {"joint", "lower [deg]", "upper [deg]"}, true);
     if (const json* joints = Find(region, "joint_box_deg"); joints && joints->is_array()) {
       for (const json& j : *joints) {

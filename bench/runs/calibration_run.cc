@@ -72,14 +72,16 @@ json Misaligned(const MisalignedSummary& m) {
 
 json Stats(const PositionErrorStats& s) { return json{{"rms", Mm(s.rms)}, {"max", Mm(s.max)}}; }
 
-json Gauges(const RobotScore& s) {
+json Gauges(int configurations, const GaugeErrors& before, const GaugeErrors& after) {
   json j;
-  j["configurations"] = s.configurations;
-  j["raw"] = {{"before", Stats(s.before.raw)}, {"after", Stats(s.after.raw)}};
-  j["rigid"] = {{"before", Stats(s.before.rigid)}, {"after", Stats(s.after.rigid)}};
-  j["similarity"] = {{"before", Stats(s.before.similarity)}, {"after", Stats(s.after.similarity)}};
+  j["configurations"] = configurations;
+  j["raw"] = {{"before", Stats(before.raw)}, {"after", Stats(after.raw)}};
+  j["rigid"] = {{"before", Stats(before.rigid)}, {"after", Stats(after.rigid)}};
+  j["similarity"] = {{"before", Stats(before.similarity)}, {"after", Stats(after.similarity)}};
   return j;
 }
+
+json Gauges(const RobotScore& s) { return Gauges(s.configurations, s.before, s.after); }
 
 json IntrinsicsJson(const PinholeIntrinsics& k, const DistortionCoefficients& d) {
   return json{{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}, {"k1", d.k1},
@@ -398,16 +400,10 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
           joints.push_back({{"joint", i + 1}, {"lower_deg", RadToDeg(box.lower(i))},
                             {"upper_deg", RadToDeg(box.upper(i))}});
         }
-        r["truth_position_error_mm_covered_region"] = {
-            {"configurations", region.configurations},
-            {"poses", used.size()},
-            {"joint_box_deg", joints},
-            {"raw", {{"before", Stats(region.before.raw)}, {"after", Stats(region.after.raw)}}},
-            {"rigid",
-             {{"before", Stats(region.before.rigid)}, {"after", Stats(region.after.rigid)}}},
-            {"similarity",
-             {{"before", Stats(region.before.similarity)},
-              {"after", Stats(region.after.similarity)}}}};
+        json covered = Gauges(region.configurations, region.before, region.after);
+        covered["poses"] = used.size();
+        covered["joint_box_deg"] = joints;
+        r["truth_position_error_mm_covered_region"] = covered;
       }
     }
     if (rc.refit) {

@@ -27,6 +27,21 @@ Eigen::Matrix3Xd ToMatrix(const std::vector<Vector3>& points) {
   return m;
 }
 
+// End points of the three models at the same configurations.
+struct EndPoints {
+  std::vector<Vector3> nominal, identified, truth;
+};
+EndPoints EndPointsAt(const KinematicModel& nominal, const KinematicModel& identified,
+                      const KinematicModel& truth, const std::vector<JointVector>& qs) {
+  EndPoints p;
+  for (const JointVector& q : qs) {
+    p.nominal.push_back(EndPose(nominal, q).translation());
+    p.identified.push_back(EndPose(identified, q).translation());
+    p.truth.push_back(EndPose(truth, q).translation());
+  }
+  return p;
+}
+
 }  // namespace
 
 GaugeErrors CompareInGauges(const std::vector<Vector3>& model, const std::vector<Vector3>& truth,
@@ -48,18 +63,13 @@ GaugeErrors CompareInGauges(const std::vector<Vector3>& model, const std::vector
 
 std::vector<JointVector> RandomJointConfigurations(const KinematicModel& model, int n,
                                                    std::uint64_t seed, double margin) {
-  std::mt19937_64 rng(seed);
-  std::vector<JointVector> qs;
-  for (int c = 0; c < n; ++c) {
-    JointVector q(model.num_joints());
-    for (int i = 0; i < model.num_joints(); ++i) {
-      const JointLimits& l = model.links[i].limits;
-      const double lo = l.lower + margin, hi = std::max(lo, l.upper - margin);
-      q(i) = std::uniform_real_distribution<double>(lo, hi)(rng);
-    }
-    qs.push_back(q);
+  JointBox box{JointVector(model.num_joints()), JointVector(model.num_joints())};
+  for (int i = 0; i < model.num_joints(); ++i) {
+    const JointLimits& l = model.links[i].limits;
+    box.lower(i) = l.lower + margin;
+    box.upper(i) = std::max(box.lower(i), l.upper - margin);
   }
-  return qs;
+  return RandomJointConfigurationsIn(box, n, seed);
 }
 
 JointBox CoveredJointBox(const std::vector<JointVector>& poses) {
@@ -92,14 +102,10 @@ RegionScore ScoreRegion(const KinematicModel& nominal, const KinematicModel& ide
                         std::uint64_t seed) {
   RegionScore s;
   s.configurations = n;
-  std::vector<Vector3> p_nom, p_id, p_true;
-  for (const JointVector& q : RandomJointConfigurationsIn(box, n, seed)) {
-    p_nom.push_back(EndPose(nominal, q).translation());
-    p_id.push_back(EndPose(identified, q).translation());
-    p_true.push_back(EndPose(truth, q).translation());
-  }
-  s.before = CompareInGauges(p_nom, p_true);
-  s.after = CompareInGauges(p_id, p_true);
+  const EndPoints p =
+      EndPointsAt(nominal, identified, truth, RandomJointConfigurationsIn(box, n, seed));
+  s.before = CompareInGauges(p.nominal, p.truth);
+  s.after = CompareInGauges(p.identified, p.truth);
   return s;
 }
 
@@ -108,19 +114,15 @@ RobotScore ScoreRobot(const KinematicModel& nominal, const KinematicModel& ident
                       int configurations, std::uint64_t seed) {
   RobotScore s;
   s.configurations = configurations;
-  std::vector<Vector3> p_nom, p_id, p_true;
-  for (const JointVector& q :
-       RandomJointConfigurations(nominal, configurations, seed, DegToRad(10.0))) {
-    p_nom.push_back(EndPose(nominal, q).translation());
-    p_id.push_back(EndPose(identified, q).translation());
-    p_true.push_back(EndPose(truth, q).translation());
-  }
-  s.before = CompareInGauges(p_nom, p_true);
-  s.after = CompareInGauges(p_id, p_true);
+  const EndPoints p =
+      EndPointsAt(nominal, identified, truth,
+                  RandomJointConfigurations(nominal, configurations, seed, DegToRad(10.0)));
+  s.before = CompareInGauges(p.nominal, p.truth);
+  s.after = CompareInGauges(p.identified, p.truth);
   // Scale of a model's point cloud relative to the nominal one: the similarity taking the
   // nominal points onto the model's has scale |model| / |nominal|.
-  CompareInGauges(p_nom, p_id, &s.scale_estimated);
-  CompareInGauges(p_nom, p_true, &s.scale_true);
+  CompareInGauges(p.nominal, p.identified, &s.scale_estimated);
+  CompareInGauges(p.nominal, p.truth, &s.scale_true);
 
   const ParameterVector phi0 = GetParameters(nominal);
   const ParameterVector d_est = GetParameters(identified) - phi0;
