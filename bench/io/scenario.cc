@@ -1,6 +1,7 @@
 #include "bench/io/scenario.h"
 
 #include <algorithm>
+#include <array>
 #include <cstddef>
 #include <filesystem>
 #include <map>
@@ -97,6 +98,7 @@ class ScenarioParser {
     ParseBoard(m.Get("board"));
     if (const auto f = m.Find("intrinsics_target", false)) ParseIntrinsicsTarget(*f);
     if (const auto f = m.Find("tips", false)) ParseTips(*f);
+    DefaultTipsOutward();
     if (const auto f = m.Find("physics", false)) ParsePhysics(*f);
     if (const auto f = m.Find("effects", false)) ParseEffects(*f);
     if (const auto f = m.Find("tracker", false)) ParseTracker(*f);
@@ -380,6 +382,21 @@ class ScenarioParser {
     }
   }
 
+  // A tip without a pose of its own sits at the flange's centre, its capsule behind the point
+  // inside the wrist: along -z of L_N where the last link's d is >= 0 (z points out of the
+  // face), along +z where d < 0 (URDFs whose last axis points into the wrist, as KUKA's: there
+  // the default frame is turned by 180 deg about x, or the capsule would stand out of the
+  // flange through whatever is mounted on it).
+  void DefaultTipsOutward() {
+    for (int i = 0; i < kNumRobots; ++i) {
+      if (tip_pose_given_[i]) continue;
+      const KinematicModel& model = out_.twin.robots[i].model;
+      if (model.num_joints() < 1 || model.flange().dh.d >= 0.0) continue;
+      out_.twin.tips[i].X_FTip.linear() =
+          Eigen::AngleAxisd(kPi, Vector3::UnitX()).toRotationMatrix();
+    }
+  }
+
   void ParseTips(const YamlField& f) {
     Locate("tips", f);
     const YamlMap m(r_, f, RobotNames());  // keys are robot names
@@ -392,6 +409,7 @@ class ScenarioParser {
       TipSpec& tip = out_.twin.tips[i];
       if (t.Has("xyz_mm") || t.Has("rpy_deg") || t.Has("zyz_deg")) {
         tip.X_FTip = PoseFrom(t);
+        tip_pose_given_[i] = true;
         Locate(spec + ".X_FTip", *entry);
       }
       if (const auto v = t.Find("length_mm", false)) {
@@ -499,6 +517,7 @@ class ScenarioParser {
   std::string base_dir_;
   Locations locations_;
   Scenario out_;
+  std::array<bool, kNumRobots> tip_pose_given_{};  // tips.<robot> gave xyz_mm or a rotation
 };
 
 }  // namespace

@@ -60,7 +60,10 @@
 //     tips:                                # optional, keyed by robot name; each entry optional
 //       r1: {xyz_mm: [0, 0, 80], rpy_deg: [0, 0, 0], length_mm: 80, radius_mm: 4}
 //                                          # pose X_FTip (if given, xyz_mm and a rotation), and
-//                                          # optional length_mm, radius_mm (defaults TipSpec)
+//                                          # optional length_mm, radius_mm (defaults TipSpec;
+//                                          # without a pose: at the flange's centre, pointing
+//                                          # out of the face: RotX(180 deg) where the model's
+//                                          # last d < 0, L_N's z into the wrist, as on KUKAs)
 //     physics:                             # optional; each key optional (defaults PhysicsSpec)
 //       timestep_s: 0.002
 //       stiffness_Nm_per_rad: 1.0e5

@@ -93,6 +93,13 @@ IntrinsicsResult CalibrateIntrinsics(Cell& cell, int board_robot,
     result.reason = "board detected in " + std::to_string(result.views_used) + " of " +
                     std::to_string(board_poses.size()) + " poses, min_views = " +
                     std::to_string(options.min_views);
+    // The first reasons, so that a user sees whether the moves or the detection failed.
+    for (size_t i = 0; i < result.skipped.size() && i < 3; ++i) {
+      result.reason += (i == 0 ? "; skipped: " : "; ") + result.skipped[i];
+    }
+    if (result.skipped.size() > 3) {
+      result.reason += "; ... (" + std::to_string(result.skipped.size() - 3) + " more)";
+    }
     return result;
   }
   int flags = 0;

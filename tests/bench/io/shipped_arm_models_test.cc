@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "bench/io/model_loader.h"
+#include "bench/io/scenario.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/model/parameters.h"
@@ -53,6 +54,27 @@ TEST(ShippedArmModels, WithoutTipLinkTheArmIsStillChosenWithAWarning) {
   bool chose = false;
   for (const std::string& w : warnings) chose |= w.find("chose 'tool0'") != std::string::npos;
   EXPECT_TRUE(chose);
+}
+
+// The twin's measuring tips (used by the handclasp procedure, drawn always) default to the
+// flange's centre with their capsule behind the point, inside the wrist. On the KUKA, L_N's z
+// points into the wrist (the last link's d < 0), so the default frame is turned by 180 deg
+// about x; before that the capsule stood 80 mm out of the flange through the mounted board and
+// covered its centre corners (the intrinsics target was then found in 2 of 40 views). On the
+// ABB (d > 0) it stays the identity, as on every arm before.
+TEST(ShippedArmModels, DefaultTipsPointOutOfTheFlangeFace) {
+  const Scenario kuka = LoadScenario(kRoot + "/scenarios/kuka_kr6r900.yaml");
+  const Scenario abb = LoadScenario(kRoot + "/scenarios/abb_irb2400.yaml");
+  for (int i = 0; i < 2; ++i) {
+    const KinematicModel& km = kuka.twin.robots[i].model;
+    ASSERT_LT(km.flange().dh.d, 0.0);
+    // The capsule runs from the point along the tip frame's -z: into the wrist is -sign(d) z.
+    const Vector3 capsule_dir = -kuka.twin.tips[i].X_FTip.linear().col(2);
+    EXPECT_GT(capsule_dir.dot(Vector3::UnitZ()), 0.999) << "kuka robot " << i;
+    EXPECT_LT(kuka.twin.tips[i].X_FTip.translation().norm(), 1e-12);
+    ASSERT_GT(abb.twin.robots[i].model.flange().dh.d, 0.0);
+    EXPECT_TRUE(abb.twin.tips[i].X_FTip.isApprox(Transform::Identity())) << "abb robot " << i;
+  }
 }
 
 }  // namespace
