@@ -22,6 +22,9 @@ struct IntrinsicsOptions {
   int min_views = 10;               ///< views with a detected board needed to calibrate (>= 3)
   bool fix_k3 = true;               ///< hold k3 at 0 (a small board cannot constrain it)
   bool fix_all_distortion = false;  ///< hold k1, k2, p1, p2, k3 at 0 (pure pinhole)
+  /// Drop views whose reprojection RMS exceeds this many times the median view's, worst first,
+  /// recalibrating after each, while more than min_views remain (0: keep every view; else > 1).
+  double max_view_error_ratio = 3.0;
 };
 
 /// Throws InputError naming the bad field and value.
@@ -49,7 +52,8 @@ struct IntrinsicsResult {
   DistortionCoefficients distortion;   ///< estimated distortion [-]
   double rms_px = 0;                   ///< RMS reprojection error over all corners [px]
   int views_used = 0;                  ///< views whose corners entered the calibration
-  std::vector<std::string> skipped;    ///< one line per skipped pose (failed move, no board)
+  /// One line per skipped pose (failed move, no board, dropped as an outlier view).
+  std::vector<std::string> skipped;
 };
 
 /// Moves robot `board_robot` to each of `board_poses` (motor angles [rad]), grabs an image,
@@ -60,6 +64,17 @@ IntrinsicsResult CalibrateIntrinsics(Cell& cell, int board_robot,
                                      const std::vector<JointVector>& board_poses,
                                      const BoardGeometry& board,
                                      const IntrinsicsOptions& options = {});
+
+/// The calibration step of CalibrateIntrinsics on detected corners: per view its object points
+/// (board plane, z = 0 [m]), image points [px] and the index of the pose it was taken at (for
+/// the messages); `poses` is how many poses were tried, `result` carries the skipped lines so
+/// far. Zhang's method (cv::calibrateCamera), then outlier views dropped as max_view_error_ratio
+/// says, each with a line in `skipped`. Throws InputError for bad options or unequal counts.
+IntrinsicsResult CalibrateFromCorners(std::vector<std::vector<cv::Point3f>> object_points,
+                                      std::vector<std::vector<cv::Point2f>> image_points,
+                                      std::vector<int> view_pose, cv::Size image_size,
+                                      int poses, const IntrinsicsOptions& options,
+                                      IntrinsicsResult result = {});
 
 /// n poses for intrinsic calibration around q_center (a pose where the camera sees the board):
 /// the first is q_center, the others perturb joints 4-6 uniformly within +-20 deg and joints
