@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 #include <sstream>
+#include <utility>
 
 #include <opencv2/calib3d.hpp>
 
@@ -95,7 +96,8 @@ IntrinsicsResult CalibrateIntrinsics(Cell& cell, int board_robot,
     image_points.push_back(std::move(corners));
     view_pose.push_back(static_cast<int>(i));
   }
-  return CalibrateFromCorners(object_points, image_points, view_pose, image_size,
+  return CalibrateFromCorners(std::move(object_points), std::move(image_points),
+                              std::move(view_pose), image_size,
                               static_cast<int>(board_poses.size()), options, std::move(result));
 }
 
@@ -137,8 +139,9 @@ IntrinsicsResult CalibrateFromCorners(std::vector<std::vector<cv::Point3f>> obje
   // times the median view's are dropped, worst first and one at a time (each drop changes
   // the others' errors), while at least min_views remain. A wrongly ordered or partly wrong
   // corner grid in one view pulls the distortion and the focal length off without raising the
-  // overall RMS much (one such view among 28 left fx 5e-4 off and k2 at -0.08 on the twin);
-  // honest views' RMS over ~100 corners vary by some 10-20 %, so a ratio of 3 drops none.
+  // overall RMS much (one such view among 28 left fx 5e-4 off and k2 at -0.08 on the twin).
+  // Over 85 twin trials (the KUKA, ABB and paper scenarios) two views were dropped, at 7 and
+  // 12 times the median; Gaussian corner noise alone drops none (the tests).
   for (;;) {
     try {
       result.rms_px =
