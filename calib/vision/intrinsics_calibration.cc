@@ -134,7 +134,7 @@ IntrinsicsResult CalibrateFromCorners(std::vector<std::vector<cv::Point3f>> obje
   cv::Mat K, dist;
   std::vector<cv::Mat> rvecs, tvecs;
   const cv::TermCriteria criteria(cv::TermCriteria::COUNT + cv::TermCriteria::EPS, 100, 1e-12);
-  cv::Mat std_intrinsics, std_extrinsics, per_view;
+  cv::Mat per_view;
   // Zhang's method, then the views whose own reprojection RMS exceeds max_view_error_ratio
   // times the median view's are dropped, worst first and one at a time (each drop changes
   // the others' errors), while at least min_views remain. A wrongly ordered or partly wrong
@@ -146,7 +146,7 @@ IntrinsicsResult CalibrateFromCorners(std::vector<std::vector<cv::Point3f>> obje
     try {
       result.rms_px =
           cv::calibrateCamera(object_points, image_points, image_size, K, dist, rvecs, tvecs,
-                              std_intrinsics, std_extrinsics, per_view, flags, criteria);
+                              cv::noArray(), cv::noArray(), per_view, flags, criteria);
     } catch (const cv::Exception& e) {
       result.status = IntrinsicsStatus::kFailed;
       result.reason = std::string("cv::calibrateCamera threw: ") + e.what();
