@@ -610,13 +610,28 @@ CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base
     }
   }
   const int added = static_cast<int>(model.terms.back()->parameters().size());
-  const Fit all = data.FitOn(model, {}, "candidate " + c.label + ", all data");
+  Fit all = data.FitOn(model, {}, "candidate " + c.label + ", all data");
   const int first = model.num_parameters() - added;
+  int rank = all.result.observability.rank;
+  if (model.terms.back()->has_dormant_parameters() && rank > base_rank &&
+      rank < base_rank + added) {
+    // Some parameters only have a gradient once the term acts (a time constant while the
+    // amplitude is zero): start again from the first solution's term values, and keep that
+    // start (for the cross-validation too) if more of the term is then identifiable.
+    RobotModel restart = model;
+    restart.term_values.tail(added) = all.result.model.term_values.tail(added);
+    Fit again = data.FitOn(restart, {}, "candidate " + c.label + ", all data, restarted");
+    if (again.result.observability.rank > rank) {
+      model = std::move(restart);
+      all = std::move(again);
+      rank = all.result.observability.rank;
+      c.restarted = true;
+    }
+  }
   for (int k = 0; k < added; ++k) {
     const IdentifiedParameter& ip = all.result.parameters[first + k];
     c.parameters.push_back({ip.name, ip.unit, ip.estimated, ip.sigma});
   }
-  const int rank = all.result.observability.rank;
   if (rank <= base_rank) {
     c.identifiable = false;
     c.note = "unidentifiable from " + data.Measured() + ": the rank does not rise with its " +
@@ -630,18 +645,17 @@ CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base
     c.note = "partly identifiable: the rank rises by " + std::to_string(rank - base_rank) +
              " of its " + std::to_string(added) + " parameters";
   }
-  const Eigen::MatrixXd& C = all.result.covariance;
-  const int geometric = model.chain.num_parameters();
-  for (int k = 0; k < added; ++k) {
-    const int a = first + k;
-    for (int g = 0; g < geometric; ++g) {
-      const double denom = std::sqrt(C(a, a) * C(g, g));
-      if (!(denom > 0.0)) continue;
-      const double rho = std::abs(C(a, g) / denom);
-      if (rho > c.max_geometry_correlation) {
-        c.max_geometry_correlation = rho;
-        c.correlated_with = all.result.parameters[g].name;
-      }
+  // Disguise of the geometry: the canonical correlations of the term's columns with the
+  // geometric ones (TermGeometryDependence); the directions that did not raise the rank lie in
+  // the geometry by definition and are left out, the largest of the rest is the measure.
+  const std::string block = ParameterLayout(model).blocks().back().name;
+  for (const TermGeometryDependence& d : all.result.term_dependence) {
+    if (d.block != block) continue;
+    const int rise = rank - base_rank;
+    const int skip = std::max(0, static_cast<int>(d.canonical_correlations.size()) - rise);
+    if (skip < static_cast<int>(d.canonical_correlations.size())) {
+      c.max_geometry_correlation = d.canonical_correlations[skip];
+      c.correlated_with = d.nearest_geometric[skip];
     }
   }
   const CrossValidation cv = CrossValidate(data, model, region, folds, "candidate " + c.label);
@@ -840,6 +854,14 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
       const CandidateScore& accepted = s.candidates[best];
       s.accepted = best;
       current = WithTerm(current, MakeErrorTerm(accepted.spec, start.chain, start.name()));
+      if (accepted.restarted) {
+        // Its fits start where its first fit ended (ScoreCandidate), for the same reason.
+        const int added = static_cast<int>(accepted.parameters.size());
+        for (int k = 0; k < added; ++k) {
+          current.term_values(current.term_values.size() - added + k) =
+              accepted.parameters[k].estimated;
+        }
+      }
       current_region = CrossValidate(data, current, region, folds, "region folds");
       s.heldout_rms_after_m = current_region.Rms();
       r.effects_added.push_back(accepted);

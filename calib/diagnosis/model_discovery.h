@@ -25,7 +25,8 @@
 //    context is in the data (time stamps, temperatures, approach directions) and its
 //    parameters are identifiable (the rank rises; by less than its parameter count: partly,
 //    the engine then moves only the combinations the data sees) and not a disguise
-//    of the geometry (|correlation| with a geometric parameter below correlation_limit). The
+//    of the geometry (the largest canonical correlation of its rank-raising Jacobian directions
+//    with the geometric columns below correlation_limit: TermGeometryDependence). The
 //    paired test is Wilcoxon's signed rank on per-point differences of held-out squared error
 //    (base minus candidate, one-sided), Holm-corrected over the candidates tested in the
 //    step. The candidate with the largest held-out gain is accepted only if its adjusted p is
@@ -87,8 +88,9 @@ struct DiscoveryOptions {
   int max_effects = 3;             ///< at most this many effects added
   int folds = 5;                   ///< K of both cross-validations (>= 2)
   std::uint64_t seed = 1;          ///< of the random folds of the residual test
-  /// |correlation| between a term parameter and a geometric one from which the term counts as
-  /// a disguise of the geometry and is not accepted [-].
+  /// Canonical correlation of a term's rank-raising Jacobian directions with the geometric
+  /// columns (TermGeometryDependence) from which the term counts as a disguise of the geometry
+  /// and is not accepted [-].
   double correlation_limit = 0.999;
   /// Candidates to try; empty: every registered term at every joint / order it applies to.
   std::vector<TermSpec> candidates;
@@ -145,12 +147,19 @@ struct CandidateScore {
   bool applicable = true;           ///< the data has the context the term needs
   bool identifiable = true;         ///< its parameters raise the rank
   std::string note;                 ///< why not applicable / identifiable / accepted
-  double max_geometry_correlation = 0;  ///< max |rho| with a geometric parameter [-]
-  std::string correlated_with;      ///< that geometric parameter
+  /// Largest canonical correlation of its rank-raising directions with the geometric columns
+  /// (DiscoveryOptions::correlation_limit) [-]
+  double max_geometry_correlation = 0;
+  std::string correlated_with;      ///< the geometric parameter most aligned with that direction
   double heldout_rms_m = 0;         ///< region-disjoint held-out RMS with the term [m]
   double gain_percent = 0;          ///< held-out sum-of-squares reduction vs the step's base [%]
   double p_value = 1, p_adjusted = 1;  ///< Wilcoxon one-sided, and after Holm
   bool tested = false;              ///< applicable, identifiable, and entered the correction
+  /// Its fits started from its first all-data fit's term values rather than zero: a term with
+  /// dormant parameters (ErrorTerm::has_dormant_parameters: a time constant while the
+  /// amplitude is zero) that became identifiable there; an accepted term keeps that start in
+  /// the later steps.
+  bool restarted = false;
   bool accepted = false;
   std::vector<DiscoveredParameter> parameters;  ///< identified on every point
 };

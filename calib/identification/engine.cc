@@ -112,26 +112,33 @@ std::vector<int> FreeParameters(const ParameterLayout& layout, const Identificat
   return free;
 }
 
+// The model columns `columns` of J (n model columns, then nuisance) with the nuisance profiled
+// out: projected onto the orthogonal complement of the nuisance columns' range (what the data
+// sees once the nuisance is refitted).
+Eigen::MatrixXd ProfiledModelColumns(const Eigen::MatrixXd& J, int n,
+                                     const std::vector<int>& columns) {
+  const int f = static_cast<int>(columns.size());
+  Eigen::MatrixXd Jm(J.rows(), f);
+  for (int c = 0; c < f; ++c) Jm.col(c) = J.col(columns[c]);
+  const int u = static_cast<int>(J.cols()) - n;
+  if (u > 0) {
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J.rightCols(u));
+    const int k = static_cast<int>(qr.rank());
+    if (k > 0) {
+      const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(J.rows(), k);
+      Jm -= Q * (Q.transpose() * Jm);
+    }
+  }
+  return Jm;
+}
+
 // Step 1 of the header on the Jacobian J (model columns first, n of them, then nuisance).
 ObservabilityReport AnalyseJacobian(const Eigen::MatrixXd& J, int n, const std::vector<int>& free,
                                     const ParameterLayout& layout,
                                     const std::vector<Eigen::VectorXd>& invariants,
                                     double rank_tolerance) {
-  const int rows = static_cast<int>(J.rows());
   const int f = static_cast<int>(free.size());
-  Eigen::MatrixXd Jm(rows, f);
-  for (int c = 0; c < f; ++c) Jm.col(c) = J.col(free[c]);
-  const int u = static_cast<int>(J.cols()) - n;
-  if (u > 0) {
-    // Profile the nuisance out: project the model columns onto the orthogonal complement of
-    // the nuisance columns' range (what the data sees once the nuisance is refitted).
-    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J.rightCols(u));
-    const int k = static_cast<int>(qr.rank());
-    if (k > 0) {
-      const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(rows, k);
-      Jm -= Q * (Q.transpose() * Jm);
-    }
-  }
+  const Eigen::MatrixXd Jm = ProfiledModelColumns(J, n, free);
   std::vector<std::string> names;
   Eigen::VectorXd scales(f);
   for (int c = 0; c < f; ++c) {
@@ -145,6 +152,64 @@ ObservabilityReport AnalyseJacobian(const Eigen::MatrixXd& J, int n, const std::
     if (w.norm() > 1e-12 * std::max(1.0, v.norm())) inv.push_back(w);
   }
   return AnalyseObservability(Jm, names, scales, rank_tolerance, inv);
+}
+
+// Orthonormal basis of the span of A's columns (rank-revealing QR, relative threshold).
+Eigen::MatrixXd SpanBasis(const Eigen::MatrixXd& A) {
+  if (A.cols() == 0) return Eigen::MatrixXd(A.rows(), 0);
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  qr.setThreshold(1e-10);
+  const int k = static_cast<int>(qr.rank());
+  return qr.householderQ() * Eigen::MatrixXd::Identity(A.rows(), k);
+}
+
+// TermGeometryDependence of every term block, from the full Jacobian Jp (model columns at the
+// solution, then nuisance).
+std::vector<TermGeometryDependence> TermDependence(const Eigen::MatrixXd& Jp, int n,
+                                                   const std::vector<int>& free,
+                                                   const ParameterLayout& layout) {
+  std::vector<int> all(n);
+  for (int i = 0; i < n; ++i) all[i] = i;
+  const Eigen::MatrixXd Jm = ProfiledModelColumns(Jp, n, all);
+  std::vector<int> geometric;
+  for (int i : free) {
+    if (layout[i].term < 0) geometric.push_back(i);
+  }
+  Eigen::MatrixXd G(Jm.rows(), geometric.size());
+  for (std::size_t c = 0; c < geometric.size(); ++c) G.col(c) = Jm.col(geometric[c]);
+  const Eigen::MatrixXd QG = SpanBasis(G);
+  std::vector<TermGeometryDependence> out;
+  for (const ParameterBlock& b : layout.blocks()) {
+    if (b.begin < layout.geometry_size()) continue;
+    TermGeometryDependence d;
+    d.block = b.name;
+    const Eigen::MatrixXd QT = SpanBasis(Jm.middleCols(b.begin, b.size));
+    if (QT.cols() > 0 && QG.cols() > 0) {
+      Eigen::JacobiSVD<Eigen::MatrixXd> svd(QG.transpose() * QT, Eigen::ComputeThinV);
+      const Eigen::VectorXd cosines = svd.singularValues();
+      for (int k = 0; k < cosines.size(); ++k) {
+        d.canonical_correlations.push_back(std::min(1.0, cosines(k)));
+        const Eigen::VectorXd u = QT * svd.matrixV().col(k);  // the term's direction
+        double best = -1;
+        std::string name;
+        for (std::size_t c = 0; c < geometric.size(); ++c) {
+          const double norm = G.col(c).norm();
+          if (!(norm > 0)) continue;
+          const double cos = std::abs(G.col(c).dot(u)) / norm;
+          if (cos > best) {
+            best = cos;
+            name = layout[geometric[c]].name;
+          }
+        }
+        d.nearest_geometric.push_back(name);
+      }
+    } else {
+      d.canonical_correlations.assign(QT.cols(), 0.0);
+      d.nearest_geometric.assign(QT.cols(), "");
+    }
+    out.push_back(std::move(d));
+  }
+  return out;
 }
 
 void Validate(const RobotModel& model, const std::vector<MeasurementSet*>& sets) {
@@ -374,6 +439,13 @@ IdentificationResult Identify(const RobotModel& start, const std::vector<Measure
             });
   if (static_cast<int>(res.correlations.size()) > options.max_correlations) {
     res.correlations.resize(options.max_correlations);
+  }
+  // 5. How far each term can be told from the geometry, on the full columns at the solution.
+  if (layout.size() > layout.geometry_size()) {
+    a.problem->SetManifold(params.data(), nullptr);
+    double cost = 0;
+    const Eigen::MatrixXd Jp = DenseJacobian(a.problem.get(), a.blocks, &cost);
+    res.term_dependence = TermDependence(Jp, n, res.free_parameters, layout);
   }
   for (size_t s = 0; s < sets.size(); ++s) {
     const std::vector<double> r = sets[s]->ResidualNorms(res.model);

@@ -62,6 +62,22 @@ enum class IdentificationStatus {
 /// Name of a status ("converged", "max_iterations", "failed").
 const char* ToString(IdentificationStatus status);
 
+/// How far one error term's effect on the measurements can be told from the geometry's, at the
+/// solution: the canonical correlations between the span of the term's Jacobian columns and the
+/// span of the free geometric columns (weighted rows, nuisance profiled out). They depend only
+/// on the two spans, not on how either side is parameterized or scaled; correlations taken from
+/// the covariance do, for parameters inside unidentifiable combinations (their covariance is
+/// that of the identifiable projection, which follows the column scaling).
+struct TermGeometryDependence {
+  std::string block;  ///< the term's block name (ParameterInfo::block)
+  /// One per independent direction of the term's columns (a zero column adds none),
+  /// descending; 1: that direction of the term moves the measurements exactly as some
+  /// geometric correction does [-]
+  std::vector<double> canonical_correlations;
+  /// Per direction, the free geometric parameter whose column is most aligned with it.
+  std::vector<std::string> nearest_geometric;
+};
+
 /// One parameter of the identified model.
 struct IdentifiedParameter {
   std::string name;
@@ -115,6 +131,8 @@ struct IdentificationResult {
   Eigen::MatrixXd covariance_z;      ///< of z (rank x rank) [-, the directions carry SI]
   Eigen::MatrixXd covariance;        ///< of the flat parameters [SI], held parameters 0
   std::vector<ParameterCorrelation> correlations;  ///< strongest first
+  /// Per error term of the model (layout order), at the solution; empty without terms.
+  std::vector<TermGeometryDependence> term_dependence;
   int residual_rows = 0;             ///< weighted residual rows
   int unknowns = 0;                  ///< rank + nuisance tangent dimensions
   /// Independent residual rows less all unknowns (sum of the groups' redundancies less rank).

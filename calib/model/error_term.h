@@ -66,6 +66,10 @@ class ErrorTerm {
   virtual bool sags_under_gravity() const { return false; }
   /// True for terms with a tool-offset stage (stage 4).
   virtual bool offsets_tool() const { return false; }
+  /// True when some parameters act only once others are non-zero (a time constant while the
+  /// amplitude is zero): at zero they have no gradient, so model discovery fits such a term a
+  /// second time from its first solution.
+  virtual bool has_dormant_parameters() const { return false; }
 
   /// Stage 1: adds to the link angles q (N entries) [rad].
   virtual void OffsetJoints(const double* p, const MeasurementContext& c, double* q) const = 0;

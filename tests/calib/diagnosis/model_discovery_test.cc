@@ -159,6 +159,39 @@ TEST(ModelDiscovery, ATermWithoutItsContextIsNotApplicableAndOneInvisibleToTheDa
   EXPECT_TRUE(s[2].accepted) << s[2].note;
 }
 
+// An arm warming up with a 15 min time constant over the hour of the synthetic session (final
+// growth 2e-4, ~0.2 mm at the tool): the warm-up candidates start at 40 and 80 min, and the one
+// accepted estimates the time constant itself (the growth first, then the time constant from
+// that start: "restarted").
+TEST(ModelDiscovery, AWarmUpIsAddedWithItsTimeConstantEstimated) {
+  const TermSpec truth_term{"thermal_warmup", -1, {15}};
+  const Case c = MakeCase(18, {{truth_term, {2e-4, 0.0}}});
+  const auto points = SyntheticTrackerPoints(c.truth, 150, 10, kSigma);
+  const TermSpec warmup40{"thermal_warmup", -1, {40}}, warmup80{"thermal_warmup", -1, {80}};
+  const DiscoveryResult r =
+      DiscoverTrackerModel(c.nominal, points, Options({kCompliance2, warmup40, warmup80}));
+  ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+  ASSERT_EQ(r.effects_added.size(), 1u);
+  const CandidateScore& w = r.effects_added[0];
+  EXPECT_EQ(w.spec.type, "thermal_warmup");
+  EXPECT_TRUE(w.restarted);
+  EXPECT_TRUE(w.note.find("partly") == std::string::npos) << w.note;
+  ASSERT_EQ(w.parameters.size(), 2u);
+  // The time constant: tau0 exp(l) against 15 min, within 3 of the engine's sigmas of l.
+  const double l_true = std::log(15.0 / w.spec.orders[0]);
+  EXPECT_NEAR(w.parameters[1].estimated, l_true, 3.0 * w.parameters[1].sigma + 1e-6)
+      << "tau " << w.spec.orders[0] * std::exp(w.parameters[1].estimated) << " min";
+  EXPECT_NEAR(w.parameters[0].estimated, 2e-4, 3.0 * w.parameters[0].sigma + 1e-9);
+  // The discovered model carries the estimated time constant (its own term, same values).
+  const int n = static_cast<int>(r.model.term_values.size());
+  ASSERT_EQ(n, 2);
+  EXPECT_NEAR(r.model.term_values(1), w.parameters[1].estimated,
+              0.1 * w.parameters[1].sigma);
+  EXPECT_LT(r.heldout_rms_discovered_m, 1.5 * std::sqrt(3.0) * kSigma);
+  // Not a disguise of the geometry: the growth over time is no length correction.
+  EXPECT_LT(w.max_geometry_correlation, 0.99) << w.correlated_with;
+}
+
 TEST(ModelDiscovery, RepeatedPosesGiveTheirSpreadAsASecondNoiseEstimate) {
   const Case c = MakeCase(16, {});
   std::vector<TrackerPoint> points = SyntheticTrackerPoints(c.truth, 120, 8, 0.0);

@@ -153,6 +153,39 @@ TEST(Engine, ConstantTemperatureLeavesThermalGrowthInsideTheScaleOfTheArm) {
   EXPECT_TRUE(named) << ::testing::PrintToString(r.observability.unidentifiable);
 }
 
+// The disguise measure of model discovery: how far a term's columns can be told from the
+// geometry's. A growth with the temperature barely varying is a scale of the arm in all but
+// 1e-3 of it; with the temperature spread over 20 K it is far from any geometric correction.
+TEST(Engine, TermGeometryDependenceSeesAGrowthAtNearlyOneTemperatureAsTheScale) {
+  TermCase c{{"thermal_growth", -1, {}}, {1.2e-5}};
+  const TermSetup s = MakeSetup(c, 57, 100, 58, 0.0);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> jitter(0.0, 0.01);
+  std::vector<TrackerPoint> points = SyntheticTrackerPoints(s.truth, 100, 58, 1e-5);
+  for (TrackerPoint& p : points) p.context.temperature_delta_K = 10.0 + jitter(rng);
+  TrackerSet nearly(points);
+  const IdentificationResult r = Identify(s.start, {&nearly});
+  ASSERT_EQ(r.term_dependence.size(), 1u);
+  const TermGeometryDependence& d = r.term_dependence[0];
+  EXPECT_EQ(d.block, TermLabel(c.spec));
+  ASSERT_EQ(d.canonical_correlations.size(), 1u);
+  // 1 - cos is about (0.01 K / 10 K)^2 / 2 = 5e-7: 1e-5 leaves room for the other columns.
+  EXPECT_GT(d.canonical_correlations[0], 1.0 - 1e-5);
+  EXPECT_EQ(d.nearest_geometric.size(), 1u);
+  EXPECT_EQ(d.nearest_geometric[0].rfind("r1.link", 0), 0u) << d.nearest_geometric[0];
+
+  // SyntheticTrackerPoints' own temperatures: uniform over -5..15 K. The growth's column is
+  // T_i times the scale's; its correlation with the scale's alone is mean / RMS of T = 0.65,
+  // and no geometric correction follows a random temperature: below 0.9.
+  TrackerSet spread(SyntheticTrackerPoints(s.truth, 100, 58, 1e-5));
+  const IdentificationResult r2 = Identify(s.start, {&spread});
+  ASSERT_EQ(r2.term_dependence.size(), 1u);
+  EXPECT_LT(r2.term_dependence[0].canonical_correlations.at(0), 0.9);
+  // A model without terms has none.
+  TrackerSet plain(SyntheticTrackerPoints(s.truth, 100, 58, 1e-5));
+  EXPECT_TRUE(Identify(MakeRobotModel(s.nominal), {&plain}).term_dependence.empty());
+}
+
 TEST(Engine, FixedParametersAreHeldAndOthersStillFit) {
   TermCase c{{"joint_compliance", 1, {}}, {2e-5}};
   const TermSetup s = MakeSetup(c, 49, 120, 50, 0.0);

@@ -249,11 +249,16 @@ TEST_F(TermsVsTwin, ThermalDriftTermScalesTheArmLikeTheTwinsWarmUp) {
     EXPECT_LT((TwinTool(cell, 0) - TermTool(m, c, spec.robots[0].X_WB)).norm(), kAgreement)
         << "t = " << truth.time_s << " s";
     // The warm-up term with the twin's time constant (1 min) and final growth predicts it at
-    // every time with one parameter.
+    // every time; so does one started at 2 min whose log-ratio halves it.
     RobotModel warmup = WithTerm(MakeRobotModel(chain),
                                  MakeErrorTerm({"thermal_warmup", -1, {1}}, chain, "r1"));
-    warmup.term_values << kGrowth;
+    warmup.term_values << kGrowth, 0.0;
     EXPECT_LT((TwinTool(cell, 0) - TermTool(warmup, c, spec.robots[0].X_WB)).norm(), kAgreement)
+        << "t = " << truth.time_s << " s";
+    RobotModel slower = WithTerm(MakeRobotModel(chain),
+                                 MakeErrorTerm({"thermal_warmup", -1, {2}}, chain, "r1"));
+    slower.term_values << kGrowth, std::log(0.5);
+    EXPECT_LT((TwinTool(cell, 0) - TermTool(slower, c, spec.robots[0].X_WB)).norm(), kAgreement)
         << "t = " << truth.time_s << " s";
     last_gap = (TwinTool(cell, 0) - TermTool(MakeRobotModel(chain), c, spec.robots[0].X_WB)).norm();
   }
