@@ -188,6 +188,7 @@ class TimedCell : public Cell {
   MoveResult ExchangeTools() override { return cell_.ExchangeTools(); }
   int CameraRobot() override { return cell_.CameraRobot(); }
   MoveResult MountTarget(BracketTarget target) override { return cell_.MountTarget(target); }
+  double ClockSeconds() override { return cell_.ClockSeconds(); }
 
   double move_s = 0, grab_s = 0;
   int moves = 0, frames = 0, region_frames = 0;
@@ -556,6 +557,7 @@ void ScorePhysicalTruth(TwinCell& cell, const Scenario& sc, const CalibrationCon
       MeasurementContext c;
       c.q = cell.ReadEncoders(rc.robot);
       c.approach = ApproachDirections(before, q);
+      c.time_s = cell.ClockSeconds();
       if (!MissingContext(discovered_model, c).empty()) break;  // a term needs what is not read
       const TwinTruth t = cell.Truth();
       p_true.push_back(t.X_WB[rc.robot].inverse() * t.X_WT.translation());

@@ -4,6 +4,7 @@
 // it (DESIGN.md: the estimator never sees the truth).
 #pragma once
 
+#include <limits>
 #include <string>
 
 #include <opencv2/core.hpp>
@@ -108,6 +109,10 @@ class Cell {
     }
     return result;
   }
+  /// The cell's clock [s] (on hardware the controller's or the cell PC's; on the twin its
+  /// simulated time), from an origin of the cell's choosing; NaN: the cell keeps no clock, the
+  /// default. Time stamps of measurements (a thermal drift needs them).
+  virtual double ClockSeconds() { return std::numeric_limits<double>::quiet_NaN(); }
   /// Measures the reflector (SMR) on robot `robot`'s flange with the laser tracker, the robot
   /// standing still. The default is a cell without a tracker.
   virtual TrackerReading MeasureTracker(int robot) {

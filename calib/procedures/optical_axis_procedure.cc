@@ -612,6 +612,8 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
         smp.depth = p_C->z();
         smp.sigma_offset = std::sqrt(0.5 * (fp->covariance(0, 0) + fp->covariance(1, 1)));
         smp.sigma_depth = std::sqrt(fp->covariance(2, 2));
+        smp.approach = sr.approach;
+        smp.time_s = cell.ClockSeconds();  // NaN where the cell keeps no clock
         rc.samples.push_back(smp);
         correction = EndPose(rc.nominal, sr.q_passive).translation() -
                      EndPose(rc.nominal, planned).translation();

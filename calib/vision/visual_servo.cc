@@ -11,6 +11,7 @@
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/inverse_kinematics.h"
+#include "calib/model/measurement_context.h"
 
 namespace twin {
 namespace {
@@ -138,7 +139,19 @@ ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
     return finish(ServoStatus::kJointLimits,
                   "start pose of robot " + std::to_string(passive) + " is outside its limits");
   }
+  result.approach = JointVector::Zero(q_passive_start.size());
+  // Each joint's last motion over the corrections: the sign of each commanded target against
+  // the one before (the start pose first), as the motors moved; a correction of a few
+  // microradians is not to be told from the encoders' noise, so readings would not do. The
+  // start move's own direction is not known here (where the robot came from is the caller's).
+  const auto record_approach = [&](const JointVector& before, const JointVector& target) {
+    const JointVector a = ApproachDirections(before, target);
+    for (int i = 0; i < a.size() && i < result.approach.size(); ++i) {
+      if (a(i) != 0.0) result.approach(i) = a(i);
+    }
+  };
   const MoveResult start = MoveAvoidingSweep(cell, passive, q_passive_start);
+  JointVector last_target = q_passive_start;
   if (start.status != MoveStatus::kSettled) {
     return finish(start.status == MoveStatus::kOutOfLimits ? ServoStatus::kJointLimits
                                                            : ServoStatus::kMoveFailed,
@@ -250,6 +263,8 @@ ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
     }
     const MoveResult move = cell.MoveTo(passive, ik.q);
     ++result.moves;
+    record_approach(last_target, ik.q);
+    last_target = ik.q;
     last_command = command;
     last_error = Eigen::Vector2d(du, dv);
     have_command = true;

@@ -94,6 +94,10 @@ struct ServoResult {
   int frames = 0;                              ///< images grabbed
   int moves = 0;                               ///< corrective moves commanded
   JointVector q_passive;  ///< final passive encoder reading [rad]
+  /// Sign of each passive joint's last commanded motion over the corrections (+1, -1; 0: no
+  /// correction moved it), each target against the one before, the start pose first: the
+  /// approach direction a backlash acts with.
+  JointVector approach;
   cv::Mat image_before;                        ///< first image grabbed (reports)
   cv::Mat image_after;                         ///< last image grabbed (reports)
   cv::Point2d first_pixel_error{0, 0};         ///< (du, dv) of the first image [px]

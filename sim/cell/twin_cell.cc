@@ -781,6 +781,8 @@ cv::Mat TwinCell::GrabImageRegion(const cv::Rect& roi) {
   return image;
 }
 
+double TwinCell::ClockSeconds() { return impl_->d->time; }
+
 TrackerReading TwinCell::MeasureTracker(int robot) {
   Impl& s = *impl_;
   const TrackerSpec& t = s.spec.tracker;

@@ -70,6 +70,8 @@ class TwinCell : public Cell {
   /// hits a geom before the reflector (the reflector's own flange body excepted), else the
   /// position in the tracker frame with its noise and drift.
   TrackerReading MeasureTracker(int robot) override;
+  /// The twin's simulated time [s] (TwinTruth::time_s).
+  double ClockSeconds() override;
 
   /// Standard deviation of the operator's alignment error per world axis [m] (default 0).
   /// Throws InputError for a negative or non-finite value.

@@ -97,6 +97,52 @@ TEST_F(VisualServoTest, AlignsTheFeaturePointWithinTenIterations) {
   EXPECT_LT(std::hypot(p_CP.x(), p_CP.y()), 1e-4) << p_CP.transpose();
 }
 
+// Forwards to the twin and keeps, per joint of robot 1, the sign of its last commanded motion
+// (target against the previous target, as a controller knows it; from the second move on).
+class MotionLog : public Cell {
+ public:
+  explicit MotionLog(TwinCell& cell) : cell_(cell) {}
+  MoveResult MoveTo(int robot, const JointVector& q) override {
+    if (robot == 1) {
+      if (last_sign.size() != q.size()) last_sign = JointVector::Zero(q.size());
+      for (int i = 0; i < q.size() && last_.size() == q.size(); ++i) {
+        if (q(i) != last_(i)) last_sign(i) = q(i) > last_(i) ? 1.0 : -1.0;
+      }
+      last_ = q;
+    }
+    return cell_.MoveTo(robot, q);
+  }
+  JointVector ReadEncoders(int robot) override { return cell_.ReadEncoders(robot); }
+  cv::Mat GrabImage() override { return cell_.GrabImage(); }
+  cv::Mat GrabImageRegion(const cv::Rect& roi) override { return cell_.GrabImageRegion(roi); }
+  MoveResult ExchangeTools() override { return cell_.ExchangeTools(); }
+  int CameraRobot() override { return cell_.CameraRobot(); }
+  JointVector last_sign;
+
+ private:
+  TwinCell& cell_;
+  JointVector last_;
+};
+
+// The servo reports each joint's approach direction (what a backlash acts with): the sign of
+// its last motion over the start move and the corrections.
+TEST_F(VisualServoTest, ReportsTheDirectionOfEachJointsLastMotion) {
+  const TwinSpec spec = PerturbedSpec();
+  TwinCell twin(spec, "visual_servo_test");
+  MotionLog cell(twin);
+  const ServoSetup setup = SetupFor(spec, twin);
+  const ServoResult r = AlignFeatureToOpticalAxis(cell, setup, OffsetStart(), ServoOptions{});
+  ASSERT_EQ(r.status, ServoStatus::kAligned) << r.reason;
+  ASSERT_GE(r.moves, 1);
+  ASSERT_EQ(r.approach.size(), 6);
+  // The start move is the log's first: its signs come from the corrections, which move all six
+  // joints by IK.
+  for (int i = 0; i < 6; ++i) {
+    EXPECT_NE(cell.last_sign(i), 0.0) << "joint " << i + 1;
+    EXPECT_EQ(r.approach(i), cell.last_sign(i)) << "joint " << i + 1;
+  }
+}
+
 // After the first whole frame the servo grabs only the predicted board region
 // (board_region.h); a first region that misses the board costs one whole frame more.
 TEST_F(VisualServoTest, GrabsRegionsAfterTheFirstFrameAndFallsBackWhenTheBoardIsMissing) {
