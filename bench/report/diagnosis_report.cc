@@ -71,6 +71,7 @@ json DiagnosisJson(const DiscoveryResult& r) {
   j["verdict"] = r.verdict;
   j["reason"] = r.reason;
   j["data"] = r.data;
+  if (!r.data_note.empty()) j["data_note"] = r.data_note;
   j["noise_floor_mm"] = 1e3 * r.noise.sigma_m;
   const bool optical = r.data == "optical_axes";
   j["noise_floor"] = {{"sigma_mm", 1e3 * r.noise.sigma_m},

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <numeric>
 #include <random>
@@ -953,16 +954,27 @@ DiscoveryResult DiscoverOpticalAxisModel(const RobotModel& start,
                                          const std::vector<AxisSample>& samples,
                                          const DiscoveryOptions& o) {
   ValidateDiscoveryOptions(o);
-  const OpticalData data(start, samples, o);
-  for (int axis : data.axes()) {
-    const auto m = std::count_if(samples.begin(), samples.end(),
-                                 [&](const AxisSample& s) { return s.axis == axis; });
-    if (m < 3 || axis < 0) {
-      throw InputError(o.axis_source, "model discovery: axis " + std::to_string(axis + 1) +
-                                          " has " + std::to_string(m) +
-                                          " samples; every axis needs 3 or more");
+  // An axis of fewer than 3 samples (the servo lost the others) has no straightness to score
+  // held out: it is left out, and the result says so.
+  std::map<int, int> per_axis;
+  for (const AxisSample& s : samples) {
+    if (s.axis < 0) {
+      throw InputError(o.axis_source, "model discovery: a sample has axis index " +
+                                          std::to_string(s.axis) + "; expected 0 or more");
     }
+    ++per_axis[s.axis];
   }
+  std::vector<AxisSample> kept;
+  std::string left_out;
+  for (const AxisSample& s : samples) {
+    if (per_axis[s.axis] >= 3) kept.push_back(s);
+  }
+  for (const auto& [axis, m] : per_axis) {
+    if (m >= 3) continue;
+    left_out += (left_out.empty() ? "" : ", ") + std::string("axis ") + std::to_string(axis + 1) +
+                " (" + std::to_string(m) + (m == 1 ? " sample)" : " samples)");
+  }
+  const OpticalData data(start, kept, o);
   const int q = static_cast<int>(data.axes().size());
   if (q < 3) {
     throw InputError(o.axis_source, "model discovery: " + std::to_string(q) +
@@ -972,6 +984,9 @@ DiscoveryResult DiscoverOpticalAxisModel(const RobotModel& start,
   const int folds = std::min(o.folds, q);  // of the region folds
   DiscoveryResult r;
   r.data = "optical_axes";
+  if (!left_out.empty()) {
+    r.data_note = "left out, fewer than 3 samples: " + left_out;
+  }
   r.noise = OpticalNoise(data, o);
   const std::string global_rule =
       "in sample: the adjustment's global test, every sample fitted with the stated sigmas, "

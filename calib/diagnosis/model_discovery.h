@@ -190,6 +190,7 @@ struct ResidualMap {
 
 struct DiscoveryResult {
   std::string data;               ///< "tracker_points" or "optical_axes"
+  std::string data_note;          ///< units of data left out and why; empty: none
   std::string verdict;            ///< consistent_with_noise | effects_added | unexplained
   std::string reason;             ///< one sentence for the report
   NoiseFloor noise;
@@ -214,8 +215,9 @@ DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
 
 /// The diagnosis on one robot's optical-axis samples (header, "Optical axes"); `start` is the
 /// board robot's model (BoardRobotModel: end point the feature point) plus any declared terms;
-/// sample axis indices may have gaps (plan axes). Throws InputError for bad options, fewer
-/// than 3 axes with 3 or more samples, or samples the set refuses.
+/// sample axis indices may have gaps (plan axes); axes of fewer than 3 samples are left out
+/// (DiscoveryResult::data_note). Throws InputError for bad options, a negative axis index,
+/// fewer than 3 axes with 3 or more samples, or samples the set refuses.
 DiscoveryResult DiscoverOpticalAxisModel(const RobotModel& start,
                                          const std::vector<AxisSample>& samples,
                                          const DiscoveryOptions& options = {});

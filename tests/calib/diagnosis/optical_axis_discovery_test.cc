@@ -167,5 +167,22 @@ TEST(OpticalAxisDiscovery, TooFewAxesAreRefused) {
   EXPECT_THROW(DiscoverOpticalAxisModel(d.nominal, two, Options({kCompliance2})), InputError);
 }
 
+// An axis the servo kept only 2 samples of is left out (named), the others are diagnosed.
+TEST(OpticalAxisDiscovery, AnAxisOfTwoSamplesIsLeftOutAndNamed) {
+  const Data d = MakeData(26, {});
+  std::vector<AxisSample> samples;
+  int kept_of_axis_2 = 0;
+  for (const AxisSample& s : d.samples) {
+    if (s.axis == 2 && kept_of_axis_2++ >= 2) continue;
+    samples.push_back(s);
+  }
+  const DiscoveryResult r =
+      DiscoverOpticalAxisModel(d.nominal, samples, Options({kCompliance2}));
+  EXPECT_EQ(r.data_note, "left out, fewer than 3 samples: axis 3 (2 samples)");
+  EXPECT_FALSE(r.verdict.empty());
+  const DiscoveryResult all = DiscoverOpticalAxisModel(d.nominal, d.samples, Options({kCompliance2}));
+  EXPECT_TRUE(all.data_note.empty()) << all.data_note;
+}
+
 }  // namespace
 }  // namespace twin
