@@ -26,6 +26,11 @@ declare -A INJECTED=(
   [tracker_thermal_drift]="thermal_"   # thermal_drift or thermal_warmup (any time constant)
   [optical_clean]=""
   [optical_compliance_j2]="joint_compliance (joint 2)"
+  [optical_compliance_j2_declared]=""
+  [optical_transmission_j3]="transmission_error (joint 3, order 1)"
+  [optical_backlash_j3]="backlash (joint 3)"
+  [optical_thermal_drift]="thermal_"   # thermal_drift or thermal_warmup (any time constant)
+  [optical_mount_deflection]="mount_deflection"
 )
 case "$PROCEDURE" in
   tracker)
@@ -33,7 +38,8 @@ case "$PROCEDURE" in
            tracker_thermal_drift tracker_compliance_j2_declared)
     PREFIX="" ;;
   optical)
-    ORDER=(optical_clean optical_compliance_j2)
+    ORDER=(optical_clean optical_compliance_j2 optical_transmission_j3 optical_backlash_j3
+           optical_thermal_drift optical_mount_deflection optical_compliance_j2_declared)
     PREFIX="robots.r2." ;;
   *) echo "discovery_table: procedure must be tracker or optical, got '$PROCEDURE'" >&2; exit 2 ;;
 esac
@@ -43,25 +49,30 @@ CLEAN="${ORDER[0]}"
 for s in "${ORDER[@]}"; do
   "$BIN" study "scenarios/discovery/$s.yaml" --trials "$TRIALS" --jobs 2 --out "$OUT/$s" >&2
 done
-# Per trial: trial, effects added (labels joined by ;), geometric-only and discovered RMS.
+# Per trial: trial, effects added (labels joined by ;), geometric-only and discovered RMS over
+# the whole joint space, then the same over the covered region (optical runs; nan otherwise).
 rows() {
   jq -r --arg p "$PREFIX" '[.trial,
           ([.labels | to_entries[] | select(.key | startswith($p)) | select(.key[($p | length):] | test("^diagnosis\\.effects_added\\[[0-9]+\\]\\.label$")) | .value] | join(";")),
           (.figures[$p + "truth_position_error_mm_physical.calibrated_model.rigid.rms"] // "nan"),
-          (.figures[$p + "truth_position_error_mm_discovered_model.rigid.rms"] // "nan")] | @tsv' \
+          (.figures[$p + "truth_position_error_mm_discovered_model.rigid.rms"] // "nan"),
+          (.figures[$p + "truth_position_error_mm_physical_covered_region.calibrated_model.rigid.rms"] // "nan"),
+          (.figures[$p + "truth_position_error_mm_physical_covered_region.discovered_model.rigid.rms"] // "nan")] | @tsv' \
      "$OUT/$1/trials.jsonl" | sort -t$'\t' -k1,1
 }
 rows "$CLEAN" > "$OUT/clean.tsv"
-printf '| scenario | injected (undeclared) | named | something else added | truth RMS geometric-only [mm] | discovered [mm] | effect-free [mm] | discovered <= 1.2 x effect-free |\n'
-printf '|---|---|---|---|---|---|---|---|\n'
+printf '| scenario | injected (undeclared) | named | something else added | truth RMS geometric-only [mm] | discovered [mm] | effect-free [mm] | discovered <= 1.2 x effect-free | covered region: geometric-only / discovered / effect-free [mm] | covered: within 1.2 x |\n'
+printf '|---|---|---|---|---|---|---|---|---|---|\n'
 for s in "${ORDER[@]}"; do
   rows "$s" > "$OUT/$s.tsv"
   join -t $'\t' "$OUT/$s.tsv" "$OUT/clean.tsv" | awk -F'\t' -v inj="${INJECTED[$s]}" -v name="$s" '
     { n++; named += (inj != "" && index($2, inj) > 0);
       split($2, added, ";")
       for (k in added) if (added[k] != "" && (inj == "" || index(added[k], inj) == 0)) { other++; break }
-      g += $3; d += $4; f += $6; within += ($4 <= 1.2 * $6) }
-    END { printf "| %s | %s | %s | %d of %d | %.4f | %.4f | %.4f | %d of %d |\n", name,
+      g += $3; d += $4; f += $8; within += ($4 <= 1.2 * $8)
+      if ($6 != "nan" && $10 != "nan") { nc++; gc += $5; dc += $6; fc += $10; withinc += ($6 <= 1.2 * $10) } }
+    END { covered = nc > 0 ? sprintf("%.4f / %.4f / %.4f | %d of %d", gc / nc, dc / nc, fc / nc, withinc, nc) : "- | -"
+          printf "| %s | %s | %s | %d of %d | %.4f | %.4f | %.4f | %d of %d | %s |\n", name,
           (inj == "" ? "none" : inj), (inj == "" ? "-" : named " of " n), other, n, g / n, d / n,
-          f / n, within, n }'
+          f / n, within, n, covered }'
 done

@@ -83,6 +83,13 @@ TEST(CalibrationCli, RunDiagnosesEachCalibratedRobotUnlessTold) {
   EXPECT_GT(d["noise_floor"]["depth_sigma_mm"].get<double>(), 0.0);
   EXPECT_TRUE(j["robots"]["r2"]["truth_position_error_mm_physical"].contains("poses"))
       << j["robots"]["r2"]["truth_position_error_mm_physical"].dump();
+  // The same inside the joint box of the aligned poses: at least the 10 poses a gauge needs,
+  // both models scored.
+  const nlohmann::json& covered = j["robots"]["r2"]["truth_position_error_mm_physical_covered_region"];
+  ASSERT_TRUE(covered.contains("poses")) << j["robots"]["r2"].dump();
+  EXPECT_GE(covered["poses"].get<int>(), 10);
+  EXPECT_GT(covered["calibrated_model"]["rigid"]["rms"].get<double>(), 0.0);
+  EXPECT_GT(covered["discovered_model"]["rigid"]["rms"].get<double>(), 0.0);
   EXPECT_NE(r.output.find("diagnosis"), std::string::npos) << r.output;
 
   const CliRun skip = Twinbench("run " + kScenarios + "study_small.yaml --quiet --no-diagnosis "
