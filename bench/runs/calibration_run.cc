@@ -19,6 +19,7 @@
 
 #include "bench/io/calibration_config.h"
 #include "bench/io/csv.h"
+#include "bench/io/declared_terms.h"
 #include "bench/scoring/calibration_scoring.h"
 #include "bench/runs/handclasp_run.h"
 #include "bench/runs/plan_cache.h"
@@ -234,6 +235,7 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
   // (fewer than 3 axes) is reported as skipped; the calibration stands.
   std::map<int, DiscoveryResult> diagnosis;
   std::map<int, std::string> diagnosis_skipped;
+  std::map<int, json> declared_terms;  // per robot: the declared effects' term labels
   const auto t_diagnosis = Clock::now();
   for (const RobotCalibration& rc : result.robots) {
     const std::string name = sc.robot_names[rc.robot];
@@ -255,8 +257,13 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
     if (config.board_mass_kg > 0.0) {
       AddPointMass(config.board_mass_kg, Vector3::Zero(), &model.tool());
     }
+    // Declared effects (declared: true) are in the model from the start, by type and joint.
+    std::vector<std::string> notes;
+    const RobotModel start = DeclaredModel(sc, rc.robot, model, &notes);
+    declared_terms[rc.robot] = json::array();
+    for (const auto& t : start.terms) declared_terms[rc.robot].push_back(TermLabel(t->spec()));
     try {
-      diagnosis[rc.robot] = DiscoverOpticalAxisModel(MakeRobotModel(model), rc.samples, d);
+      diagnosis[rc.robot] = DiscoverOpticalAxisModel(start, rc.samples, d);
     } catch (const InputError& e) {
       diagnosis_skipped[rc.robot] = e.what();
     }
@@ -490,6 +497,7 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
            }())}}}};
     if (diagnosis.count(rc.robot)) {
       r["diagnosis"] = DiagnosisJson(diagnosis.at(rc.robot));
+      r["declared_terms"] = declared_terms[rc.robot];
     } else {
       r["diagnosis"] = {{"verdict", nullptr}, {"skipped", diagnosis_skipped[rc.robot]}};
     }
@@ -539,9 +547,11 @@ void ScorePhysicalTruth(TwinCell& cell, const Scenario& sc, const CalibrationCon
       continue;
     }
     const RobotModel delivered = MakeRobotModel(rc.identified);
-    // Nothing added: the discovered model is the delivered one.
+    // Nothing added and nothing declared: the discovered model is the delivered one; with
+    // declared terms it is the diagnosis' model (the geometry refitted with them).
     const RobotModel& discovered_model =
-        d->second.effects_added.empty() ? delivered : d->second.model;
+        d->second.effects_added.empty() && d->second.model.terms.empty() ? delivered
+                                                                           : d->second.model;
     // The twin moved to each configuration that settles, until `wanted` are measured.
     struct Measured {
       std::vector<Vector3> p_true, p_delivered, p_discovered;

@@ -19,6 +19,7 @@
 #include "bench/io/term_spec_text.h"
 #include "bench/io/yaml_util.h"
 #include "bench/report/acceptance.h"
+#include "bench/io/declared_terms.h"
 #include "bench/io/diagnosis_config.h"
 #include "bench/report/diagnosis_report.h"
 #include "bench/report/report_units.h"
@@ -55,46 +56,6 @@ struct TrackerRunConfig {
   double payload_kg = 0.0;     // told: weighed
   Vector3 payload_p_F = Vector3::Zero();  // told: its centre of mass in the flange, by drawing
 };
-
-// The estimator's starting model: the nominal chain plus a term for every effect the scenario
-// declares (declared: true) that the estimator's library has, by type and joint only (never a
-// magnitude). Declared effects without a term (geometry errors, noise) need none; a declared
-// thermal growth needs temperatures, which this procedure does not record: said, not modelled.
-RobotModel DeclaredModel(const Scenario& sc, int robot, const KinematicModel& nominal,
-                         std::vector<std::string>* notes) {
-  RobotModel m = MakeRobotModel(nominal);
-  const std::string where = sc.path + " scenario.effects";
-  for (const EffectSpec& e : sc.twin.effects) {
-    if (!e.declared || (e.robot != -1 && e.robot != robot)) continue;
-    std::vector<TermSpec> specs;
-    const auto per_joint = [&](const std::string& type, std::vector<int> orders) {
-      for (int j = 0; j < nominal.num_joints(); ++j) {
-        if (e.joint == -1 || e.joint == j) specs.push_back({type, j, orders});
-      }
-    };
-    if (e.type == "joint_compliance" || e.type == "backlash") {
-      per_joint(e.type, {});
-    } else if (e.type == "transmission_error") {
-      const auto h = e.params.find("harmonic");
-      per_joint(e.type, {h != e.params.end() ? static_cast<int>(std::lround(h->second)) : 1});
-    } else if (e.type == "mount_deflection" || e.type == "thermal_drift") {
-      specs.push_back({e.type, -1, {}});
-    } else if (e.type == "thermal_growth") {
-      notes->push_back("declared thermal_growth is not modelled: the tracker procedure records "
-                       "no temperature");
-    }
-    for (const TermSpec& spec : specs) {
-      bool present = false;
-      for (const auto& t : m.terms) {
-        const TermSpec& have = t->spec();
-        present = present || (have.type == spec.type && have.joint == spec.joint &&
-                              have.orders == spec.orders);
-      }
-      if (!present) m = WithTerm(m, MakeErrorTerm(spec, nominal, nominal.name, where));
-    }
-  }
-  return m;
-}
 
 TrackerRunConfig ParseTrackerRunConfig(const Scenario& sc) {
   const YamlReader r(sc.path);

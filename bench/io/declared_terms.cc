@@ -1,0 +1,45 @@
+#include "bench/io/declared_terms.h"
+
+#include <cmath>
+
+#include "calib/model/error_term.h"
+
+namespace twin {
+
+RobotModel DeclaredModel(const Scenario& sc, int robot, const KinematicModel& nominal,
+                         std::vector<std::string>* notes) {
+  RobotModel m = MakeRobotModel(nominal);
+  const std::string where = sc.path + " scenario.effects";
+  for (const EffectSpec& e : sc.twin.effects) {
+    if (!e.declared || (e.robot != -1 && e.robot != robot)) continue;
+    std::vector<TermSpec> specs;
+    const auto per_joint = [&](const std::string& type, std::vector<int> orders) {
+      for (int j = 0; j < nominal.num_joints(); ++j) {
+        if (e.joint == -1 || e.joint == j) specs.push_back({type, j, orders});
+      }
+    };
+    if (e.type == "joint_compliance" || e.type == "backlash") {
+      per_joint(e.type, {});
+    } else if (e.type == "transmission_error") {
+      const auto h = e.params.find("harmonic");
+      per_joint(e.type, {h != e.params.end() ? static_cast<int>(std::lround(h->second)) : 1});
+    } else if (e.type == "mount_deflection" || e.type == "thermal_drift") {
+      specs.push_back({e.type, -1, {}});
+    } else if (e.type == "thermal_growth") {
+      notes->push_back("declared thermal_growth is not modelled: the procedure records no "
+                       "temperature");
+    }
+    for (const TermSpec& spec : specs) {
+      bool present = false;
+      for (const auto& t : m.terms) {
+        const TermSpec& have = t->spec();
+        present = present || (have.type == spec.type && have.joint == spec.joint &&
+                              have.orders == spec.orders);
+      }
+      if (!present) m = WithTerm(m, MakeErrorTerm(spec, nominal, nominal.name, where));
+    }
+  }
+  return m;
+}
+
+}  // namespace twin

@@ -1,0 +1,22 @@
+// What the estimator is told of the twin's effects: a scenario effect with `declared: true`
+// says that the effect exists (its term type and joint), never its magnitude (README, "Model
+// discovery"). Shared by the tracker and the optical-axis runs.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "bench/io/scenario.h"
+#include "calib/kinematics/kinematic_model.h"
+#include "calib/model/robot_model.h"
+
+namespace twin {
+
+/// The estimator's starting model for robot `robot` (0-based): `nominal` plus a term, at zero,
+/// for every declared effect of the scenario on that robot that the estimator's library has,
+/// by type and joint only. Declared effects without a term (geometry errors, noise) need none;
+/// one the procedure cannot model (a thermal growth without temperatures) is said in `notes`.
+RobotModel DeclaredModel(const Scenario& sc, int robot, const KinematicModel& nominal,
+                         std::vector<std::string>* notes);
+
+}  // namespace twin
