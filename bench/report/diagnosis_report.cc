@@ -54,6 +54,7 @@ json CandidateJson(const CandidateScore& c, int step) {
           {"p_adjusted", c.tested ? json(c.p_adjusted) : json(nullptr)},
           {"max_geometry_correlation", c.max_geometry_correlation},
           {"correlated_with", c.correlated_with},
+          {"restarted", c.restarted},
           {"accepted", c.accepted},
           {"note", c.note}};
 }
