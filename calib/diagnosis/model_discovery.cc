@@ -83,10 +83,14 @@ class Data {
   }
 };
 
+// `all_data`: the fit on every unit, the only one whose term_dependence the search reads (the
+// disguise check); cross-validation folds skip it.
 Fit Identified(const RobotModel& model, MeasurementSet* set, const DiscoveryOptions& o,
-               const std::string& source) {
+               const std::string& source, bool all_data) {
   Fit f;
-  f.result = Identify(model, {set}, o.engine);
+  IdentificationOptions engine = o.engine;
+  engine.term_dependence = engine.term_dependence && all_data;
+  f.result = Identify(model, {set}, engine);
   if (f.result.status == IdentificationStatus::kFailed) {
     throw InputError(source, "the identification failed: " + f.result.reason);
   }
@@ -145,7 +149,7 @@ class TrackerData : public Data {
       for (int i : train) subset.push_back(points_[i]);
     }
     TrackerSet set(subset, so);
-    Fit f = Identified(model, &set, o_, so.source);
+    Fit f = Identified(model, &set, o_, so.source, train.empty());
     f.X_TB = set.X_TB();
     return f;
   }
@@ -365,7 +369,7 @@ class OpticalData : public Data {
     so.use_depth = depth_;
     so.use_sample_sigmas = true;  // each sample's own noise where known (SigmaOffset)
     OpticalAxisSet set(subset, so);
-    Fit f = Identified(model, &set, o_, o_.axis_source + " (" + what + ")");
+    Fit f = Identified(model, &set, o_, o_.axis_source + " (" + what + ")", train.empty());
     f.axes = present;
     f.lines = set.lines();
     f.depth_offsets = set.depth_offsets();

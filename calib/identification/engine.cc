@@ -441,7 +441,7 @@ IdentificationResult Identify(const RobotModel& start, const std::vector<Measure
     res.correlations.resize(options.max_correlations);
   }
   // 5. How far each term can be told from the geometry, on the full columns at the solution.
-  if (layout.size() > layout.geometry_size()) {
+  if (options.term_dependence && layout.size() > layout.geometry_size()) {
     a.problem->SetManifold(params.data(), nullptr);
     double cost = 0;
     const Eigen::MatrixXd Jp = DenseJacobian(a.problem.get(), a.blocks, &cost);

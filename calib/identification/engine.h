@@ -45,6 +45,9 @@ struct IdentificationOptions {
   /// ("geometry", "joint_compliance (joint 2)").
   std::vector<std::string> fixed;
   int num_threads = 1;                 ///< Ceres threads (>= 1)
+  /// Fill IdentificationResult::term_dependence (one more Jacobian and two QRs at the
+  /// solution) for a model with terms.
+  bool term_dependence = true;
   /// Report correlations with |rho| at least this [-], strongest first.
   double correlation_threshold = 0.9;
   int max_correlations = 20;           ///< at most this many correlations reported
