@@ -17,6 +17,7 @@
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/inverse_kinematics.h"
+#include "calib/vision/axis_start_predictor.h"
 #include "calib/vision/board_region.h"
 
 namespace twin {
@@ -527,6 +528,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
     setup.board = knowledge.board;
     const int num_axes = static_cast<int>(rc.plan.axes.size());
     ServoStepModel step_model;  // learnt over this robot's poses
+    AxisStartPredictor start_predictor;  // the plan's miss, learnt over this robot's poses
     for (int k = 0; k < num_axes; ++k) {
       const PlannedAxis& axis = rc.plan.axes[k];
       const int p = static_cast<int>(axis.q_passive.size());
@@ -558,12 +560,22 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
       bool have_correction = false;
       cv::Rect next_region;  // where the board should appear at the next position
       // Steps 2-4: each position servoed onto the axis and its joint angles saved.
+      const Vector3 axis_Bp = R_BpC.col(2);
       for (int i = 0; i < p; ++i) {
         const JointVector& planned = axis.q_passive[i];
+        const Vector3 planned_P = EndPose(rc.nominal, planned).translation();
         JointVector start = planned;
+        // The correction found at this axis's previous position, else (its first position,
+        // or none aligned yet) the miss predicted from the other axes' positions.
+        Vector3 start_shift = Vector3::Zero();
         if (options.carry_correction && have_correction) {
+          start_shift = correction;
+        } else if (options.predict_axis_start && start_predictor.positions() > 0) {
+          start_shift = start_predictor.Correction(planned_P);
+        }
+        if (start_shift.squaredNorm() > 0) {
           Transform target = EndPose(rc.nominal, planned);
-          target.translation() += correction;
+          target.translation() += start_shift;
           IkOptions ik_options;
           ik_options.seed = options.servo.ik_seed;
           const IkResult ik = SolveIk(rc.nominal, target, planned, ik_options);
@@ -615,9 +627,10 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
         smp.approach = sr.approach;
         smp.time_s = cell.ClockSeconds();  // NaN where the cell keeps no clock
         rc.samples.push_back(smp);
-        correction = EndPose(rc.nominal, sr.q_passive).translation() -
-                     EndPose(rc.nominal, planned).translation();
+        const Vector3 aligned_P = EndPose(rc.nominal, sr.q_passive).translation();
+        correction = aligned_P - planned_P;
         have_correction = true;
+        start_predictor.Add(planned_P, aligned_P, axis_Bp);
         if (options.servo.use_regions && options.carry_correction) {
           // The next position starts on the axis again (carried correction), 20 mm along it:
           // the board stays about where it is, a few percent larger or smaller.

@@ -79,6 +79,11 @@ struct OpticalAxisOptions {
   /// Start each position of an axis with the correction the servo found at the previous one
   /// (the kinematic error changes little over 20 mm), so the servo starts close.
   bool carry_correction = true;
+  /// Start each axis's first position (and any position before one of its axis aligned)
+  /// shifted by the plan's miss predicted from the positions aligned so far
+  /// (AxisStartPredictor: a small rigid motion of the passive base, the rough base's error
+  /// mostly), so a rough base does not put every axis a long way off.
+  bool predict_axis_start = true;
   /// Servo moves commanded through a step model learnt over each robot's poses
   /// (ServoStepModel), so that first moves land within tolerance more often.
   bool learn_servo_steps = true;

@@ -240,11 +240,16 @@ ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
     // command that achieves it by the learnt step model M^-1 of that.
     Eigen::Vector2d command = -options.gain * Eigen::Vector2d(du, dv);
     if (step_model) command = step_model->Matrix(kStepModelPriorPx).inverse() * command;
-    const Vector3 step_Bp = R_BpC * Vector3(command.x() * z / k.fx, command.y() * z / k.fy, 0.0);
+    Vector3 step_Bp = R_BpC * Vector3(command.x() * z / k.fx, command.y() * z / k.fy, 0.0);
+    // A correction longer than max_step_m is taken in moves of that length, each followed by
+    // a new image (a far start: a rough base transform, a large kinematic error); the image
+    // motion wanted from this move shrinks with it.
+    double step_fraction = 1.0;
     if (step_Bp.norm() > options.max_step_m) {
-      return finish(ServoStatus::kNotConverged,
-                    "correction of " + Num(step_Bp.norm()) + " m exceeds max_step_m = " +
-                        Num(options.max_step_m));
+      step_fraction = options.max_step_m / step_Bp.norm();
+      step_Bp *= step_fraction;
+      command *= step_fraction;
+      ++result.limited_moves;
     }
 
     const JointVector q_now = cell.ReadEncoders(passive);
@@ -272,7 +277,7 @@ ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
       // The move should bring P onto the principal point: the board moves by -gain (du, dv).
       // Before a whole frame was seen the cell clips the region to its image.
       if (frame_size.width == 0) frame_size = cv::Size(1 << 20, 1 << 20);
-      region = PredictBoardRegion(det, -options.gain * cv::Point2d(du, dv),
+      region = PredictBoardRegion(det, -options.gain * step_fraction * cv::Point2d(du, dv),
                                   options.region_margin_squares, options.region_slack_px,
                                   frame_size);
     }

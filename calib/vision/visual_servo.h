@@ -44,7 +44,9 @@ struct ServoOptions {
   int max_iterations = 10;     ///< corrective moves before giving up (images: one more) [-]
   double gain = 1.0;           ///< fraction of the estimated correction applied per move, (0, 2)
   double nominal_depth_m = 0;  ///< depth z_f of P [m]; 0 estimates it per image with solvePnP
-  double max_step_m = 0.05;    ///< largest translation of one move; larger ones are refused [m]
+  /// Largest translation of one move [m]; a longer correction is taken in moves of this
+  /// length, each followed by a new image (within max_iterations).
+  double max_step_m = 0.05;
   std::uint64_t ik_seed = 1;   ///< seed of nominal IK's random restarts (reproducible)
   /// After a detection, grab only the region where the board will be (Cell::GrabImageRegion,
   /// board_region.h); a whole frame when the board is not found there (and first, unless a
@@ -80,7 +82,7 @@ enum class ServoStatus {
   kIkFailed,        ///< nominal IK found no joint angles for the corrected pose
   kMoveFailed,      ///< the cell refused or failed a move (collision, not settled, bad input)
   kJointLimits,     ///< a start or corrected pose lies outside the passive joint limits
-  kNotConverged,    ///< still misaligned after max_iterations moves (or a step too large)
+  kNotConverged,    ///< still misaligned after max_iterations moves
 };
 
 /// Name of a status for messages ("aligned", "board_not_found", ...).
@@ -106,6 +108,7 @@ struct ServoResult {
   FeatureDetection detection_after;            ///< of the last image, frame coordinates
   int region_frames = 0;                       ///< of `frames`, regions (GrabImageRegion)
   int full_frame_fallbacks = 0;                ///< regions without the board, then a frame
+  int limited_moves = 0;  ///< of `moves`, corrections cut to max_step_m (a far start)
 };
 
 /// Moves the passive robot to q_passive_start, then repeats: grab an image, detect P, and if

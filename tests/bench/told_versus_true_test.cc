@@ -70,7 +70,8 @@ std::string EstimatorInputs(const Scenario& sc) {
   for (int r : o.robots) os << " " << r;
   os << "\nintrinsics_views " << o.intrinsics_views << " calibration_axes "
      << o.calibration_axes << " split " << static_cast<int>(o.split) << " refit "
-     << o.refit_all_axes << " carry " << o.carry_correction << " kept_images "
+     << o.refit_all_axes << " carry " << o.carry_correction << " predict " << o.predict_axis_start
+     << " kept_images "
      << o.kept_images << " intrinsics fix_k3 " << o.intrinsics.fix_k3 << " pinhole "
      << o.intrinsics.fix_all_distortion << "\n";
   const PosePlannerOptions& p = o.planner;
