@@ -465,7 +465,8 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
           {"calibration_after_mm", Mm(lin.mean_misaligned_error_after)}}},
         {"nonlinear",
          {{"status", ToString(nl.status)}, {"iterations", nl.iterations},
-          {"rank", nl.observability.rank}, {"depth_used", nl.depth_used},
+          {"rank", nl.observability.rank}, {"passes", nl.passes},
+          {"depth_used", nl.depth_used},
           {"singular_values", nl.observability.singular_values},
           {"depth_weight", nl.depth_weight},
           {"rms_distance_before_mm", Mm(nl.rms_distance_before)},
@@ -476,6 +477,7 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
          rc.refit ? json{{"status", ToString(rc.refit_result.status)},
                          {"axes", rc.calibration_axes.size() + rc.validation_axes.size()},
                          {"rank", rc.refit_result.observability.rank},
+                         {"passes", rc.refit_result.passes},
                          {"rms_distance_after_mm", Mm(rc.refit_result.rms_distance_after)},
                          {"rms_depth_residual_mm", Mm(rc.refit_result.rms_depth_residual)}}
                   : json(nullptr)},

@@ -10,6 +10,7 @@
 #include "calib/measurements/optical_axis_set.h"
 
 #include "calib/common/errors.h"
+#include "calib/diagnosis/statistics.h"
 
 namespace twin {
 
@@ -19,6 +20,7 @@ void ValidateNonlinearIdentificationOptions(const NonlinearIdentificationOptions
                      std::string(expected) + ", got " + std::to_string(v));
   };
   if (o.max_iterations < 1) fail("max_iterations", o.max_iterations, "must be >= 1");
+  if (o.relinearize_passes < 0) fail("relinearize_passes", o.relinearize_passes, "must be >= 0");
   if (!(o.function_tolerance > 0.0 && o.function_tolerance < 1.0)) {
     fail("function_tolerance", o.function_tolerance, "must be in (0, 1)");
   }
@@ -94,12 +96,38 @@ NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
   io.estimate_group_weights = options.depth_weight <= 0.0;
   const RobotModel start = MakeRobotModel(nominal);
   res.engine = Identify(start, {&set}, io);
+  const double rms_nominal = res.engine.sets[0].rms_before;
+  for (int pass = 0; pass < options.relinearize_passes; ++pass) {
+    const IdentificationResult& last = res.engine;
+    // Within 0.1 um (a noise-free fit) there is nothing left for another pass to reach.
+    if (last.status == IdentificationStatus::kFailed || last.sets[0].rms_after < 1e-7) break;
+    IdentificationResult again = Identify(last.model, {&set}, io);
+    if (again.status == IdentificationStatus::kFailed || again.redundancy < 1) break;
+    const int added = again.observability.rank - last.observability.rank;
+    const double before = last.sets[0].rms_after, after = again.sets[0].rms_after;
+    if (added < 0 || !(after < before)) break;
+    if (added == 0 && !(after < 0.99 * before)) break;  // the linearization has settled
+    if (added > 0) {
+      // Directions that are null at the nominal model's symmetries (exactly parallel or
+      // perpendicular axes) but not at the solution: kept only when the data need them, the
+      // drop in the sum of squares against chi-square with `added` degrees of freedom at
+      // 0.1 % (each new direction fits about one unit of it from noise alone).
+      const double stat = again.redundancy * (before * before - after * after) / (after * after);
+      if (!(stats::ChiSquareUpperTail(stat, added) < 1e-3)) break;
+    }
+    res.engine = std::move(again);
+    ++res.passes;
+  }
+  if (res.passes > 1) {
+    // The sets were re-initialized at the last start: lines and weights are that pass's.
+    res.engine.correction = GetParameters(res.engine.model) - GetParameters(start);
+  }
   const IdentificationResult& r = res.engine;
 
   res.observability = r.observability;
   res.depth_used = set.depth_used();
   res.depth_weight = set.depth_used() ? set.depth_weight() / set.perpendicular_weight() : 0.0;
-  res.rms_distance_before = r.sets[0].rms_before;
+  res.rms_distance_before = rms_nominal;
   res.axes = set.initial_lines();
   res.rms_distance_after = res.rms_distance_before;
   res.z = r.z;

@@ -26,13 +26,18 @@ struct OpticalAxisScenario {
 /// Builds the scenario. Parameter errors are uniform up to `len_error` m and `ang_error` rad
 /// (paper's Table 3: ~1-5 mm, ~0.1-0.5 deg); `joint_noise` (rad, Gaussian sigma) is added to
 /// the recorded q after the IK solve. Throws std::runtime_error if a position is unreachable.
+/// With `point_on_last_axis`, the nominal tool link puts the feature point 40 mm out on the
+/// last joint's axis (the paper scenario's board mount), where the last joint's rotation
+/// cannot move it: a symmetry of the nominal model that the perturbed truth breaks.
 inline OpticalAxisScenario MakeOpticalAxisScenario(std::uint64_t seed, double joint_noise = 0.0,
                                                    double len_error = 0.003,
-                                                   double ang_error = DegToRad(0.3)) {
+                                                   double ang_error = DegToRad(0.3),
+                                                   bool point_on_last_axis = false) {
   std::mt19937_64 rng(seed);
   OpticalAxisScenario s;
   s.nominal = ReinovoLikeModel();
   s.nominal.name = "r2";
+  if (point_on_last_axis) s.nominal.links[6].dh = {0.0, 0.040, 0.0, 0.0, 0.0};
   s.truth = Perturbed(s.nominal, rng, len_error, ang_error);
   s.truth.X_BL0 = Transform::Identity();  // nominal and truth differ only in the 35 parameters
   s.truth.X_LtE = Transform::Identity();
