@@ -27,4 +27,11 @@ constexpr double kPi = 3.14159265358979323846;
 inline constexpr double DegToRad(double deg) { return deg * kPi / 180.0; }
 inline constexpr double RadToDeg(double rad) { return rad * 180.0 / kPi; }
 
+/// The cross-product matrix [v]x: [v]x u = v x u.
+inline Matrix3 SkewMatrix(const Vector3& v) {
+  Matrix3 s;
+  s << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return s;
+}
+
 }  // namespace twin

@@ -9,12 +9,6 @@
 namespace twin {
 namespace {
 
-Matrix3 Skew(const Vector3& v) {
-  Matrix3 S;
-  S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
-  return S;
-}
-
 // Orients `dir` from the first point towards the last one.
 Vector3 Oriented(Vector3 dir, const std::vector<Vector3>& points) {
   if (dir.dot(points.back() - points.front()) < 0.0) dir = -dir;
@@ -87,7 +81,7 @@ Eigen::Matrix<double, 3, Eigen::Dynamic> ErrorJacobian(const KinematicModel& mod
   // Eq. 19; IdentificationJacobian rows 0-2 are already 0R_N J_P (base frame, eq. 12).
   const Eigen::Matrix<double, 3, Eigen::Dynamic> Ji = IdentificationJacobian(model, q_i).topRows<3>();
   const Eigen::Matrix<double, 3, Eigen::Dynamic> Jj = IdentificationJacobian(model, q_j).topRows<3>();
-  return Skew(mu) * (Ji - Jj);
+  return SkewMatrix(mu) * (Ji - Jj);
 }
 
 int ValidateAxisSamples(const std::vector<AxisSample>& samples) {
@@ -167,7 +161,7 @@ MisalignedErrorStack StackMisalignedErrors(const KinematicModel& model,
   for (int k = 0; k < num_axes; ++k) {
     out.axis_row_begin.push_back(r);
     const Vector3 mu = directions[k].normalized();
-    const Matrix3 S = Skew(mu);
+    const Matrix3 S = SkewMatrix(mu);
     const Eigen::Matrix<double, 3, 2> T = TangentBasis(mu);
     const int n = static_cast<int>(p[k].size());
     for (int i = 0; i < n; ++i) {
@@ -176,7 +170,7 @@ MisalignedErrorStack StackMisalignedErrors(const KinematicModel& model,
         out.E.segment<3>(r) = MisalignedError(mu, p[k][i], p[k][j]);    // eq. 46
         out.Phi.middleRows<3>(r) = S * (J[k][i] - J[k][j]);  // eq. 19
         // d(mu x dp)/d(mu) = -[dp x], restricted to the tangent plane of mu.
-        out.direction_jacobian.block<3, 2>(r, 2 * k) = -Skew(dp) * T;
+        out.direction_jacobian.block<3, 2>(r, 2 * k) = -SkewMatrix(dp) * T;
       }
     }
   }

@@ -11,12 +11,6 @@
 namespace twin {
 namespace {
 
-Matrix3 Skew(const Vector3& v) {
-  Matrix3 s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
-
 void Positive(double v, const char* name) {
   if (!std::isfinite(v) || v <= 0) {
     throw InputError("AxisStartPredictor", std::string(name) + " = " + ShortestNumber(v) + ": expected > 0");
@@ -46,7 +40,7 @@ void AxisStartPredictor::Add(const Vector3& planned, const Vector3& aligned,
   // across (t + w x p) = across (t - [p]x w) = across (aligned - planned)
   Eigen::Matrix<double, 3, 6> a;
   a.leftCols<3>() = across;
-  a.rightCols<3>() = -across * Skew(planned);
+  a.rightCols<3>() = -across * SkewMatrix(planned);
   const Vector3 b = across * (aligned - planned);
   const double w = 1.0 / (scatter_m_ * scatter_m_);
   normal_ += w * a.transpose() * a;

@@ -100,13 +100,15 @@ TEST_F(VisualServoTest, AlignsTheFeaturePointWithinTenIterations) {
   EXPECT_LT(std::hypot(p_CP.x(), p_CP.y()), 1e-4) << p_CP.transpose();
 }
 
-// Forwards to the twin and keeps, per joint of robot 1, the sign of its last commanded motion
-// (target against the previous target, as a controller knows it; from the second move on).
+// Forwards to the twin and keeps robot 1's commanded targets and, per joint, the sign of its
+// last commanded motion (target against the previous target, as a controller knows it; from
+// the second move on).
 class MotionLog : public Cell {
  public:
   explicit MotionLog(TwinCell& cell) : cell_(cell) {}
   MoveResult MoveTo(int robot, const JointVector& q) override {
     if (robot == 1) {
+      targets.push_back(q);
       if (last_sign.size() != q.size()) last_sign = JointVector::Zero(q.size());
       for (int i = 0; i < q.size() && last_.size() == q.size(); ++i) {
         if (q(i) != last_(i)) last_sign(i) = q(i) > last_(i) ? 1.0 : -1.0;
@@ -121,6 +123,7 @@ class MotionLog : public Cell {
   MoveResult ExchangeTools() override { return cell_.ExchangeTools(); }
   int CameraRobot() override { return cell_.CameraRobot(); }
   JointVector last_sign;
+  std::vector<JointVector> targets;
 
  private:
   TwinCell& cell_;
@@ -221,30 +224,10 @@ TEST_F(VisualServoTest, BoardOutOfViewIsReported) {
   EXPECT_EQ(r.moves, 0);
 }
 
-// Records the passive robot's commanded targets and forwards everything to the twin.
-class MoveRecorder : public Cell {
- public:
-  MoveRecorder(Cell& inner, int robot) : inner_(inner), robot_(robot) {}
-  MoveResult MoveTo(int robot, const JointVector& q) override {
-    if (robot == robot_) targets.push_back(q);
-    return inner_.MoveTo(robot, q);
-  }
-  JointVector ReadEncoders(int robot) override { return inner_.ReadEncoders(robot); }
-  cv::Mat GrabImage() override { return inner_.GrabImage(); }
-  cv::Mat GrabImageRegion(const cv::Rect& roi) override { return inner_.GrabImageRegion(roi); }
-  MoveResult ExchangeTools() override { return inner_.ExchangeTools(); }
-  int CameraRobot() override { return inner_.CameraRobot(); }
-  std::vector<JointVector> targets;
-
- private:
-  Cell& inner_;
-  int robot_;
-};
-
 TEST_F(VisualServoTest, ACorrectionAboveMaxStepIsTakenInSteps) {
   const TwinSpec spec = PerturbedSpec();
   TwinCell twin(spec, "visual_servo_test");
-  MoveRecorder cell(twin, 1);
+  MotionLog cell(twin);
   const ServoSetup setup = SetupFor(spec, cell);
   // Half a radian on the base joint leaves the board at the image edge, about 0.18 m off axis:
   // at least three moves of 0.05 m before the last, shorter ones.
