@@ -563,7 +563,8 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
       const Vector3 axis_Bp = R_BpC.col(2);
       for (int i = 0; i < p; ++i) {
         const JointVector& planned = axis.q_passive[i];
-        const Vector3 planned_P = EndPose(rc.nominal, planned).translation();
+        const Transform planned_pose = EndPose(rc.nominal, planned);
+        const Vector3 planned_P = planned_pose.translation();
         JointVector start = planned;
         // The correction found at this axis's previous position, else (its first position,
         // or none aligned yet) the miss predicted from the other axes' positions.
@@ -574,7 +575,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
           start_shift = start_predictor.Correction(planned_P);
         }
         if (start_shift.squaredNorm() > 0) {
-          Transform target = EndPose(rc.nominal, planned);
+          Transform target = planned_pose;
           target.translation() += start_shift;
           IkOptions ik_options;
           ik_options.seed = options.servo.ik_seed;
