@@ -78,6 +78,7 @@ NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
 
   OpticalAxisSetOptions set_options;
   set_options.use_depth = options.use_depth;
+  set_options.use_sample_sigmas = options.use_sample_sigmas;
   // A first guess of sigma_perpendicular / sigma_depth: ~0.02 mm of servo residual against
   // ~0.1 mm of depth from a small board (DESIGN.md corner accuracy); re-estimated by the
   // engine's variance components unless a weight is given.

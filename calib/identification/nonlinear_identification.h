@@ -61,6 +61,11 @@ struct NonlinearIdentificationOptions {
   /// rose, when the drop in the sum of squares is significant at 0.1 % (chi-square with the
   /// added directions' count); a rank that falls stops.
   int relinearize_passes = 3;
+  /// Weight each sample by its own sigmas (AxisSample::sigma_offset, sigma_depth: the board
+  /// pose's covariance) within its group; the groups' weights are still estimated (or given
+  /// by depth_weight). A board's depth noise grows with its distance, so uniform weights let
+  /// the far samples set the scale. false: every sample of a group alike.
+  bool use_sample_sigmas = true;
 };
 
 /// Throws InputError naming the bad field and value.

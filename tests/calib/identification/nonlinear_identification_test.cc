@@ -159,7 +159,9 @@ TEST(NonlinearIdentification, RelinearizedPassesReachTheDataWithLargeErrors) {
     // similarity target (0.1 mm) for the relinearized fit, at any seed.
     EXPECT_LT(sim_b, 1e-5);
     EXPECT_LE(b.rms_distance_after, a.rms_distance_after);
-    if (a.rms_distance_after > 1e-6) EXPECT_GT(b.passes, 1);
+    if (a.rms_distance_after > 1e-6) {
+      EXPECT_GT(b.passes, 1);
+    }
   }
   // The defect this guards against, seen at seed 3: the nominal subspace alone leaves more
   // than a millimetre (measured 1.21 mm), so this test fails without the passes.
