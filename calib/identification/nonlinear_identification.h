@@ -88,7 +88,9 @@ struct NonlinearIdentificationResult {
   int iterations = 0;                 ///< Ceres iterations (successful and not)
   KinematicModel model;               ///< nominal + correction
   ParameterVector correction;         ///< identified - nominal [m, rad]
-  Eigen::VectorXd z;                  ///< coordinates in observability.identifiable_basis
+  /// Coordinates of the last kept pass's step in observability.identifiable_basis (from that
+  /// pass's start, which is the nominal model only when passes == 1).
+  Eigen::VectorXd z;
   std::vector<Line3> axes;            ///< the fitted optical axes in B (unit directions)
   double rms_distance_before = 0.0;   ///< RMS point-to-line distance, nominal, FitLine axes [m]
   double rms_distance_after = 0.0;    ///< RMS point-to-line distance at the solution [m]
