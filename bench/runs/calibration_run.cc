@@ -512,6 +512,8 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
   WriteText(staging / "measurements.csv", csv.str());
   const double scoring = Seconds(t_score);
   (*report)["timing_s"] = {{"total", Seconds(t_start)}, {"intrinsics", result.intrinsics_s},
+                        {"intrinsics_detection", result.intrinsics.detect_s},
+                        {"intrinsics_zhang", result.intrinsics.calibrate_s},
                         {"planning", planning},      {"planning_compute", planning_compute},
                         {"servoing", servoing},
                         {"identification", identification}, {"diagnosis", diagnosis_s},

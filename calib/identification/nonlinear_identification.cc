@@ -67,15 +67,10 @@ Vector3 AxisResidual(const KinematicModel& model, const ParameterVector& phi,
   return r;
 }
 
-NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
-                                                const std::vector<AxisSample>& samples,
-                                                const NonlinearIdentificationOptions& options) {
-  ValidateNonlinearIdentificationOptions(options);
-  ValidateAxisSamples(samples);
-  NonlinearIdentificationResult res;
-  res.model = nominal;
-  res.correction = ParameterVector::Zero(nominal.num_parameters());
+namespace {
 
+// The measurement set's options as IdentifyNonlinear and NonlinearIdentifiability build them.
+OpticalAxisSetOptions SetOptionsFor(const NonlinearIdentificationOptions& options) {
   OpticalAxisSetOptions set_options;
   set_options.use_depth = options.use_depth;
   set_options.use_sample_sigmas = options.use_sample_sigmas;
@@ -86,7 +81,33 @@ NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
     set_options.sigma_depth = set_options.sigma_perpendicular / options.depth_weight;
   }
   if (options.loss == NonlinearLoss::kHuber) set_options.huber_scale = options.huber_scale;
-  OpticalAxisSet set(samples, set_options);
+  return set_options;
+}
+
+}  // namespace
+
+ObservabilityReport NonlinearIdentifiability(const KinematicModel& nominal,
+                                             const std::vector<AxisSample>& samples,
+                                             const NonlinearIdentificationOptions& options) {
+  ValidateNonlinearIdentificationOptions(options);
+  ValidateAxisSamples(samples);
+  OpticalAxisSet set(samples, SetOptionsFor(options));
+  IdentificationOptions io;
+  io.rank_tolerance = options.rank_tolerance;
+  io.estimate_group_weights = options.depth_weight <= 0.0;
+  return AnalyseIdentifiability(MakeRobotModel(nominal), {&set}, io);
+}
+
+NonlinearIdentificationResult IdentifyNonlinear(const KinematicModel& nominal,
+                                                const std::vector<AxisSample>& samples,
+                                                const NonlinearIdentificationOptions& options) {
+  ValidateNonlinearIdentificationOptions(options);
+  ValidateAxisSamples(samples);
+  NonlinearIdentificationResult res;
+  res.model = nominal;
+  res.correction = ParameterVector::Zero(nominal.num_parameters());
+
+  OpticalAxisSet set(samples, SetOptionsFor(options));
 
   IdentificationOptions io;
   io.max_iterations = options.max_iterations;

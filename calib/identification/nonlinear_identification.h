@@ -116,6 +116,14 @@ NonlinearIdentificationResult IdentifyNonlinear(
     const KinematicModel& nominal, const std::vector<AxisSample>& samples,
     const NonlinearIdentificationOptions& options = {});
 
+/// The identifiability of IdentifyNonlinear's problem at `nominal` without solving it: the
+/// observability report of its first pass (the same measurement set, initial weights and
+/// nuisance lines fitted to the nominal positions, the same rank tolerance), from one Jacobian.
+/// Same input checks as IdentifyNonlinear.
+ObservabilityReport NonlinearIdentifiability(const KinematicModel& nominal,
+                                             const std::vector<AxisSample>& samples,
+                                             const NonlinearIdentificationOptions& options = {});
+
 /// Perpendicular residual (3 rows [m]) of one sample, evaluated in double through the same
 /// residual functor the solver differentiates (OpticalAxisResidual); `phi` the geometric
 /// parameters, `point` and unit `direction` the line. Exposed for tests.

@@ -204,8 +204,9 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
 
 /// Splits plan axes 0..num_axes-1 into calibration and validation sets by whole axes:
 /// options.calibration_axes of them calibrate, chosen by options.split among the axes with 3
-/// or more samples (kBestConditioned: every subset is identified from `nominal` and the one
-/// with the largest smallest identifiable singular value wins; `candidates` lists each subset
+/// or more samples (kBestConditioned: the identifiability of every subset at `nominal`,
+/// NonlinearIdentifiability, and the one with the largest smallest identifiable singular value
+/// wins; `candidates` lists each subset
 /// and that value, empty for kFirst or when there is no choice).
 void SplitAxes(const KinematicModel& nominal, const std::vector<AxisSample>& samples,
                int num_axes, const OpticalAxisOptions& options,

@@ -2,6 +2,7 @@
 #include "calib/vision/intrinsics_calibration.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <random>
 #include <sstream>
@@ -14,6 +15,10 @@
 
 namespace twin {
 namespace {
+
+double SecondsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 // Object points of the inner corners in the board plane (z = 0), row by row like
 // findChessboardCorners, centred on the middle corner [m].
@@ -78,7 +83,9 @@ IntrinsicsResult CalibrateIntrinsics(Cell& cell, int board_robot,
       continue;
     }
     const cv::Mat image = cell.GrabImage();
+    const auto t0 = std::chrono::steady_clock::now();
     const FeatureDetection det = DetectFeaturePoint(image, board);
+    result.detect_s += SecondsSince(t0);
     if (det.status != DetectionStatus::kFound) {
       result.skipped.push_back("pose " + std::to_string(i) + ": board not found: " + det.reason);
       continue;
@@ -143,10 +150,12 @@ IntrinsicsResult CalibrateFromCorners(std::vector<std::vector<cv::Point3f>> obje
   // Over 85 twin trials (the KUKA, ABB and paper scenarios) two views were dropped, at 7 and
   // 12 times the median; Gaussian corner noise alone drops none (the tests).
   for (;;) {
+    const auto t0 = std::chrono::steady_clock::now();
     try {
       result.rms_px =
           cv::calibrateCamera(object_points, image_points, image_size, K, dist, rvecs, tvecs,
                               cv::noArray(), cv::noArray(), per_view, flags, criteria);
+      result.calibrate_s += SecondsSince(t0);
     } catch (const cv::Exception& e) {
       result.status = IntrinsicsStatus::kFailed;
       result.reason = std::string("cv::calibrateCamera threw: ") + e.what();

@@ -54,6 +54,8 @@ struct IntrinsicsResult {
   int views_used = 0;                  ///< views whose corners entered the calibration
   /// One line per skipped pose (failed move, no board, dropped as an outlier view).
   std::vector<std::string> skipped;
+  double detect_s = 0;     ///< wall time in corner detection, every view [s]
+  double calibrate_s = 0;  ///< wall time in cv::calibrateCamera, every round [s]
 };
 
 /// Moves robot `board_robot` to each of `board_poses` (motor angles [rad]), grabs an image,

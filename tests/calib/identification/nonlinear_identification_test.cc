@@ -173,6 +173,35 @@ TEST(NonlinearIdentification, RelinearizedPassesReachTheDataWithLargeErrors) {
   EXPECT_GT(SimilarityResidual(a.model, s.truth), 1e-4);
 }
 
+// NonlinearIdentifiability is the first pass's observability without the solve: same rank and
+// singular values as IdentifyNonlinear with no relinearized pass, with and without depths.
+// Tolerance: the same Jacobian is assembled twice, so only rounding may differ (1e-9 relative).
+TEST(NonlinearIdentification, IdentifiabilityIsTheFirstPassObservability) {
+  const auto s = MakeOpticalAxisScenario(7, 1e-5);
+  const std::vector<AxisSample> with_depths = testing::SamplesWithEffects(
+      s, MakeRobotModel(s.truth), 7, 2e-5, 1e-4);
+  for (bool depth : {false, true}) {
+    const std::vector<AxisSample>& samples = depth ? with_depths : s.samples;
+    NonlinearIdentificationOptions once;
+    once.relinearize_passes = 0;
+    const ObservabilityReport a = NonlinearIdentifiability(s.nominal, samples, once);
+    const NonlinearIdentificationResult b = IdentifyNonlinear(s.nominal, samples, once);
+    ASSERT_NE(b.status, NonlinearIdentificationStatus::kFailed);
+    EXPECT_EQ(b.depth_used, depth);
+    ASSERT_GT(a.rank, 10) << "depth " << depth;
+    EXPECT_EQ(a.rank, b.observability.rank) << "depth " << depth;
+    ASSERT_EQ(a.singular_values.size(), b.observability.singular_values.size());
+    for (int i = 0; i < a.rank; ++i) {
+      EXPECT_NEAR(a.singular_values[i], b.observability.singular_values[i],
+                  1e-9 * a.singular_values[0])
+          << "depth " << depth << ", singular value " << i;
+    }
+  }
+  // Depths make the uniform scale identifiable: one more identifiable combination.
+  EXPECT_EQ(NonlinearIdentifiability(s.nominal, with_depths).rank,
+            NonlinearIdentifiability(s.nominal, s.samples).rank + 1);
+}
+
 TEST(NonlinearIdentification, ValidatesOptionsAndSamples) {
   const auto s = MakeOpticalAxisScenario(42);
   NonlinearIdentificationOptions o;
