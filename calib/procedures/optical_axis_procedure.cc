@@ -227,10 +227,9 @@ namespace {
 
 // The smallest identifiable singular value of the identification of `samples` at the nominal
 // model (Ceres formulation, scale measurement included when recorded; the first pass's
-// Jacobian, no solve: the split compares the plans' geometry, and one Jacobian per subset
-// instead of a full identification per subset took the paper scenario's split from about 6 s
-// to a fraction of a second per robot, README "Speed of trials"); 0 when nothing is
-// identifiable.
+// Jacobian, no solve: the split compares the plans' geometry; one Jacobian per subset instead
+// of a full identification per subset took the paper scenario's identification stage from
+// 16.5 s to 0.8 s per trial, README "Speed of trials"); 0 when nothing is identifiable.
 double SmallestIdentifiableSingularValue(const KinematicModel& nominal,
                                          const std::vector<AxisSample>& samples,
                                          const NonlinearIdentificationOptions& options) {
