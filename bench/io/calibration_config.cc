@@ -32,7 +32,8 @@ const YamlKeys kPlanningKeys = {"axes",
                                 "max_visibility_angle_deg",
                                 "camera_reach_mm",
                                 "camera_height_mm",
-                                "seed"};
+                                "seed",
+                                "select_run"};
 const YamlKeys kServoKeys = {"tolerance_px", "max_iterations", "gain"};
 const YamlKeys kScoringKeys = {"configurations", "seed"};
 
@@ -203,6 +204,16 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
     number("camera_reach_mm", 1e-3, -5000, 5000, reach, &p.camera_reach);
     number("camera_height_mm", 1e-3, -5000, 5000, reach, &p.camera_height);
     if (const auto g = pm.Find("seed", false)) p.seed = r.Unsigned64(*g);
+    if (const auto g = pm.Find("select_run", false)) {
+      const std::string v = r.String(*g);
+      if (v == "best_fitness") {
+        p.select_run = PosePlannerOptions::RunSelection::kBestFitness;
+      } else if (v == "predicted_error") {
+        p.select_run = PosePlannerOptions::RunSelection::kPredictedError;
+      } else {
+        r.Fail(*g, "must be best_fitness (the paper's 1/O1) or predicted_error, got '" + v + "'");
+      }
+    }
   }
   if (const auto f = m.Find("servo", false)) {
     const YamlMap sm(r, *f, kServoKeys);

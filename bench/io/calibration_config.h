@@ -42,6 +42,9 @@
 //       seed: 1                      # PSO seed, the same for every trial of a study (the
 //                                    # plan is then planned once and cached); absent: the
 //                                    # scenario's estimator seed (+ trial), see scenario.h
+//       select_run: best_fitness       # which PSO run's poses: best_fitness (the paper's
+//                                      # 1/O1) or predicted_error (PredictedPositionError,
+//                                      # pose_planner.h)
 //     servo: {tolerance_px: 0.1, max_iterations: 10, gain: 1.0}
 //     calibration_axes: 3              # whole axes in the calibration set; the rest validate
 //     calibration_split: best_conditioned  # which axes: best_conditioned (the subset with the

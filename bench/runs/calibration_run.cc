@@ -317,6 +317,16 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                      {"positions_per_axis", config.options.planner.positions_per_axis},
                      {"best_fitness", Num(rc.plan.best_fitness)},
                      {"best_run", rc.plan.best_run},
+                     {"select_run", config.options.planner.select_run ==
+                                            PosePlannerOptions::RunSelection::kPredictedError
+                                        ? "predicted_error"
+                                        : "best_fitness"},
+                     {"run_fitness", rc.plan.run_fitness},
+                     {"run_predicted_error_mm", [&] {
+                        json e = json::array();
+                        for (double x : rc.plan.run_predicted_error) e.push_back(Num(1e3 * x));
+                        return e;
+                      }()},
                      {"evaluations", rc.plan.evaluations},
                      {"fitness_history", history},
                      {"rejections",

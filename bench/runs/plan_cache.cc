@@ -83,7 +83,12 @@ json PlanToJson(const PosePlanResult& p) {
     history.push_back(h);
   }
   const RejectionCounts& r = p.rejections;
+  json run_fitness = json::array(), run_predicted = json::array();
+  for (double f : p.run_fitness) run_fitness.push_back(Hex(f));
+  for (double e : p.run_predicted_error) run_predicted.push_back(Hex(e));
   return json{{"status", ToString(p.status)},
+              {"run_fitness", run_fitness},
+              {"run_predicted_error", run_predicted},
               {"reason", p.reason},
               {"axes", axes},
               {"best_fitness", Hex(p.best_fitness)},
@@ -124,6 +129,13 @@ PosePlanResult PlanFromJson(const json& j, const std::string& where) {
       std::vector<double> h;
       for (const json& f : run) h.push_back(FromHex(f, where + " fitness_history"));
       p.fitness_history.push_back(std::move(h));
+    }
+    // Absent from plans stored before they were recorded.
+    for (const json& f : j.value("run_fitness", json::array())) {
+      p.run_fitness.push_back(FromHex(f, where + " run_fitness"));
+    }
+    for (const json& e : j.value("run_predicted_error", json::array())) {
+      p.run_predicted_error.push_back(FromHex(e, where + " run_predicted_error"));
     }
     const json& r = j.at("rejections");
     if (!r.is_array() || r.size() != 7) throw InputError(where, "rejections: expected 7 counts");

@@ -56,6 +56,12 @@ std::string PlanInputsText(const PlanInputs& in) {
   os << "num_axes " << o.num_axes << "\npositions_per_axis " << o.positions_per_axis
      << "\nswarm_size " << o.swarm_size << "\niterations " << o.iterations << "\nruns "
      << o.runs << '\n';
+  // The run selection only when it is not the paper's, so the keys of plans made before it
+  // existed stay the same.
+  if (o.select_run != PosePlannerOptions::RunSelection::kBestFitness) {
+    os << "select_run predicted_error\nprediction_configurations "
+       << o.prediction_configurations << "\nprediction_seed " << o.prediction_seed << '\n';
+  }
   Write(os, "inertia", o.inertia);
   Write(os, "learning_personal", o.learning_personal);
   Write(os, "learning_global", o.learning_global);

@@ -12,6 +12,7 @@
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/identification/linearized_identification.h"
+#include "calib/identification/nonlinear_identification.h"
 #include "calib/identification/observability.h"
 #include "calib/measurements/optical_axis_model.h"
 
@@ -196,6 +197,8 @@ void ValidatePosePlannerOptions(const PosePlannerOptions& o) {
   Require(o.swarm_size >= 1, "swarm_size", o.swarm_size, ">= 1");
   Require(o.iterations >= 0, "iterations", o.iterations, ">= 0");
   Require(o.runs >= 1, "runs", o.runs, ">= 1");
+  Require(o.prediction_configurations >= 1, "prediction_configurations",
+          o.prediction_configurations, ">= 1");
   Require(std::isfinite(o.inertia) && o.inertia >= 0.0, "inertia", o.inertia, "finite >= 0");
   Require(std::isfinite(o.learning_personal) && o.learning_personal >= 0.0, "learning_personal",
           o.learning_personal, "finite >= 0");
@@ -230,6 +233,45 @@ void ValidatePosePlannerOptions(const PosePlannerOptions& o) {
   Require(o.rank_tolerance > 0.0 && o.rank_tolerance < 1.0, "rank_tolerance", o.rank_tolerance,
           "in (0, 1)");
   ValidateIkOptions(o.ik);
+}
+
+double PredictedPositionError(const KinematicModel& passive, const std::vector<PlannedAxis>& axes,
+                              double rank_tolerance, int configurations, std::uint64_t seed) {
+  if (configurations < 1) {
+    throw InputError("PredictedPositionError configurations",
+                     "must be >= 1, got " + std::to_string(configurations));
+  }
+  std::vector<AxisSample> samples;
+  for (size_t k = 0; k < axes.size(); ++k) {
+    for (size_t i = 0; i < axes[k].q_passive.size(); ++i) {
+      AxisSample s;
+      s.axis = static_cast<int>(k);
+      s.q = axes[k].q_passive[i];
+      if (i < axes[k].distances.size()) s.depth = axes[k].distances[i];
+      samples.push_back(s);
+    }
+  }
+  NonlinearIdentificationOptions options;
+  options.rank_tolerance = rank_tolerance;
+  const ObservabilityReport o = NonlinearIdentifiability(passive, samples, options);
+  const int n = passive.num_parameters();
+  if (o.rank < 1 || o.identifiable_basis.rows() != n) return kInf;
+  // Whitened residuals: C = S V diag(1 / sigma^2) V^T S in SI units; G = S V diag(1 / sigma).
+  Eigen::MatrixXd G = o.column_scale.asDiagonal() * o.identifiable_basis;
+  for (int c = 0; c < o.rank; ++c) G.col(c) /= o.singular_values[c];
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  double sum = 0.0;
+  for (int m = 0; m < configurations; ++m) {
+    JointVector q(passive.num_joints());
+    for (int j = 0; j < q.size(); ++j) {
+      const JointLimits& l = passive.links[j].limits;
+      q[j] = l.lower + u01(rng) * (l.upper - l.lower);
+    }
+    const ParameterJacobian J = IdentificationJacobian(passive, q);
+    sum += (J.topRows<3>() * G).squaredNorm();
+  }
+  return std::sqrt(sum / configurations);
 }
 
 double PoseSetFitness(const KinematicModel& passive,
@@ -466,10 +508,22 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
       return result;
     }
   }
+  double best_predicted = kInf;
   for (int run = 0; run < o.runs; ++run) {
     result.fitness_history.push_back(runs[run].history);
-    if (runs[run].best < best_overall || result.best_run < 0) {
+    result.run_fitness.push_back(runs[run].best);
+    const double predicted =
+        std::isfinite(runs[run].best)
+            ? PredictedPositionError(passive, runs[run].axes, o.rank_tolerance,
+                                     o.prediction_configurations, o.prediction_seed)
+            : kInf;
+    result.run_predicted_error.push_back(predicted);
+    const bool better = o.select_run == PosePlannerOptions::RunSelection::kPredictedError
+                            ? predicted < best_predicted
+                            : runs[run].best < best_overall;
+    if (better || result.best_run < 0) {
       best_overall = runs[run].best;
+      best_predicted = predicted;
       result.best_run = run;
       result.axes = runs[run].axes;
     }

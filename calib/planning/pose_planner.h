@@ -35,7 +35,17 @@ struct PosePlannerOptions {
   int positions_per_axis = 10;         ///< p, passive positions per axis [-] (>= 3)
   int swarm_size = 10;                 ///< N, particles [-]
   int iterations = 100;                ///< PSO iterations per run [-]
-  int runs = 5;                        ///< independent PSO runs; the best one is returned [-]
+  int runs = 5;                        ///< independent PSO runs; one is returned (select_run) [-]
+  /// Which run's best poses are returned: the lowest fitness 1/O1 (the paper's, kBestFitness),
+  /// or the lowest predicted position error over the whole joint space (kPredictedError, see
+  /// PredictedPositionError): O1 rewards a well-spread spectrum, not the error the
+  /// identification leaves where the arm is used.
+  enum class RunSelection { kBestFitness, kPredictedError };
+  RunSelection select_run = RunSelection::kBestFitness;
+  /// Random configurations (uniform in the joint limits) of PredictedPositionError, and their
+  /// seed.
+  int prediction_configurations = 200;
+  std::uint64_t prediction_seed = 1;
   double inertia = 0.7;                ///< w of eq. 40 [-]
   double learning_personal = 1.5;      ///< L1 of eq. 40 [-]
   double learning_global = 1.5;        ///< L2 of eq. 40 [-]
@@ -110,6 +120,9 @@ struct PosePlanResult {
   std::vector<PlannedAxis> axes;            ///< q axes of the best particle (empty on failure)
   double best_fitness = 0.0;                ///< f_ob = 1/O1 of eq. 39 of the returned poses
   int best_run = -1;                        ///< run that produced the returned poses
+  std::vector<double> run_fitness;          ///< each run's best fitness 1/O1 (not stored in plan caches)
+  /// Each run's PredictedPositionError [m] (not stored in plan caches).
+  std::vector<double> run_predicted_error;
   /// Best fitness of each run after initialisation ([0]) and after every iteration (Fig. 10).
   std::vector<std::vector<double>> fitness_history;
   RejectionCounts rejections;               ///< all runs together
@@ -123,6 +136,17 @@ struct PosePlanResult {
 PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const KinematicModel& passive,
                                     const Transform& X_BaBp, const Transform& X_FC,
                                     const PosePlannerOptions& options = {});
+
+/// The position error the identification from `axes` is expected to leave, RMS over
+/// `configurations` random joint configurations uniform in the passive model's limits (seeded)
+/// [m]: the samples the plan asks for (each planned position on its axis, its planned distance
+/// as the measured depth), the covariance of the identifiable combinations of IdentifyNonlinear's
+/// problem at the nominal model under its starting noise model (0.02 mm across the axis,
+/// 0.1 mm in depth; NonlinearIdentifiability), propagated through the end point's parameter
+/// Jacobian. The unidentifiable combinations (rigid motions of the arm) contribute nothing.
+/// +infinity when nothing is identifiable.
+double PredictedPositionError(const KinematicModel& passive, const std::vector<PlannedAxis>& axes,
+                              double rank_tolerance, int configurations, std::uint64_t seed);
 
 /// Fitness of eq. 39 (1/O1; +infinity when O1 = 0) for given passive joint angles per axis and
 /// axis directions mu_k in Bp.

@@ -254,5 +254,27 @@ TEST(ToldVersusTrue, EveryShippedProcedureScenarioStatesItsToldValues) {
   }
 }
 
+// The planner's run selection from the scenario: the paper's by default, the predicted error
+// when asked, and a clear error naming the key and the value otherwise.
+TEST(ToldVersusTrue, PlanningRunSelectionIsReadFromTheScenario) {
+  const std::string paper = ReadFile(kScenarioDir + "/paper_reinovo.yaml");
+  const std::string seed_line = "      seed: 1\n";
+  ASSERT_NE(paper.find(seed_line), std::string::npos);
+  EXPECT_EQ(ParseCalibrationConfig(Parse(paper)).options.planner.select_run,
+            PosePlannerOptions::RunSelection::kBestFitness);
+  const std::string predicted =
+      Replaced(paper, seed_line, seed_line + "      select_run: predicted_error\n");
+  EXPECT_EQ(ParseCalibrationConfig(Parse(predicted)).options.planner.select_run,
+            PosePlannerOptions::RunSelection::kPredictedError);
+  try {
+    ParseCalibrationConfig(
+        Parse(Replaced(paper, seed_line, seed_line + "      select_run: newest\n")));
+    ADD_FAILURE() << "no error for an unknown run selection";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("select_run"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'newest'"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace twin

@@ -23,6 +23,8 @@ PosePlanResult SomePlan() {
   p.rejections.c3_visibility = 5;
   p.rejections.active_ik = 2;
   p.fitness_history = {{std::numeric_limits<double>::infinity(), 0.7, 0.1 / 3.0}, {0.9, 0.2}};
+  p.run_fitness = {0.1 / 3.0, 0.2};
+  p.run_predicted_error = {1.3e-4 / 3.0, std::numeric_limits<double>::infinity()};
   for (int k = 0; k < 2; ++k) {
     PlannedAxis a;
     a.camera_origin = Vector3(0.1 * k + 1e-17, std::sqrt(2.0), -std::acos(-1.0));
@@ -46,6 +48,8 @@ void ExpectBitEqual(const PosePlanResult& a, const PosePlanResult& b) {
   EXPECT_EQ(a.rejections.active_ik, b.rejections.active_ik);
   EXPECT_EQ(std::memcmp(&a.best_fitness, &b.best_fitness, sizeof(double)), 0);
   EXPECT_EQ(a.fitness_history, b.fitness_history);  // exact, infinity included
+  EXPECT_EQ(a.run_fitness, b.run_fitness);
+  EXPECT_EQ(a.run_predicted_error, b.run_predicted_error);
   for (std::size_t k = 0; k < a.axes.size(); ++k) {
     EXPECT_EQ(a.axes[k].camera_origin, b.axes[k].camera_origin);
     EXPECT_EQ(a.axes[k].direction, b.axes[k].direction);

@@ -44,12 +44,28 @@ TEST(PlanStoreTest, EveryInputThatChangesThePlanChangesTheText) {
       {"C3", [](PlanInputs* p) { p->options.max_visibility_angle *= 1.0000001; }},
       {"ik seed", [](PlanInputs* p) { p->options.ik.seed = 9; }},
       {"board normal", [](PlanInputs* p) { p->options.board_normal_in_E.x() = 1e-12; }},
+      {"run selection",
+       [](PlanInputs* p) {
+         p->options.select_run = PosePlannerOptions::RunSelection::kPredictedError;
+       }},
   };
   for (const auto& [what, edit] : edits) {
     PlanInputs p = Inputs();
     edit(&p);
     EXPECT_NE(PlanInputsText(p), base) << what;  // exact (hex) numbers: the last bit counts
   }
+  // With the predicted-error selection its configurations and seed choose the run too; with
+  // the paper's selection they do not (and the text stays that of plans made before them).
+  PlanInputs predicted = Inputs();
+  predicted.options.select_run = PosePlannerOptions::RunSelection::kPredictedError;
+  PlanInputs other_seed = predicted, other_count = predicted, paper = Inputs();
+  other_seed.options.prediction_seed = 2;
+  other_count.options.prediction_configurations = 201;
+  paper.options.prediction_seed = 2;
+  EXPECT_NE(PlanInputsText(other_seed), PlanInputsText(predicted));
+  EXPECT_NE(PlanInputsText(other_count), PlanInputsText(predicted));
+  EXPECT_EQ(PlanInputsText(paper), base);
+  EXPECT_EQ(base.find("select_run"), std::string::npos);
 }
 
 }  // namespace

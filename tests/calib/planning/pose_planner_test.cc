@@ -1,5 +1,6 @@
 #include "calib/planning/pose_planner.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -170,6 +171,48 @@ TEST_F(PosePlannerTest, SameSeedIsIdenticalDifferentSeedDiffers) {
   }
   EXPECT_NE(a.best_fitness, c.best_fitness);
   EXPECT_GT((a.axes[0].q_active - c.axes[0].q_active).norm(), 1e-6);
+}
+
+// Every planned axis taken twice doubles the information on every identifiable combination
+// (each copy has its own nuisance line, so the profiled information adds), so the predicted
+// error falls by sqrt(2) exactly; the tolerance is rounding (1e-6 relative).
+TEST_F(PosePlannerTest, PredictedErrorFallsBySqrtTwoWithEveryAxisTwice) {
+  ASSERT_EQ(result_->status, PosePlannerStatus::kSuccess) << result_->reason;
+  const KinematicModel passive = ReinovoLikeModel(1);
+  const double once = PredictedPositionError(passive, result_->axes, 1e-6, 50, 3);
+  std::vector<PlannedAxis> twice = result_->axes;
+  twice.insert(twice.end(), result_->axes.begin(), result_->axes.end());
+  const double both = PredictedPositionError(passive, twice, 1e-6, 50, 3);
+  std::printf("predicted position error: %.4g mm, every axis twice %.4g mm\n", 1e3 * once,
+              1e3 * both);
+  ASSERT_TRUE(std::isfinite(once));
+  ASSERT_GT(once, 0.0);
+  EXPECT_NEAR(once / both, std::sqrt(2.0), 1e-6 * std::sqrt(2.0));
+  EXPECT_THROW(PredictedPositionError(passive, result_->axes, 1e-6, 0, 3), InputError);
+}
+
+// Each run's fitness and predicted error are reported, and the selection rule picks the run
+// with the lowest of the one it names.
+TEST_F(PosePlannerTest, RunSelectionPicksTheLowestOfItsFigure) {
+  ASSERT_EQ(result_->status, PosePlannerStatus::kSuccess) << result_->reason;
+  PosePlannerOptions o = SmallOptions();
+  ASSERT_EQ(result_->run_fitness.size(), static_cast<size_t>(o.runs));
+  ASSERT_EQ(result_->run_predicted_error.size(), static_cast<size_t>(o.runs));
+  const auto argmin = [](const std::vector<double>& v) {
+    return static_cast<int>(std::min_element(v.begin(), v.end()) - v.begin());
+  };
+  EXPECT_EQ(result_->best_run, argmin(result_->run_fitness));
+  o.select_run = PosePlannerOptions::RunSelection::kPredictedError;
+  const PosePlanResult p = PlanCalibrationPoses(ReinovoLikeModel(0), ReinovoLikeModel(1),
+                                                BaseToBase(), HandEye(), o);
+  ASSERT_EQ(p.status, PosePlannerStatus::kSuccess) << p.reason;
+  // The runs are the same (same seed); only the choice differs.
+  EXPECT_EQ(p.run_fitness, result_->run_fitness);
+  EXPECT_EQ(p.best_run, argmin(p.run_predicted_error));
+  EXPECT_EQ(p.best_fitness, p.run_fitness[p.best_run]);
+  EXPECT_EQ(p.run_predicted_error[p.best_run],
+            PredictedPositionError(ReinovoLikeModel(1), p.axes, o.rank_tolerance,
+                                   o.prediction_configurations, o.prediction_seed));
 }
 
 TEST(PosePlanner, EmptyDistanceWindowGivesNoFeasiblePoses) {
