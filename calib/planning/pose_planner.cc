@@ -512,11 +512,16 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
   for (int run = 0; run < o.runs; ++run) {
     result.fitness_history.push_back(runs[run].history);
     result.run_fitness.push_back(runs[run].best);
-    const double predicted =
-        std::isfinite(runs[run].best)
-            ? PredictedPositionError(passive, runs[run].axes, o.rank_tolerance,
-                                     o.prediction_configurations, o.prediction_seed)
-            : kInf;
+    double predicted = kInf;
+    if (std::isfinite(runs[run].best)) {
+      try {
+        predicted = PredictedPositionError(passive, runs[run].axes, o.rank_tolerance,
+                                           o.prediction_configurations, o.prediction_seed);
+      } catch (const InputError&) {
+        // Samples the identification refuses (cannot happen for a feasible plan of >= 3
+        // positions per axis): no prediction, the run stays selectable by 1/O1.
+      }
+    }
     result.run_predicted_error.push_back(predicted);
     const bool better = o.select_run == PosePlannerOptions::RunSelection::kPredictedError
                             ? predicted < best_predicted
