@@ -33,6 +33,7 @@
 #include "bench/report/report_html.h"
 #include "bench/io/scenario.h"
 #include "bench/io/yaml_util.h"
+#include "calib/common/clock.h"
 #include "calib/common/errors.h"
 #include "calib/model/parameters.h"
 #include "sim/world/mujoco_handles.h"
@@ -42,12 +43,6 @@ namespace twin {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 // JSON number, or null for NaN / infinity (JSON has neither).
 json Num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
@@ -165,7 +160,7 @@ class TimedCell : public Cell {
   MoveResult MoveTo(int robot, const JointVector& q) override {
     const auto t0 = Clock::now();
     MoveResult r = cell_.MoveTo(robot, q);
-    move_s += Seconds(t0);
+    move_s += SecondsSince(t0);
     ++moves;
     return r;
   }
@@ -173,14 +168,14 @@ class TimedCell : public Cell {
   cv::Mat GrabImage() override {
     const auto t0 = Clock::now();
     cv::Mat image = cell_.GrabImage();
-    grab_s += Seconds(t0);
+    grab_s += SecondsSince(t0);
     ++frames;
     return image;
   }
   cv::Mat GrabImageRegion(const cv::Rect& roi) override {
     const auto t0 = Clock::now();
     cv::Mat image = cell_.GrabImageRegion(roi);
-    grab_s += Seconds(t0);
+    grab_s += SecondsSince(t0);
     ++frames;
     ++region_frames;
     pixels += static_cast<double>(image.total());
@@ -223,7 +218,7 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                                     std::map<int, DiscoveryResult>* diagnoses) {
   config.options.progress = [&](const std::string& line) {
     if (quiet) return;
-    std::printf("[%7.1f s] %s\n", Seconds(t_start), line.c_str());
+    std::printf("[%7.1f s] %s\n", SecondsSince(t_start), line.c_str());
     std::fflush(stdout);
   };
   TimedCell timed(cell);
@@ -247,7 +242,7 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
     d.axis_source = sc.path + " scenario.calibration.diagnosis (robot " + name + ")";
     if (!quiet) {
       d.progress = [&, name](const std::string& line) {
-        std::printf("[%7.1f s] %s: %s\n", Seconds(t_start), name.c_str(), line.c_str());
+        std::printf("[%7.1f s] %s: %s\n", SecondsSince(t_start), name.c_str(), line.c_str());
         std::fflush(stdout);
       };
     }
@@ -268,7 +263,7 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
       diagnosis_skipped[rc.robot] = e.what();
     }
   }
-  const double diagnosis_s = Seconds(t_diagnosis);
+  const double diagnosis_s = SecondsSince(t_diagnosis);
 
   // Scoring: estimates meet truth only here, after the procedure ended.
   const auto t_score = Clock::now();
@@ -520,8 +515,8 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
   }
   (*report)["robots"] = robots;
   WriteText(staging / "measurements.csv", csv.str());
-  const double scoring = Seconds(t_score);
-  (*report)["timing_s"] = {{"total", Seconds(t_start)}, {"intrinsics", result.intrinsics_s},
+  const double scoring = SecondsSince(t_score);
+  (*report)["timing_s"] = {{"total", SecondsSince(t_start)}, {"intrinsics", result.intrinsics_s},
                         {"intrinsics_detection", result.intrinsics.detect_s},
                         {"intrinsics_zhang", result.intrinsics.calibrate_s},
                         {"planning", planning},      {"planning_compute", planning_compute},
@@ -785,7 +780,7 @@ int RunCalibrationScenario(const RunOptions& o) {
     std::printf("wrote %s/{report.json, report.html, measurements.csv, servo_*.png}\n",
                 out.string().c_str());
   }
-  if (!o.junit.empty()) WriteJunit(o.junit, sc.name, verdict, Seconds(t_start));
+  if (!o.junit.empty()) WriteJunit(o.junit, sc.name, verdict, SecondsSince(t_start));
   PrintVerdict(verdict);
   return VerdictExitCode(verdict);
 }

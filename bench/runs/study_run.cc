@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <chrono>
 #include <climits>
 #include <cstdio>
 #include <cstring>
@@ -35,18 +34,13 @@
 #include "bench/runs/tracker_run.h"
 #include "bench/runs/trial_record.h"
 #include "bench/runs/trials_file.h"
+#include "calib/common/clock.h"
 #include "calib/common/errors.h"
 
 namespace twin {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 volatile sig_atomic_t g_interrupted = 0;
 void OnSignal(int) { g_interrupted = 1; }
@@ -158,7 +152,7 @@ class Progress {
     ++done_now_;
     if (status != "ok") ++failed_;
     if (!enabled_) return;
-    const double rate = done_now_ / std::max(1e-9, Seconds(start_));  // trials per second
+    const double rate = done_now_ / std::max(1e-9, SecondsSince(start_));  // trials per second
     const double eta = (total_ - done_) / std::max(1e-9, rate);
     if (tty_) {
       Bar(running, eta);
@@ -387,7 +381,7 @@ int RunStudy(const StudyOptions& o) {
     const Running r = it->second;
     running.erase(it);
     TrialOutcome outcome;
-    outcome.wall_s = Seconds(r.start);
+    outcome.wall_s = SecondsSince(r.start);
     outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status)
                                           : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
     json report;
@@ -454,7 +448,8 @@ int RunStudy(const StudyOptions& o) {
               "s, mean trial wall time %.2f s; wrote %s/{trials.jsonl, summary.json, "
               "summary.html}\n",
               in_shard, shard.c_str(), summary["trials"]["failed"].get<int>(), finished,
-              Seconds(t_study), finished > 0 ? wall_sum / finished : 0.0, out.string().c_str());
+              SecondsSince(t_study), finished > 0 ? wall_sum / finished : 0.0,
+              out.string().c_str());
   close(lock_fd);
   return 0;
 }

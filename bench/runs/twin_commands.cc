@@ -5,7 +5,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <vector>
@@ -15,6 +14,7 @@
 #include "bench/io/model_loader.h"
 #include "bench/io/output_files.h"
 #include "bench/io/scenario.h"
+#include "calib/common/clock.h"
 #include "calib/common/errors.h"
 #include "sim/cell/twin_cell.h"
 
@@ -22,11 +22,6 @@ namespace twin {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-
-double SecondsSince(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 // Small wrist moves of the board robot around its initial pose, for a few distinct views.
 JointVector ViewPose(const JointVector& q0, int k) {

@@ -12,6 +12,7 @@
 #include "bench/report/acceptance.h"
 #include "bench/report/report_html.h"
 #include "bench/runs/handclasp_run.h"
+#include "calib/common/clock.h"
 #include "calib/common/errors.h"
 #include "calib/procedures/handclasp_procedure.h"
 #include "sim/world/mujoco_handles.h"
@@ -19,12 +20,6 @@
 namespace twin {
 namespace fs = std::filesystem;
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 
 // Moves both robots back to the scenario's initial joints (the calibration's intrinsics step
@@ -108,7 +103,7 @@ int RunWorkflowScenario(const RunOptions& o) {
     // (a) Handclasp with the controllers' nominal kinematics.
     const std::array<KinematicModel, 2> nominal = {sc.twin.robots[0].model,
                                                    sc.twin.robots[1].model};
-    progress << "[" << Seconds(t_start) << " s] (a) handclasp with nominal kinematics\n";
+    progress << "[" << SecondsSince(t_start) << " s] (a) handclasp with nominal kinematics\n";
     stage_a = RunHandclaspStage(cell, sc, nominal, progress);
     const HandclaspStageResult& a = *stage_a;
     workflow["nominal_kinematics"] = StageSummary(a, "nominal");
@@ -123,7 +118,8 @@ int RunWorkflowScenario(const RunOptions& o) {
     std::array<KinematicModel, 2> calibrated = nominal;
     if (failure.empty()) {
       config.knowledge.X_B1B2 = a.X_B1B2_constrained;
-      progress << "[" << Seconds(t_start) << " s] (b) optical-axis calibration of both robots\n";
+      progress << "[" << SecondsSince(t_start)
+               << " s] (b) optical-axis calibration of both robots\n";
       std::fflush(stdout);
       const OpticalAxisResult b =
           RunCalibrationStage(cell, sc, config, staging, o.quiet, t_start, &report);
@@ -151,7 +147,7 @@ int RunWorkflowScenario(const RunOptions& o) {
       if (m.status != MoveStatus::kSettled) failure = "exchanging the tools back: " + m.reason;
     }
     if (failure.empty()) {
-      progress << "[" << Seconds(t_start) << " s] (c) handclasp with calibrated kinematics, "
+      progress << "[" << SecondsSince(t_start) << " s] (c) handclasp with calibrated kinematics, "
                << 1e3 * handclasp.calibrated_operator_error_m << " mm operator error\n";
       HandclaspStageOptions stage;
       stage.operator_error_m = handclasp.calibrated_operator_error_m;
@@ -175,7 +171,7 @@ int RunWorkflowScenario(const RunOptions& o) {
     if (!failure.empty()) report["reason"] = failure;
     report["base_frame"]["installation"] = ToString(handclasp.constraint);
     report["base_frame"]["workflow"] = workflow;
-    if (report.contains("timing_s")) report["timing_s"]["workflow_total"] = Seconds(t_start);
+    if (report.contains("timing_s")) report["timing_s"]["workflow_total"] = SecondsSince(t_start);
     if (!failure.empty()) {
       // A refused stage is exit 2 with its reason (README, exit codes); nothing is written.
       std::string detail;
@@ -230,7 +226,7 @@ int RunWorkflowScenario(const RunOptions& o) {
     DiscardStaging(staging.string());
     throw;
   }
-  if (!o.junit.empty()) WriteJunit(o.junit, sc.name, verdict, Seconds(t_start));
+  if (!o.junit.empty()) WriteJunit(o.junit, sc.name, verdict, SecondsSince(t_start));
   PrintVerdict(verdict);
   return VerdictExitCode(verdict);
 }

@@ -120,9 +120,8 @@ struct PosePlanResult {
   std::vector<PlannedAxis> axes;            ///< q axes of the best particle (empty on failure)
   double best_fitness = 0.0;                ///< f_ob = 1/O1 of eq. 39 of the returned poses
   int best_run = -1;                        ///< run that produced the returned poses
-  std::vector<double> run_fitness;          ///< each run's best fitness 1/O1 (not stored in plan caches)
-  /// Each run's PredictedPositionError [m] (not stored in plan caches).
-  std::vector<double> run_predicted_error;
+  std::vector<double> run_fitness;          ///< each run's best fitness 1/O1
+  std::vector<double> run_predicted_error;  ///< each run's PredictedPositionError [m]
   /// Best fitness of each run after initialisation ([0]) and after every iteration (Fig. 10).
   std::vector<std::vector<double>> fitness_history;
   RejectionCounts rejections;               ///< all runs together

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <future>
 #include <map>
 #include <memory>
@@ -14,6 +13,7 @@
 #include <opencv2/calib3d.hpp>
 
 #include "calib/cell/cell_moves.h"
+#include "calib/common/clock.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/inverse_kinematics.h"
@@ -22,12 +22,6 @@
 
 namespace twin {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point since) {
-  return std::chrono::duration<double>(Clock::now() - since).count();
-}
 
 std::string Fixed(double v, int digits) {
   std::ostringstream os;
@@ -159,7 +153,7 @@ PlanOutcome PlanWithStore(PlanInputs inputs, std::shared_ptr<PlanStore> store,
       }
     }
   }
-  out.seconds = Seconds(t0);
+  out.seconds = SecondsSince(t0);
   return out;
 }
 
@@ -336,7 +330,7 @@ void IdentifyRobot(const std::vector<int>& calibration_axes,
     rc->identified = rc->linearized.model;
     rc->method = "linearized";
   }
-  rc->identification_s += Seconds(t0);
+  rc->identification_s += SecondsSince(t0);
   rc->calibration_error = Misaligned(rc->nominal, rc->identified, cal);
   rc->validation_error = Misaligned(rc->nominal, rc->identified, val);
   int num_axes = 0;
@@ -358,7 +352,7 @@ void IdentifyRobot(const std::vector<int>& calibration_axes,
     const auto t1 = Clock::now();
     const std::vector<AxisSample> all_samples = Subset(rc->samples, all);
     NonlinearIdentificationResult f = IdentifyNonlinear(rc->nominal, all_samples, options.nonlinear);
-    rc->identification_s += Seconds(t1);
+    rc->identification_s += SecondsSince(t1);
     if (f.status != NonlinearIdentificationStatus::kFailed) {
       rc->covariance = EstimateIdentificationCovariance(rc->nominal, all_samples, f);
       rc->identified = f.model;
@@ -461,7 +455,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
       mount(BracketTarget::kFeatureBoard);
       say("intrinsics: feature board mounted again");
     }
-    out.intrinsics_s = Seconds(t0);
+    out.intrinsics_s = SecondsSince(t0);
     if (out.intrinsics.status != IntrinsicsStatus::kSuccess) {
       throw InputError("intrinsics", std::string(ToString(out.intrinsics.status)) + ": " +
                                          out.intrinsics.reason +
@@ -499,7 +493,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
     rc.plan = std::move(planned_outcome.plan);
     rc.plan_from_store = planned_outcome.from_store;
     rc.plan_compute_s = planned_outcome.seconds;
-    rc.planning_s = Seconds(t0);
+    rc.planning_s = SecondsSince(t0);
     if (rc.plan.status != PosePlannerStatus::kSuccess) {
       throw InputError(name(r) + " planning", rc.plan.reason);
     }
@@ -668,14 +662,14 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
             Fixed(1000.0 * p_C->z(), 1) + " mm");
       }
     }
-    rc.servoing_s = Seconds(t0);
+    rc.servoing_s = SecondsSince(t0);
 
     // 3-4. Split by whole axes and identify.
     std::vector<int> cal_axes, val_axes;
     const auto t_split = Clock::now();
     SplitAxes(rc.nominal, rc.samples, num_axes, options, &cal_axes, &val_axes,
               &rc.split_candidates);
-    rc.identification_s += Seconds(t_split);
+    rc.identification_s += SecondsSince(t_split);
     if (!rc.split_candidates.empty()) {
       std::string axes;
       for (int k : cal_axes) axes += (axes.empty() ? "" : ", ") + std::to_string(k + 1);

@@ -2,7 +2,6 @@
 #include "calib/vision/intrinsics_calibration.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <random>
 #include <sstream>
@@ -10,15 +9,12 @@
 
 #include <opencv2/calib3d.hpp>
 
+#include "calib/common/clock.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/inverse_kinematics.h"
 
 namespace twin {
 namespace {
-
-double SecondsSince(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // Object points of the inner corners in the board plane (z = 0), row by row like
 // findChessboardCorners, centred on the middle corner [m].
@@ -83,7 +79,7 @@ IntrinsicsResult CalibrateIntrinsics(Cell& cell, int board_robot,
       continue;
     }
     const cv::Mat image = cell.GrabImage();
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = Clock::now();
     const FeatureDetection det = DetectFeaturePoint(image, board);
     result.detect_s += SecondsSince(t0);
     if (det.status != DetectionStatus::kFound) {
@@ -150,7 +146,7 @@ IntrinsicsResult CalibrateFromCorners(std::vector<std::vector<cv::Point3f>> obje
   // Over 85 twin trials (the KUKA, ABB and paper scenarios) two views were dropped, at 7 and
   // 12 times the median; Gaussian corner noise alone drops none (the tests).
   for (;;) {
-    const auto t0 = std::chrono::steady_clock::now();
+    const auto t0 = Clock::now();
     try {
       result.rms_px =
           cv::calibrateCamera(object_points, image_points, image_size, K, dist, rvecs, tvecs,
