@@ -16,7 +16,7 @@ const YamlKeys kKeys = {"robots",           "rough_base_from_robot1", "rough_han
                         "intrinsics_views", "planning",               "servo",
                         "calibration_axes", "scoring",                "calibration_split",
                         "refit_all_axes",   "diagnosis",              "board_mass_kg",
-                        "intrinsics_distortion", "intrinsics_target"};
+                        "intrinsics_distortion", "intrinsics_target", "board_pose_test_p"};
 const YamlKeys kTargetKeys = {"squares", "square_mm"};
 const YamlKeys kPlanningKeys = {"axes",
                                 "positions_per_axis",
@@ -232,6 +232,10 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
   o.calibration_axes = std::min(3, p.num_axes);
   if (const auto f = m.Find("calibration_axes", false)) o.calibration_axes = r.Integer(*f);
   if (const auto f = m.Find("refit_all_axes", false)) o.refit_all_axes = r.Bool(*f);
+  if (const auto f = m.Find("board_pose_test_p", false)) {
+    o.board_pose_test_p = BoundedNumber(r, *f, 0.0, 0.5, "a p-value; 0 turns the board pose's "
+                                        "test off, and above 0.5 it would refuse most poses");
+  }
   if (const auto f = m.Find("calibration_split", false)) {
     const std::string v = r.String(*f);
     if (v == "best_conditioned") {

@@ -51,6 +51,9 @@
 //                                      # largest smallest identifiable singular value) or first
 //     refit_all_axes: true             # deliver the model refit on all axes after validation
 //                                      # (false: the calibration-set model)
+//     board_pose_test_p: 1e-6          # an aligned pose whose board pose fails the chi-square
+//                                      # test of its corner residuals at this level is left
+//                                      # out (OpticalAxisOptions::board_pose_test_p; 0: off)
 //     scoring: {configurations: 200, seed: 1}   # truth metrics (bench only)
 //     diagnosis: {enabled: true, ...}  # model discovery per calibrated robot on its aligned
 //                                      # poses (bench/io/diagnosis_config.h)

@@ -103,7 +103,7 @@ std::string Csv(double v, int precision = 10) {
 std::string CsvHeader(int joints) {
   std::string h = "robot,camera_robot,axis,index,set";
   for (int i = 1; i <= joints; ++i) h += ",q" + std::to_string(i) + "_deg";
-  return h + ",du_px,dv_px,depth_mm,offset_x_mm,offset_y_mm,offset_z_mm,frames,moves,du0_px,dv0_px";
+  return h + ",du_px,dv_px,depth_mm,offset_x_mm,offset_y_mm,offset_z_mm,frames,moves,du0_px,dv0_px,pose_rms_px";
 }
 
 // One CSV row per aligned pose (what a hardware cell records).
@@ -124,7 +124,7 @@ void AppendRows(const RobotCalibration& rc, const std::string& robot, const std:
          << Csv(1000 * p.p_C.z()) << ',' << Csv(1000 * p.offset.x()) << ','
          << Csv(1000 * p.offset.y()) << ',' << Csv(1000 * p.offset.z()) << ',' << p.frames << ','
          << p.moves << ',' << Csv(p.first_pixel_error.x, 6) << ',' << Csv(p.first_pixel_error.y, 6)
-         << '\n';
+         << ',' << Csv(p.pose_rms_px, 4) << '\n';
   }
 }
 
@@ -149,6 +149,39 @@ cv::Mat Annotated(const cv::Mat& image, const PinholeIntrinsics& k, const cv::Po
   };
   cv::circle(out, fixed(pp), 12 << shift, cv::Scalar(0, 0, 255), 2, cv::LINE_AA, shift);
   cv::circle(out, fixed(pp + error), 6 << shift, cv::Scalar(0, 200, 0), 2, cv::LINE_AA, shift);
+  return out;
+}
+
+// A refused board pose for the report: the board's part of the image magnified kRefusedZoom
+// times (nearest neighbour, so the pixels stay visible), a green circle on each detected corner
+// and a red line from it towards the pose's reprojection, that offset drawn kRefusedOffsetGain
+// times longer (a misplaced corner is a fraction of a pixel off).
+constexpr int kRefusedZoom = 6;
+constexpr double kRefusedOffsetGain = 20.0;
+cv::Mat RefusedPoseFigure(const RefusedPoseImage& im) {
+  cv::Rect box = cv::boundingRect(std::vector<cv::Point2f>(im.detected.begin(), im.detected.end()));
+  const int margin = std::max(8, box.width / 2);
+  box = cv::Rect(box.x - margin - im.origin.x, box.y - margin - im.origin.y,
+                 box.width + 2 * margin, box.height + 2 * margin) &
+        cv::Rect(cv::Point(0, 0), im.image.size());
+  if (box.area() <= 0) return im.image.clone();
+  cv::Mat out;
+  cv::resize(im.image(box), out, cv::Size(), kRefusedZoom, kRefusedZoom, cv::INTER_NEAREST);
+  if (out.channels() == 1) cv::cvtColor(out, out, cv::COLOR_GRAY2BGR);
+  const int shift = 4;
+  auto at = [&](const cv::Point2d& frame_px) {
+    // Frame pixel u (centre u) is crop cell j = u - x0, magnified [j Z, (j + 1) Z), centre
+    // (j + 0.5) Z.
+    const cv::Point2d local = frame_px - cv::Point2d(im.origin + box.tl()) + cv::Point2d(0.5, 0.5);
+    return cv::Point(static_cast<int>(std::lround(local.x * kRefusedZoom * (1 << shift))),
+                     static_cast<int>(std::lround(local.y * kRefusedZoom * (1 << shift))));
+  };
+  for (size_t c = 0; c < im.detected.size() && c < im.reprojected.size(); ++c) {
+    const cv::Point2d d = im.detected[c];
+    const cv::Point2d tip = d + kRefusedOffsetGain * (im.reprojected[c] - d);
+    cv::circle(out, at(d), 5 << shift, cv::Scalar(0, 200, 0), 2, cv::LINE_AA, shift);
+    cv::line(out, at(d), at(tip), cv::Scalar(0, 0, 255), 2, cv::LINE_AA, shift);
+  }
   return out;
 }
 
@@ -361,6 +394,19 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                 << ", " << e.y << ") px";
         images.push_back({{"file", file}, {"caption", caption.str()}});
       }
+    }
+    for (const RefusedPoseImage& im : rc.refused_images) {
+      const std::string file = "servo_" + name + "_axis" + std::to_string(im.axis) + "_position" +
+                               std::to_string(im.index) + "_refused.png";
+      WritePng(staging / file, RefusedPoseFigure(im));
+      std::ostringstream caption;
+      caption.precision(3);
+      caption << name << ", axis " << im.axis << ", position " << im.index
+              << ": board pose refused, corners reprojected with RMS " << im.rms_px
+              << " px (green: detected corners, red: the pose's reprojection; the board "
+              << "magnified " << kRefusedZoom << " times, the offsets a further "
+              << kRefusedOffsetGain << " times)";
+      images.push_back({{"file", file}, {"caption", caption.str()}});
     }
     const int aligned = static_cast<int>(rc.aligned.size());
     r["servo"] = {{"aligned_poses", aligned},

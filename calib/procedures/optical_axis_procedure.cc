@@ -18,6 +18,7 @@
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/inverse_kinematics.h"
 #include "calib/vision/axis_start_predictor.h"
+#include "calib/vision/board_pose.h"
 #include "calib/vision/board_region.h"
 
 namespace twin {
@@ -31,60 +32,11 @@ std::string Fixed(double v, int digits) {
   return os.str();
 }
 
-// The feature point P in the camera frame from the board's pose: solvePnP (IPPE, planar) on
-// all inner corners with the known square length, estimated intrinsics and distortion. The
-// centre corner is the board's centre of symmetry, so P does not depend on how OpenCV ordered
-// the corners. nullopt when the board was not found or lies behind the camera. `det` is in
-// frame coordinates.
-//
-// Its covariance: the pose's, sigma^2 (J^T J)^-1 with J the reprojections' Jacobian in the
-// pose (cv::projectPoints, at the refined pose) and sigma the corner noise the intrinsics step
-// measured (its RMS reprojection error over every corner of every view); P is the board
-// frame's origin, so its covariance is the translation block. The intrinsics' own error (a
-// common scale of every depth) is not in it: that is one error for the run, not noise.
-struct FeaturePoint {
-  Vector3 p_C = Vector3::Zero();
-  Matrix3 covariance = Matrix3::Zero();
-};
-
-std::optional<FeaturePoint> FeaturePointInCamera(const FeatureDetection& det,
-                                                 const BoardGeometry& board,
-                                                 const IntrinsicsResult& intr) {
-  if (det.status != DetectionStatus::kFound) return std::nullopt;
-  const cv::Size n = det.pattern_size;
-  std::vector<cv::Point3d> object;
-  for (int r = 0; r < n.height; ++r) {
-    for (int c = 0; c < n.width; ++c) {
-      object.emplace_back((c - n.width / 2) * board.square_m, (r - n.height / 2) * board.square_m,
-                          0.0);
-    }
-  }
-  std::vector<cv::Point2d> pixels(det.corners.begin(), det.corners.end());
-  const PinholeIntrinsics& k = intr.intrinsics;
-  const DistortionCoefficients& d = intr.distortion;
-  const cv::Matx33d K(k.fx, 0, k.cx, 0, k.fy, k.cy, 0, 0, 1);
-  const cv::Vec<double, 5> dist(d.k1, d.k2, d.p1, d.p2, d.k3);
-  cv::Vec3d rvec, tvec;
-  if (!cv::solvePnP(object, pixels, K, dist, rvec, tvec, false, cv::SOLVEPNP_IPPE)) {
-    return std::nullopt;
-  }
-  // Refine by Levenberg-Marquardt on the reprojection error.
-  cv::solvePnPRefineLM(object, pixels, K, dist, rvec, tvec);
-  if (!(tvec[2] > 0)) return std::nullopt;
-  FeaturePoint f;
-  f.p_C = Vector3(tvec[0], tvec[1], tvec[2]);
-  std::vector<cv::Point2d> projected;
-  cv::Mat jacobian;  // 2N x (3 rvec + 3 tvec + 2 f + 2 c + 5 distortion)
-  cv::projectPoints(object, rvec, tvec, K, dist, projected, jacobian);
-  Eigen::Matrix<double, 6, 6> JtJ = Eigen::Matrix<double, 6, 6>::Zero();
-  for (int row = 0; row < jacobian.rows; ++row) {
-    Eigen::Matrix<double, 6, 1> g;
-    for (int c = 0; c < 6; ++c) g(c) = jacobian.at<double>(row, c);
-    JtJ += g * g.transpose();
-  }
-  const Eigen::Matrix<double, 6, 6> cov = intr.rms_px * intr.rms_px * JtJ.inverse();
-  if (cov.allFinite()) f.covariance = cov.block<3, 3>(3, 3);
-  return f;
+std::string Sci(double v) {
+  std::ostringstream os;
+  os.precision(2);
+  os << v;
+  return os.str();
 }
 
 // The samples of `axes` (plan indices), renumbered 0.. in that order; axes with fewer than 3
@@ -187,6 +139,10 @@ void ValidateOpticalAxisOptions(const OpticalAxisOptions& o) {
   ValidateServoOptions(o.servo);
   ValidateLinearizedIdentificationOptions(o.linearized);
   ValidateNonlinearIdentificationOptions(o.nonlinear);
+  if (!(o.board_pose_test_p >= 0 && o.board_pose_test_p < 1)) {
+    throw InputError(where + ".board_pose_test_p",
+                     Sci(o.board_pose_test_p) + ": expected a p-value in [0, 1) (0: no test)");
+  }
   if (o.calibration_axes < 1 || o.calibration_axes > o.planner.num_axes) {
     throw InputError(where + ".calibration_axes",
                      std::to_string(o.calibration_axes) + ": expected 1 .. num_axes (" +
@@ -586,14 +542,42 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
           say(where + ": skipped (" + ToString(sr.status) + "): " + sr.reason);
           continue;
         }
-        const std::optional<FeaturePoint> fp =
-            FeaturePointInCamera(sr.detection_after, knowledge.board, out.intrinsics);
+        const std::optional<BoardPose> fp =
+            EstimateBoardPose(sr.detection_after, knowledge.board, out.intrinsics);
         if (!fp) {
           rc.failed.push_back({k, i, "board_pose_failed",
                                "aligned, but solvePnP found no board pose in the last image",
                                sr.frames});
           say(where + ": skipped: no board pose");
           continue;
+        }
+        if (options.board_pose_test_p > 0) {
+          // The corner noise: the intrinsics' RMS reprojection error over every corner.
+          const double sigma = out.intrinsics.rms_px;
+          const BoardPoseTest test = TestBoardPose(*fp, sigma);
+          if (test.p_value < options.board_pose_test_p) {
+            const std::string why =
+                "the board pose reprojects its corners with RMS " +
+                Fixed(fp->reprojection_rms_px, 3) + " px against the corner noise " +
+                Fixed(sigma, 3) + " px (chi-square " + Fixed(test.statistic, 1) + " on " +
+                Fixed(test.dof, 0) + " dof, p " + Sci(test.p_value) + " < " +
+                Sci(options.board_pose_test_p) + "): a misplaced corner";
+            rc.failed.push_back({k, i, "board_pose_inconsistent", why, sr.frames});
+            if (static_cast<int>(rc.refused_images.size()) < options.kept_images) {
+              RefusedPoseImage im;
+              im.axis = k;
+              im.index = i;
+              im.image = sr.image_after;
+              im.origin = sr.image_after_origin;
+              im.detected.assign(sr.detection_after.corners.begin(),
+                                 sr.detection_after.corners.end());
+              im.reprojected = fp->reprojected;
+              im.rms_px = fp->reprojection_rms_px;
+              rc.refused_images.push_back(im);
+            }
+            say(where + ": skipped: " + why);
+            continue;
+          }
         }
         AlignedPose ap;
         ap.axis = k;
@@ -604,6 +588,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
         const Vector3* p_C = &fp->p_C;
         ap.p_C = *p_C;
         ap.offset = R_BpC * Vector3(p_C->x(), p_C->y(), 0.0);
+        ap.pose_rms_px = fp->reprojection_rms_px;
         ap.frames = sr.frames;
         ap.moves = sr.moves;
         ap.region_frames = sr.region_frames;

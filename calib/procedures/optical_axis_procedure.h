@@ -76,6 +76,14 @@ struct OpticalAxisOptions {
   /// delivered model is identified again from all aligned axes (true), as one refits on all
   /// data after cross-validation; false delivers the calibration-set model.
   bool refit_all_axes = true;
+  /// An aligned pose's board pose is tested before it becomes a sample: the refined pose's
+  /// reprojection residuals over the board's corners against the corner noise the intrinsics
+  /// step measured (chi-square, 2 N - 6 degrees of freedom). A corner the detector misplaced
+  /// (an occluding edge, a highlight) bends the pose: its depth and its offset from the axis
+  /// are then wrong by far more than their stated sigmas, and one such pose can move the
+  /// identified scale by 1e-3 (README). A pose whose p-value is below this is left out
+  /// (FailedPose "board_pose_inconsistent"); 0 keeps every pose.
+  double board_pose_test_p = 1e-6;
   /// Start each position of an axis with the correction the servo found at the previous one
   /// (the kinematic error changes little over 20 mm), so the servo starts close.
   bool carry_correction = true;
@@ -123,6 +131,7 @@ struct AlignedPose {
   Vector3 p_C = Vector3::Zero();      ///< feature point in the camera frame from the board
                                       ///< pose (solvePnP, known square) [m]
   Vector3 offset = Vector3::Zero();   ///< AxisSample::offset: (p_C.x, p_C.y, 0) in Bp [m]
+  double pose_rms_px = 0.0;           ///< the board pose's RMS reprojection error [px]
   int frames = 0;                     ///< images grabbed for this pose
   int moves = 0;                      ///< corrective moves
   int region_frames = 0;              ///< of `frames`, regions (ServoResult)
@@ -151,6 +160,17 @@ struct ServoImages {
   int axis = 0, index = 0;
   cv::Mat before, after;
   cv::Point2d error_before{0, 0}, error_after{0, 0};  ///< (du, dv) [px]
+};
+
+/// The last image of a pose whose board pose failed its test (OpticalAxisOptions::
+/// board_pose_test_p), for the report: what the detector found and how the pose fits it.
+struct RefusedPoseImage {
+  int axis = 0, index = 0;
+  cv::Mat image;                             ///< as grabbed (a region or the whole frame)
+  cv::Point origin{0, 0};                    ///< the image's top-left pixel in the frame
+  std::vector<cv::Point2d> detected;         ///< detected corners, frame coordinates [px]
+  std::vector<cv::Point2d> reprojected;      ///< the pose's reprojection of them [px]
+  double rms_px = 0.0;                       ///< RMS of their differences [px]
 };
 
 /// Everything about one calibrated (passive) robot.
@@ -183,6 +203,7 @@ struct RobotCalibration {
   MisalignedSummary calibration_error, validation_error;  ///< eq. 46
   std::vector<MisalignedSummary> per_axis;  ///< per plan axis (samples 0 when dropped)
   std::vector<ServoImages> images;
+  std::vector<RefusedPoseImage> refused_images;  ///< at most kept_images
   /// Wall times [s]: planning_s is how long the procedure waited for the plan (planning runs
   /// in the background from the start), plan_compute_s how long the planning itself took.
   double planning_s = 0, plan_compute_s = 0, servoing_s = 0, identification_s = 0;

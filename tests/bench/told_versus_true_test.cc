@@ -276,5 +276,27 @@ TEST(ToldVersusTrue, PlanningRunSelectionIsReadFromTheScenario) {
   }
 }
 
+// The board pose test's level from the scenario: on by default (1e-6), 0 turns it off, a value
+// that is not a usable p-value is an error naming the key.
+TEST(ToldVersusTrue, BoardPoseTestLevelIsReadFromTheScenario) {
+  const std::string paper = ReadFile(kScenarioDir + "/paper_reinovo.yaml");
+  const std::string line = "    calibration_axes: 6";
+  ASSERT_NE(paper.find(line), std::string::npos);
+  EXPECT_DOUBLE_EQ(ParseCalibrationConfig(Parse(paper)).options.board_pose_test_p, 1e-6);
+  EXPECT_DOUBLE_EQ(
+      ParseCalibrationConfig(Parse(Replaced(paper, line, "    board_pose_test_p: 0\n" + line)))
+          .options.board_pose_test_p,
+      0.0);
+  for (const char* bad : {"0.9", "-1e-3"}) {
+    try {
+      ParseCalibrationConfig(
+          Parse(Replaced(paper, line, "    board_pose_test_p: " + std::string(bad) + "\n" + line)));
+      ADD_FAILURE() << "no error for board_pose_test_p " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("board_pose_test_p"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace twin
