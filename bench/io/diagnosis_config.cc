@@ -16,11 +16,11 @@ void ParseDiagnosisSection(const YamlReader& r, const YamlField& field,
                            const KinematicModel& nominal, DiagnosisConfig* c,
                            DiscoveryOptions* o, bool optical_axes) {
   static const YamlKeys kKeys = {"enabled", "alpha",      "min_gain_percent", "max_effects",
-                                 "folds",   "truth_poses", "candidates"};
+                                 "folds",   "truth_poses", "candidates", "screen"};
   static const YamlKeys kOpticalKeys = {"enabled",     "alpha",      "min_gain_percent",
                                         "max_effects", "folds",      "truth_poses",
                                         "candidates",  "perpendicular_sigma_mm",
-                                        "depth_sigma_mm", "encoder_sigma_deg"};
+                                        "depth_sigma_mm", "encoder_sigma_deg", "screen"};
   const YamlMap d(r, field, optical_axes ? kOpticalKeys : kKeys);
   // Stated noise: a sigma below 0.1 um is no camera's, above 10 mm no calibration's.
   const auto sigma_mm = [&](const char* key, double* out) {
@@ -38,6 +38,7 @@ void ParseDiagnosisSection(const YamlReader& r, const YamlField& field,
     o->joint_sigma_rad = DegToRad(deg);
   }
   if (const auto v = d.Find("enabled", false)) c->enabled = r.Bool(*v);
+  if (const auto v = d.Find("screen", false)) o->screen_when_noise = r.Bool(*v);
   if (const auto v = d.Find("alpha", false)) o->alpha = r.Number(*v);
   if (const auto v = d.Find("min_gain_percent", false)) o->min_gain_percent = r.Number(*v);
   if (const auto v = d.Find("max_effects", false)) o->max_effects = r.Integer(*v);

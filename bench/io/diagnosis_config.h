@@ -1,9 +1,11 @@
 // The `diagnosis:` section of a scenario's procedure (model discovery, README "Model
 // discovery"), shared by tracker_calibration and calibration (optical axes):
 //   diagnosis: {enabled: true, alpha: 0.05, min_gain_percent: 5, max_effects: 3, folds: 5,
-//               candidates: [joint_compliance:2, ...], truth_poses: 60}
+//               candidates: [joint_compliance:2, ...], truth_poses: 60, screen: true}
 // Every key optional; candidates are TYPE[:JOINT[:ORDERS]] (term_spec_text.h), checked against
-// the robot's nominal model; truth_poses is the physical-truth scoring's pose count (bench).
+// the robot's nominal model; truth_poses is the physical-truth scoring's pose count (bench);
+// screen: fit every candidate on all the data when the residual is consistent with the noise
+// (DiscoveryOptions::screen_when_noise).
 // Optical axes also take the stated noise of the diagnosis' floor: perpendicular_sigma_mm
 // (the camera's measurement of the servo's residual offset, default 0.02), depth_sigma_mm
 // (the depth from the board pose, default 0.1) and encoder_sigma_deg (default 0: not stated).

@@ -108,6 +108,8 @@ json DiagnosisJson(const DiscoveryResult& r) {
   for (std::size_t k = 0; k < r.effects_added.size(); ++k) {
     j["effects_added"].push_back(CandidateJson(r.effects_added[k], static_cast<int>(k) + 1));
   }
+  j["screened"] = json::array();
+  for (const CandidateScore& c : r.screened) j["screened"].push_back(CandidateJson(c, 0));
   j["unexplained_evidence"] = json::array();
   for (const ResidualCorrelation& e : r.evidence) {
     j["unexplained_evidence"].push_back(
@@ -218,7 +220,28 @@ std::string DiagnosisHtml(const json& d) {
        << (c["accepted"].get<bool>() ? "<b>yes</b>" : "") << "</td><td style=\"text-align:left\">"
        << Esc(c["note"]) << "</td></tr>";
   }
-  os << "</table><h3>Strongest residual correlations</h3><table><tr><th>quantity</th>"
+  os << "</table>";
+  if (d.contains("screened") && d["screened"].is_array() && !d["screened"].empty()) {
+    os << "<h3>Candidates screened (the residual is consistent with the noise: fitted on all the "
+          "data, none tested or added)</h3><table><tr><th>candidate</th><th>applicable</th>"
+          "<th>identifiable</th><th>parameters (estimate &plusmn; 1 sigma)</th>"
+          "<th>max |rho| geometry</th><th>note</th></tr>";
+    for (const json& c : d["screened"]) {
+      std::string params;
+      for (const json& p : c["parameters"]) {
+        params += (params.empty() ? "" : "; ") + Esc(p["name"].get<std::string>()) + " " +
+                  Fmt(p["estimated"], "%.3g") + " &plusmn; " + Fmt(p["sigma"], "%.2g") + " " +
+                  Esc(p["unit"].get<std::string>());
+      }
+      os << "<tr><td>" << Esc(c["label"]) << "</td><td>"
+         << (c["applicable"].get<bool>() ? "yes" : "no") << "</td><td>"
+         << (c["identifiable"].get<bool>() ? "yes" : "<b>no</b>") << "</td><td>" << params
+         << "</td><td>" << Fmt(c["max_geometry_correlation"], "%.5f")
+         << "</td><td style=\"text-align:left\">" << Esc(c["note"]) << "</td></tr>";
+    }
+    os << "</table>";
+  }
+  os << "<h3>Strongest residual correlations</h3><table><tr><th>quantity</th>"
         "<th>component</th><th>r</th></tr>";
   for (const json& e : d["unexplained_evidence"]) {
     os << "<tr><td>" << Esc(e["quantity"]) << "</td><td>" << Esc(e["component"]) << "</td><td>"
@@ -262,6 +285,16 @@ std::string DiagnosisSummary(const DiscoveryResult& r) {
     }
     os << "; region held-out RMS " << Mm(s.heldout_rms_before_m) << " -> "
        << Mm(s.heldout_rms_after_m) << "\n";
+  }
+  if (!r.screened.empty()) {
+    std::string unseen;
+    for (const CandidateScore& c : r.screened) {
+      if (c.applicable && !c.identifiable) unseen += (unseen.empty() ? "" : ", ") + c.label;
+    }
+    os << "  screened " << r.screened.size() << " candidates on all the data (none tested)"
+       << (unseen.empty() ? std::string("; every applicable one identifiable")
+                          : "; unidentifiable from the data: " + unseen)
+       << "\n";
   }
   if (r.verdict == "unexplained" && !r.evidence.empty()) {
     os << "  strongest residual correlations:";

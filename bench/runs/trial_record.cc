@@ -9,7 +9,7 @@ using json = nlohmann::json;
 
 // Per-iteration traces and lists that are not figures of the result.
 const std::set<std::string> kLeftOut = {"fitness_history", "eps_history_mm", "images",
-                                        "candidates"};
+                                        "candidates", "screened"};
 
 bool IsTiming(const std::string& key) {
   return key == "timing_s" || key == "time_s" || key == "from_plan_store" ||

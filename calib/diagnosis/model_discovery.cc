@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -594,7 +595,7 @@ ResidualTest RunResidualTest(const Data& data, const RobotModel& model,
 // Scores one candidate against the step's base (its region cross-validation `base_cv`).
 CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base_rank,
                               const TermSpec& spec, const std::vector<int>& region, int folds,
-                              const CrossValidation& base_cv) {
+                              const CrossValidation& base_cv, bool cross_validate = true) {
   CandidateScore c;
   c.spec = spec;
   c.label = TermLabel(spec);
@@ -663,6 +664,11 @@ CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base
       c.correlated_with = d.nearest_geometric[skip];
     }
   }
+  if (!cross_validate) {
+    c.note = (c.note.empty() ? "" : c.note + "; ") +
+             "fitted on all the data, not tested: the residual is consistent with the noise";
+    return c;
+  }
   const CrossValidation cv = CrossValidate(data, model, region, folds, "candidate " + c.label);
   c.heldout_rms_m = cv.Rms();
   const double base_sse = base_cv.Sse();
@@ -672,6 +678,43 @@ CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base
   c.p_value = stats::WilcoxonSignedRankGreater(d).p_value;
   c.tested = true;
   return c;
+}
+
+// Every candidate of `specs` scored beside `current` (ScoreCandidate), `jobs` at a time; a
+// candidate whose identification throws is reported unidentifiable with the reason.
+std::vector<CandidateScore> ScoreAll(const Data& data, const RobotModel& current, int base_rank,
+                                     const std::vector<TermSpec>& specs,
+                                     const std::vector<int>& region, int folds,
+                                     const CrossValidation& base_cv, bool cross_validate,
+                                     int jobs,
+                                     const std::function<void(const std::string&)>& say,
+                                     const std::string& what) {
+  std::vector<CandidateScore> out(specs.size());
+  std::atomic<int> next{0}, done{0};
+  std::mutex mutex;
+  const auto worker = [&]() {
+    for (int k = next++; k < static_cast<int>(specs.size()); k = next++) {
+      try {
+        out[k] = ScoreCandidate(data, current, base_rank, specs[k], region, folds, base_cv,
+                                cross_validate);
+      } catch (const std::exception& e) {
+        out[k].spec = specs[k];
+        out[k].label = TermLabel(specs[k]);
+        out[k].identifiable = false;
+        out[k].note = std::string("its identification failed: ") + e.what();
+      }
+      const int d = ++done;
+      std::lock_guard<std::mutex> lock(mutex);
+      say("diagnosis: " + what + ", candidate " + std::to_string(d) + " of " +
+          std::to_string(specs.size()) + " (" + out[k].label + ")");
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < std::min<int>(jobs, static_cast<int>(specs.size())); ++t) {
+    pool.emplace_back(worker);
+  }
+  for (std::thread& t : pool) t.join();
+  return out;
 }
 
 // Quantities the residual is correlated with and mapped against, per unit of data.
@@ -763,6 +806,10 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
     if (o.progress) o.progress(line);
   };
   RobotModel current = start;
+  const std::vector<TermSpec> all_specs =
+      o.candidates.empty() ? CandidateTermSpecs(start.chain) : o.candidates;
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const int jobs = o.jobs > 0 ? o.jobs : static_cast<int>(cores);
   say("diagnosis: residual test of the starting model (" + std::to_string(random_folds) +
       " folds)");
   r.test_before =
@@ -779,41 +826,27 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
     r.reason = os.str();
     r.test_after = r.test_before;
     r.heldout_rms_discovered_m = r.heldout_rms_start_m;
+    if (o.screen_when_noise) {
+      const int base_rank = data.FitOn(current, {}, "screen base").result.observability.rank;
+      r.screened = ScoreAll(data, current, base_rank, all_specs, region, folds, current_region,
+                            false, jobs, say, "screen");
+      int seen = 0, unseen = 0;
+      for (const CandidateScore& c : r.screened) {
+        seen += c.applicable && c.identifiable;
+        unseen += c.applicable && !c.identifiable;
+      }
+      r.reason += "; of " + std::to_string(r.screened.size()) +
+                  " candidates fitted beside the model the data could see " + std::to_string(seen) +
+                  ", " + std::to_string(unseen) + " are unidentifiable from them (screened[])";
+    }
   } else {
-    const std::vector<TermSpec> all_specs =
-        o.candidates.empty() ? CandidateTermSpecs(start.chain) : o.candidates;
-    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-    const int jobs = o.jobs > 0 ? o.jobs : static_cast<int>(cores);
     for (int step = 1; step <= o.max_effects; ++step) {
       const int base_rank = data.FitOn(current, {}, "step base").result.observability.rank;
       DiscoveryStep s;
       s.index = step;
       s.heldout_rms_before_m = current_region.Rms();
-      s.candidates.resize(all_specs.size());
-      std::atomic<int> next{0}, done{0};
-      std::mutex mutex;
-      const auto worker = [&]() {
-        for (int k = next++; k < static_cast<int>(all_specs.size()); k = next++) {
-          try {
-            s.candidates[k] = ScoreCandidate(data, current, base_rank, all_specs[k], region,
-                                             folds, current_region);
-          } catch (const std::exception& e) {
-            s.candidates[k].spec = all_specs[k];
-            s.candidates[k].label = TermLabel(all_specs[k]);
-            s.candidates[k].identifiable = false;
-            s.candidates[k].note = std::string("its identification failed: ") + e.what();
-          }
-          const int d = ++done;
-          std::lock_guard<std::mutex> lock(mutex);
-          say("diagnosis: step " + std::to_string(step) + ", candidate " + std::to_string(d) +
-              " of " + std::to_string(all_specs.size()) + " (" + s.candidates[k].label + ")");
-        }
-      };
-      std::vector<std::thread> pool;
-      for (int t = 0; t < std::min<int>(jobs, static_cast<int>(all_specs.size())); ++t) {
-        pool.emplace_back(worker);
-      }
-      for (std::thread& t : pool) t.join();
+      s.candidates = ScoreAll(data, current, base_rank, all_specs, region, folds, current_region,
+                              true, jobs, say, "step " + std::to_string(step));
 
       // Holm over the tested candidates; the largest gain is accepted only if it passes.
       std::vector<int> tested;

@@ -102,6 +102,11 @@ struct DiscoveryOptions {
   /// tracker's alone.
   double joint_sigma_rad = 0.0;
   int jobs = 0;                    ///< parallel candidate evaluations; 0: the machine's cores
+  /// When the residual is consistent with the noise nothing is searched; still fit every
+  /// candidate on all the data (no cross-validation, nothing added) and report it
+  /// (DiscoveryResult::screened): whether the data could see it at all, and its size with
+  /// 1 sigma, i.e. how large an effect the data leave room for.
+  bool screen_when_noise = true;
   IdentificationOptions engine;    ///< of every identification
   TrackerSetOptions set;           ///< default sigma, source for messages (tracker points)
   /// Optical axes: the stated noise (sigma_perpendicular, sigma_depth), the use of depths and
@@ -205,6 +210,10 @@ struct DiscoveryResult {
   std::string region_rule;        ///< how the workspace blocks were made
   std::vector<DiscoveryStep> steps;
   std::vector<CandidateScore> effects_added;
+  /// consistent_with_noise with DiscoveryOptions::screen_when_noise: every candidate fitted on
+  /// all the data beside the starting model, none tested or added (tested false): applicable,
+  /// identifiable (by name when not), its parameters with 1-sigma, its disguise of the geometry.
+  std::vector<CandidateScore> screened;
   RobotModel model;               ///< the discovered model, identified on every point
   Transform X_TB = Transform::Identity();  ///< tracker points: the tracker pose
   std::vector<ResidualCorrelation> evidence;  ///< strongest |r| first (at most 8)

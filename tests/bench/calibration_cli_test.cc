@@ -81,6 +81,13 @@ TEST(CalibrationCli, RunDiagnosesEachCalibratedRobotUnlessTold) {
             std::string::npos)
       << d["noise_floor"].dump();
   EXPECT_GT(d["noise_floor"]["depth_sigma_mm"].get<double>(), 0.0);
+  // Screened candidates exactly when nothing was searched (README "Model discovery").
+  ASSERT_TRUE(d["screened"].is_array()) << d.dump();
+  EXPECT_EQ(d["screened"].empty(), verdict != "consistent_with_noise") << verdict;
+  for (const nlohmann::json& c : d["screened"]) {
+    EXPECT_FALSE(c["tested"].get<bool>()) << c.dump();
+    EXPECT_FALSE(c["accepted"].get<bool>()) << c.dump();
+  }
   EXPECT_TRUE(j["robots"]["r2"]["truth_position_error_mm_physical"].contains("poses"))
       << j["robots"]["r2"]["truth_position_error_mm_physical"].dump();
   // The same inside the joint box of the aligned poses: at least the 10 poses a gauge needs,
@@ -110,6 +117,7 @@ TEST(CalibrationCli, BadDiagnosisSettingsAndBoardMassNameFileLineAndKey) {
       {"    diagnosis: {candidates: [joint_compliance:9]}\n", "candidates"},
       {"    diagnosis: {depth_sigma_mm: -1}\n", "depth_sigma_mm"},
       {"    diagnosis: {folds: 5, foldz: 3}\n", "foldz"},
+      {"    diagnosis: {screen: often}\n", "screen"},
       {"    board_mass_kg: 500\n", "board_mass_kg"},
       {"    intrinsics_distortion: fisheye\n", "intrinsics_distortion"},
       {"    intrinsics_target: {squares: [13, 10], square_mm: 20}\n", "intrinsics_target"},

@@ -79,6 +79,40 @@ TEST(OpticalAxisDiscovery, AGeometricTruthIsConsistentWithNoise) {
   EXPECT_NE(r.region_rule.find("whole optical axes"), std::string::npos) << r.region_rule;
 }
 
+TEST(OpticalAxisDiscovery, WithTheNoiseEveryCandidateIsScreenedAndTheInvisibleOnesNamed) {
+  // A geometric truth: consistent with the noise, nothing searched or added, but each
+  // candidate is fitted beside the model on all the data and reported.
+  const Data d = MakeData(21, {});
+  const std::vector<TermSpec> specs = {kCompliance1, kCompliance2, kTransmission3};
+  const DiscoveryResult r = DiscoverOpticalAxisModel(d.nominal, d.samples, Options(specs));
+  ASSERT_EQ(r.verdict, "consistent_with_noise") << r.reason;
+  EXPECT_TRUE(r.steps.empty());
+  EXPECT_TRUE(r.effects_added.empty());
+  ASSERT_EQ(r.screened.size(), specs.size());
+  for (std::size_t k = 0; k < specs.size(); ++k) {
+    const CandidateScore& c = r.screened[k];
+    EXPECT_EQ(c.label, TermLabel(specs[k]));
+    EXPECT_FALSE(c.tested) << c.label;
+    EXPECT_FALSE(c.accepted) << c.label;
+  }
+  // Joint 1 is vertical: its compliance has nothing to act on, and the report names it.
+  EXPECT_FALSE(r.screened[0].identifiable) << r.screened[0].note;
+  EXPECT_NE(r.screened[0].note.find("unidentifiable from the optical axes"), std::string::npos)
+      << r.screened[0].note;
+  EXPECT_NE(r.reason.find("unidentifiable"), std::string::npos) << r.reason;
+  // Joint 2's compliance is seen, and its estimate is the truth (zero) within its stated
+  // uncertainty: 4 sigma (a normal draw beyond that has probability 6e-5).
+  const CandidateScore& c2 = r.screened[1];
+  ASSERT_TRUE(c2.identifiable) << c2.note;
+  ASSERT_EQ(c2.parameters.size(), 1u);
+  EXPECT_GT(c2.parameters[0].sigma, 0.0);
+  EXPECT_LT(std::abs(c2.parameters[0].estimated), 4.0 * c2.parameters[0].sigma);
+  // And the screen can be turned off.
+  DiscoveryOptions off = Options(specs);
+  off.screen_when_noise = false;
+  EXPECT_TRUE(DiscoverOpticalAxisModel(d.nominal, d.samples, off).screened.empty());
+}
+
 TEST(OpticalAxisDiscovery, AnUndeclaredComplianceIsNamed) {
   // 1e-4 rad/(N m) at joint 2: the poses' gravity torques vary by ~10 N m over the region, so
   // the sag varies by ~1 mrad (~0.5 mm at the board) beyond what the geometry absorbs.
