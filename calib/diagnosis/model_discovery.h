@@ -33,7 +33,8 @@
 //    below alpha and its gain at least min_gain_percent; then the next step starts from the
 //    extended model, until none passes, the residual test of the extended model finds it
 //    consistent with the noise (nothing left to explain), or max_effects are in.
-// 4. Verdict: "consistent_with_noise" (step 2 passes: nothing searched), "effects_added", or
+// 4. Verdict: "consistent_with_noise" (step 2 passes: nothing searched; every candidate is
+//    still fitted on all the data and reported, DiscoveryResult::screened), "effects_added", or
 //    "unexplained" (systematic and no candidate passes), with the residual's strongest
 //    correlations (joint angles, gravity torques, time, temperature, acquisition order) and
 //    binned residual maps as evidence.
