@@ -421,7 +421,8 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                   {"time_s", rc.servoing_s}};
     r["split"] = {{"calibration_axes", rc.calibration_axes},
                   {"validation_axes", rc.validation_axes},
-                  {"rule", rc.split_candidates.empty() ? "first" : "best_conditioned"}};
+                  {"rule", rc.split_candidates.empty() ? "first" : "best_conditioned"},
+                  {"evaluated_at", rc.split_candidates.empty() ? json(nullptr) : json(rc.split_at)}};
     for (const auto& [axes, sigma] : rc.split_candidates) {
       r["split"]["candidates"].push_back({{"calibration_axes", axes},
                                           {"smallest_singular_value", sigma}});

@@ -6,6 +6,7 @@
 #include <map>
 #include <memory>
 #include <cmath>
+#include <numeric>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -180,17 +181,18 @@ namespace {
 // Jacobian, no solve: the split compares the plans' geometry; one Jacobian per subset instead
 // of a full identification per subset took the paper scenario's identification stage from
 // 16.5 s to 0.8 s per trial, README "Speed of trials"); 0 when nothing is identifiable.
-double SmallestIdentifiableSingularValue(const KinematicModel& nominal,
-                                         const std::vector<AxisSample>& samples,
-                                         const NonlinearIdentificationOptions& options) {
-  const ObservabilityReport o = NonlinearIdentifiability(nominal, samples, options);
-  if (o.rank < 1 || static_cast<int>(o.singular_values.size()) < o.rank) return 0.0;
-  return o.singular_values[o.rank - 1];
+// The identifiable rank and the smallest identifiable singular value of `samples` at `model`.
+std::pair<int, double> IdentifiableRankAndSmallest(const KinematicModel& model,
+                                                   const std::vector<AxisSample>& samples,
+                                                   const NonlinearIdentificationOptions& options) {
+  const ObservabilityReport o = NonlinearIdentifiability(model, samples, options);
+  if (o.rank < 1 || static_cast<int>(o.singular_values.size()) < o.rank) return {0, 0.0};
+  return {o.rank, o.singular_values[o.rank - 1]};
 }
 
 }  // namespace
 
-void SplitAxes(const KinematicModel& nominal, const std::vector<AxisSample>& samples,
+void SplitAxes(const KinematicModel& at, const std::vector<AxisSample>& samples,
                int num_axes, const OpticalAxisOptions& options, std::vector<int>* cal_axes,
                std::vector<int>* val_axes,
                std::vector<std::pair<std::vector<int>, double>>* candidates) {
@@ -214,17 +216,19 @@ void SplitAxes(const KinematicModel& nominal, const std::vector<AxisSample>& sam
   // Every n-subset of the usable axes (C(5, 3) = 10 for the paper's plan).
   std::vector<bool> pick(usable.size(), false);
   std::fill(pick.begin(), pick.begin() + n, true);
-  double best = -1.0;
+  // The highest identifiable rank first (a subset that leaves a direction unidentified must
+  // not win by not counting it), then the largest smallest singular value.
+  std::pair<int, double> best{-1, -1.0};
   do {
     std::vector<int> subset;
     for (size_t i = 0; i < usable.size(); ++i) {
       if (pick[i]) subset.push_back(usable[i]);
     }
-    const double sigma = SmallestIdentifiableSingularValue(nominal, Subset(samples, subset),
-                                                           options.nonlinear);
-    candidates->emplace_back(subset, sigma);
-    if (sigma > best) {
-      best = sigma;
+    const std::pair<int, double> score =
+        IdentifiableRankAndSmallest(at, Subset(samples, subset), options.nonlinear);
+    candidates->emplace_back(subset, score.second);
+    if (score > best) {
+      best = score;
       *cal_axes = subset;
     }
   } while (std::prev_permutation(pick.begin(), pick.end()));
@@ -237,7 +241,7 @@ void SplitAxes(const KinematicModel& nominal, const std::vector<AxisSample>& sam
 
 void IdentifyRobot(const std::vector<int>& calibration_axes,
                    const std::vector<int>& validation_axes, const OpticalAxisOptions& options,
-                   RobotCalibration* rc) {
+                   RobotCalibration* rc, const NonlinearIdentificationResult* all_axes_fit) {
   std::vector<int> cal_kept, val_kept;
   const std::vector<AxisSample> cal = Subset(rc->samples, calibration_axes, &cal_kept);
   const std::vector<AxisSample> val = Subset(rc->samples, validation_axes, &val_kept);
@@ -307,7 +311,9 @@ void IdentifyRobot(const std::vector<int>& calibration_axes,
     std::sort(all.begin(), all.end());
     const auto t1 = Clock::now();
     const std::vector<AxisSample> all_samples = Subset(rc->samples, all);
-    NonlinearIdentificationResult f = IdentifyNonlinear(rc->nominal, all_samples, options.nonlinear);
+    // The split's fit of every usable axis is this fit (the same samples and options).
+    NonlinearIdentificationResult f =
+        all_axes_fit ? *all_axes_fit : IdentifyNonlinear(rc->nominal, all_samples, options.nonlinear);
     rc->identification_s += SecondsSince(t1);
     if (f.status != NonlinearIdentificationStatus::kFailed) {
       rc->covariance = EstimateIdentificationCovariance(rc->nominal, all_samples, f);
@@ -652,7 +658,32 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
     // 3-4. Split by whole axes and identify.
     std::vector<int> cal_axes, val_axes;
     const auto t_split = Clock::now();
-    SplitAxes(rc.nominal, rc.samples, num_axes, options, &cal_axes, &val_axes,
+    // The subsets are ranked at the model of every usable axis, not at the nominal one: the
+    // nominal model's symmetries (the feature point on joint 6's axis) make some directions
+    // null there that the identification reaches from its first solution
+    // (NonlinearIdentificationOptions::relinearize_passes); ranked at the nominal model, the
+    // split cannot see how well a subset fixes them (README, twice Table 3's errors, trial 23).
+    // That fit is the delivered all-axes refit as well.
+    std::optional<NonlinearIdentificationResult> all_axes_fit;
+    KinematicModel split_at = rc.nominal;
+    rc.split_at = "nominal model";
+    if (options.split == OpticalAxisOptions::Split::kBestConditioned) {
+      std::vector<int> plan_axes(num_axes);
+      std::iota(plan_axes.begin(), plan_axes.end(), 0);
+      const std::vector<AxisSample> usable = Subset(rc.samples, plan_axes);
+      int usable_axes = 0;
+      for (const AxisSample& s : usable) usable_axes = std::max(usable_axes, s.axis + 1);
+      if (usable_axes >= 2) {
+        all_axes_fit = IdentifyNonlinear(rc.nominal, usable, options.nonlinear);
+        if (all_axes_fit->status != NonlinearIdentificationStatus::kFailed) {
+          split_at = all_axes_fit->model;
+          rc.split_at = "all-axes fit";
+        } else {
+          all_axes_fit.reset();
+        }
+      }
+    }
+    SplitAxes(split_at, rc.samples, num_axes, options, &cal_axes, &val_axes,
               &rc.split_candidates);
     rc.identification_s += SecondsSince(t_split);
     if (!rc.split_candidates.empty()) {
@@ -663,7 +694,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
     }
     say(name(r) + ": identifying from " + std::to_string(rc.samples.size()) + " aligned poses (" +
         std::to_string(rc.failed.size()) + " skipped)");
-    IdentifyRobot(cal_axes, val_axes, options, &rc);
+    IdentifyRobot(cal_axes, val_axes, options, &rc, all_axes_fit ? &*all_axes_fit : nullptr);
     say(name(r) + ": mean misaligned error (eq. 46) calibration " +
         Fixed(1000 * rc.calibration_error.before, 4) + " -> " +
         Fixed(1000 * rc.calibration_error.after, 4) + " mm, validation " +

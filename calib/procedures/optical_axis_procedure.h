@@ -67,9 +67,12 @@ struct OpticalAxisOptions {
   int calibration_axes = 3;          ///< axes in the calibration set, the rest validate
                                      ///< (paper: 30 / 20 poses of 5 x 10, by whole axes)
   /// Which whole axes calibrate: the first calibration_axes (kFirst), or the subset whose
-  /// identification Jacobian has the largest smallest identifiable singular value
-  /// (kBestConditioned, the minimum-singular-value observability index: the weakest
-  /// identifiable combination is determined best). Uses the recorded joint angles only.
+  /// identification Jacobian has the highest identifiable rank and then the largest smallest
+  /// identifiable singular value (kBestConditioned, the minimum-singular-value observability
+  /// index: the weakest identifiable combination is determined best). The Jacobians are taken
+  /// at the fit of every usable axis (RobotCalibration::split_at), where the directions that
+  /// the nominal model's symmetries hide are visible; that fit chooses only where the subsets
+  /// are compared, the calibration-set model is fitted to its own axes alone.
   enum class Split { kFirst, kBestConditioned };
   Split split = Split::kBestConditioned;
   /// After the hold-out validation (the paper's metric, eq. 46, on the validation axes), the
@@ -188,6 +191,9 @@ struct RobotCalibration {
   /// kBestConditioned: each candidate calibration subset (plan axes) and its smallest
   /// identifiable singular value (observability.h scaling); empty for kFirst.
   std::vector<std::pair<std::vector<int>, double>> split_candidates;
+  /// Where the split's identifiability was evaluated: "all-axes fit" (the fit of every usable
+  /// axis, which is also the delivered refit) or "nominal model" (that fit failed, or kFirst).
+  std::string split_at;
   LinearizedIdentificationResult linearized;  ///< paper, eq. 45-49, on the calibration set
   NonlinearIdentificationResult nonlinear;    ///< Ceres + scale, on the calibration set
   KinematicModel identified;           ///< the delivered model (see refit_all_axes)
@@ -225,11 +231,12 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
 
 /// Splits plan axes 0..num_axes-1 into calibration and validation sets by whole axes:
 /// options.calibration_axes of them calibrate, chosen by options.split among the axes with 3
-/// or more samples (kBestConditioned: the identifiability of every subset at `nominal`,
-/// NonlinearIdentifiability, and the one with the largest smallest identifiable singular value
-/// wins; `candidates` lists each subset
+/// or more samples (kBestConditioned: the identifiability of every subset at `at`,
+/// NonlinearIdentifiability, and the one with the highest identifiable rank, then the largest
+/// smallest identifiable singular value, wins; the procedure passes the fit of every usable
+/// axis, RobotCalibration::split_at; `candidates` lists each subset
 /// and that value, empty for kFirst or when there is no choice).
-void SplitAxes(const KinematicModel& nominal, const std::vector<AxisSample>& samples,
+void SplitAxes(const KinematicModel& at, const std::vector<AxisSample>& samples,
                int num_axes, const OpticalAxisOptions& options,
                std::vector<int>* calibration_axes, std::vector<int>* validation_axes,
                std::vector<std::pair<std::vector<int>, double>>* candidates);
@@ -239,8 +246,11 @@ void SplitAxes(const KinematicModel& nominal, const std::vector<AxisSample>& sam
 /// Fills linearized, nonlinear, holdout, the misaligned summaries and per_axis (all of the
 /// calibration-set model), then identified and method (the refit on all axes when
 /// options.refit_all_axes and there are validation axes, else the calibration-set model).
+/// `all_axes_fit`, when given, is IdentifyNonlinear of every usable axis (the split's), taken
+/// as that refit instead of solving it again.
 void IdentifyRobot(const std::vector<int>& calibration_axes,
                    const std::vector<int>& validation_axes, const OpticalAxisOptions& options,
-                   RobotCalibration* robot);
+                   RobotCalibration* robot,
+                   const NonlinearIdentificationResult* all_axes_fit = nullptr);
 
 }  // namespace twin

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include "calib/common/errors.h"
+#include "calib/identification/nonlinear_identification.h"
+#include "calib/model/parameters.h"
 #include "optical_axis_synthetic.h"
 
 namespace twin {
@@ -94,6 +96,28 @@ TEST(AxisSplit, IdentificationFromASingleUsableAxisIsRefused) {
     EXPECT_NE(e.message().find("at least 2 optical axes"), std::string::npos) << e.what();
     EXPECT_NE(e.message().find("plan axis 1"), std::string::npos) << e.what();
   }
+}
+
+// The procedure ranks the subsets at the fit of every usable axis and hands that fit to
+// IdentifyRobot as the all-axes refit: the delivered model must be the one IdentifyRobot
+// solves itself from the same samples (bit for bit: same samples, options and start).
+TEST(AxisSplit, TheSplitsAllAxesFitIsTheDeliveredRefit) {
+  const auto sc = MakeOpticalAxisScenario(33);
+  OpticalAxisOptions o;
+  RobotCalibration solved, reused;
+  solved.nominal = reused.nominal = sc.nominal;
+  solved.samples = reused.samples = sc.samples;
+  IdentifyRobot({0, 1, 2}, {3, 4}, o, &solved);
+  const NonlinearIdentificationResult fit = IdentifyNonlinear(sc.nominal, sc.samples, o.nonlinear);
+  ASSERT_NE(fit.status, NonlinearIdentificationStatus::kFailed) << fit.reason;
+  IdentifyRobot({0, 1, 2}, {3, 4}, o, &reused, &fit);
+  ASSERT_TRUE(solved.refit);
+  ASSERT_TRUE(reused.refit);
+  EXPECT_EQ(solved.method, reused.method);
+  EXPECT_EQ(GetParameters(solved.identified), GetParameters(reused.identified));
+  // The calibration-set model does not depend on it.
+  EXPECT_EQ(GetParameters(solved.holdout), GetParameters(reused.holdout));
+  EXPECT_EQ(solved.validation_error.after, reused.validation_error.after);
 }
 
 }  // namespace
