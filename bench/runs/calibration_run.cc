@@ -355,6 +355,13 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                         for (double x : rc.plan.run_predicted_error) e.push_back(Num(1e3 * x));
                         return e;
                       }()},
+                     {"run_predicted_similarity_error_mm", [&] {
+                        json e = json::array();
+                        for (double x : rc.plan.run_predicted_similarity_error) {
+                          e.push_back(Num(1e3 * x));
+                        }
+                        return e;
+                      }()},
                      {"evaluations", rc.plan.evaluations},
                      {"fitness_history", history},
                      {"rejections",

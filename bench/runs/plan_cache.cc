@@ -83,12 +83,15 @@ json PlanToJson(const PosePlanResult& p) {
     history.push_back(h);
   }
   const RejectionCounts& r = p.rejections;
-  json run_fitness = json::array(), run_predicted = json::array();
+  json run_fitness = json::array(), run_predicted = json::array(),
+       run_predicted_similarity = json::array();
   for (double f : p.run_fitness) run_fitness.push_back(Hex(f));
   for (double e : p.run_predicted_error) run_predicted.push_back(Hex(e));
+  for (double e : p.run_predicted_similarity_error) run_predicted_similarity.push_back(Hex(e));
   return json{{"status", ToString(p.status)},
               {"run_fitness", run_fitness},
               {"run_predicted_error", run_predicted},
+              {"run_predicted_similarity_error", run_predicted_similarity},
               {"reason", p.reason},
               {"axes", axes},
               {"best_fitness", Hex(p.best_fitness)},
@@ -136,6 +139,10 @@ PosePlanResult PlanFromJson(const json& j, const std::string& where) {
     }
     for (const json& e : j.value("run_predicted_error", json::array())) {
       p.run_predicted_error.push_back(FromHex(e, where + " run_predicted_error"));
+    }
+    for (const json& e : j.value("run_predicted_similarity_error", json::array())) {
+      p.run_predicted_similarity_error.push_back(
+          FromHex(e, where + " run_predicted_similarity_error"));
     }
     const json& r = j.at("rejections");
     if (!r.is_array() || r.size() != 7) throw InputError(where, "rejections: expected 7 counts");

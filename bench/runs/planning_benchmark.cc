@@ -53,8 +53,10 @@ int RunPlanningBenchmark(const PlanningBenchmarkOptions& o) {
                 plan.best_run + 1, plan.evaluations, j.active_ik, j.passive_ik, j.c1_joint_limits,
                 j.c2_singularity, j.c3_visibility, j.c4_min_distance, j.c5_max_distance, wall, cpu);
     for (size_t run = 0; run < plan.run_fitness.size(); ++run) {
-      std::printf("    run %zu: 1/O1 %.6g, predicted position error %.4f mm%s\n", run + 1,
-                  plan.run_fitness[run], 1e3 * plan.run_predicted_error[run],
+      std::printf("    run %zu: 1/O1 %.6g, predicted position error %.4f mm (similarity gauge "
+                  "%.4f mm)%s\n",
+                  run + 1, plan.run_fitness[run], 1e3 * plan.run_predicted_error[run],
+                  1e3 * plan.run_predicted_similarity_error[run],
                   static_cast<int>(run) == plan.best_run ? " (returned)" : "");
     }
   }

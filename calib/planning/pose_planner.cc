@@ -236,7 +236,8 @@ void ValidatePosePlannerOptions(const PosePlannerOptions& o) {
 }
 
 double PredictedPositionError(const KinematicModel& passive, const std::vector<PlannedAxis>& axes,
-                              double rank_tolerance, int configurations, std::uint64_t seed) {
+                              double rank_tolerance, int configurations, std::uint64_t seed,
+                              PredictionGauge gauge) {
   if (configurations < 1) {
     throw InputError("PredictedPositionError configurations",
                      "must be >= 1, got " + std::to_string(configurations));
@@ -261,7 +262,14 @@ double PredictedPositionError(const KinematicModel& passive, const std::vector<P
   for (int c = 0; c < o.rank; ++c) G.col(c) /= o.singular_values[c];
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
-  double sum = 0.0;
+  // E: the end points' errors per unit whitened noise, 3 rows per configuration; the predicted
+  // mean squared error is ||E||_F^2 / M (E z with z ~ N(0, I)).
+  Eigen::MatrixXd E(3 * configurations, o.rank);
+  Eigen::MatrixXd S;  // the gauge's motions of the end points, when one is removed
+  const int gauge_columns = gauge == PredictionGauge::kRaw     ? 0
+                            : gauge == PredictionGauge::kRigid ? 6
+                                                               : 7;
+  if (gauge_columns > 0) S.resize(3 * configurations, gauge_columns);
   for (int m = 0; m < configurations; ++m) {
     JointVector q(passive.num_joints());
     for (int j = 0; j < q.size(); ++j) {
@@ -269,9 +277,26 @@ double PredictedPositionError(const KinematicModel& passive, const std::vector<P
       q[j] = l.lower + u01(rng) * (l.upper - l.lower);
     }
     const ParameterJacobian J = IdentificationJacobian(passive, q);
-    sum += (J.topRows<3>() * G).squaredNorm();
+    E.middleRows<3>(3 * m) = J.topRows<3>() * G;
+    if (gauge_columns > 0) {
+      // A small motion t + w x p (+ s p) moves the end point p by [I, -[p x], p] (t, w, s).
+      const Vector3 p = EndPose(passive, q).translation();
+      auto rows = S.middleRows<3>(3 * m);
+      rows.leftCols<3>().setIdentity();
+      rows.col(3) << 0.0, p.z(), -p.y();
+      rows.col(4) << -p.z(), 0.0, p.x();
+      rows.col(5) << p.y(), -p.x(), 0.0;
+      if (gauge_columns == 7) rows.col(6) = p;
+    }
   }
-  return std::sqrt(sum / configurations);
+  if (gauge_columns > 0) {
+    // Least-squares removal of the gauge's span from every column of E (all configurations
+    // together, as a gauge fit over the scored configurations does).
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(S);
+    const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(S.rows(), S.cols());
+    E -= Q * (Q.transpose() * E);
+  }
+  return std::sqrt(E.squaredNorm() / configurations);
 }
 
 double PoseSetFitness(const KinematicModel& passive,
@@ -523,6 +548,14 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
       }
     }
     result.run_predicted_error.push_back(predicted);
+    double predicted_similarity = kInf;
+    if (std::isfinite(predicted)) {
+      predicted_similarity =
+          PredictedPositionError(passive, runs[run].axes, o.rank_tolerance,
+                                 o.prediction_configurations, o.prediction_seed,
+                                 PredictionGauge::kSimilarity);
+    }
+    result.run_predicted_similarity_error.push_back(predicted_similarity);
     const bool better = o.select_run == PosePlannerOptions::RunSelection::kPredictedError
                             ? predicted < best_predicted
                             : runs[run].best < best_overall;

@@ -122,6 +122,8 @@ struct PosePlanResult {
   int best_run = -1;                        ///< run that produced the returned poses
   std::vector<double> run_fitness;          ///< each run's best fitness 1/O1
   std::vector<double> run_predicted_error;  ///< each run's PredictedPositionError [m]
+  /// each run's PredictedPositionError in the similarity gauge [m]
+  std::vector<double> run_predicted_similarity_error;
   /// Best fitness of each run after initialisation ([0]) and after every iteration (Fig. 10).
   std::vector<std::vector<double>> fitness_history;
   RejectionCounts rejections;               ///< all runs together
@@ -144,8 +146,15 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
 /// 0.1 mm in depth; NonlinearIdentifiability), propagated through the end point's parameter
 /// Jacobian. The unidentifiable combinations (rigid motions of the arm) contribute nothing.
 /// +infinity when nothing is identifiable.
+/// `gauge`: kRaw is the error as it is; kRigid and kSimilarity first remove, from the stacked
+/// errors of all configurations together, what one rigid motion (6) or one similarity (7: with
+/// a scale about B's origin) of the end points explains: the error the bench's truth figures
+/// score after those gauges (bench/scoring), whose differences between plans the raw figure
+/// hides under the scale's share, the same for every plan of the same depths.
+enum class PredictionGauge { kRaw, kRigid, kSimilarity };
 double PredictedPositionError(const KinematicModel& passive, const std::vector<PlannedAxis>& axes,
-                              double rank_tolerance, int configurations, std::uint64_t seed);
+                              double rank_tolerance, int configurations, std::uint64_t seed,
+                              PredictionGauge gauge = PredictionGauge::kRaw);
 
 /// Fitness of eq. 39 (1/O1; +infinity when O1 = 0) for given passive joint angles per axis and
 /// axis directions mu_k in Bp.

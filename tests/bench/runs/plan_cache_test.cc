@@ -25,6 +25,7 @@ PosePlanResult SomePlan() {
   p.fitness_history = {{std::numeric_limits<double>::infinity(), 0.7, 0.1 / 3.0}, {0.9, 0.2}};
   p.run_fitness = {0.1 / 3.0, 0.2};
   p.run_predicted_error = {1.3e-4 / 3.0, std::numeric_limits<double>::infinity()};
+  p.run_predicted_similarity_error = {0.9e-4 / 7.0, std::numeric_limits<double>::infinity()};
   for (int k = 0; k < 2; ++k) {
     PlannedAxis a;
     a.camera_origin = Vector3(0.1 * k + 1e-17, std::sqrt(2.0), -std::acos(-1.0));
@@ -50,6 +51,7 @@ void ExpectBitEqual(const PosePlanResult& a, const PosePlanResult& b) {
   EXPECT_EQ(a.fitness_history, b.fitness_history);  // exact, infinity included
   EXPECT_EQ(a.run_fitness, b.run_fitness);
   EXPECT_EQ(a.run_predicted_error, b.run_predicted_error);
+  EXPECT_EQ(a.run_predicted_similarity_error, b.run_predicted_similarity_error);
   for (std::size_t k = 0; k < a.axes.size(); ++k) {
     EXPECT_EQ(a.axes[k].camera_origin, b.axes[k].camera_origin);
     EXPECT_EQ(a.axes[k].direction, b.axes[k].direction);
