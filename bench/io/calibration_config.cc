@@ -34,7 +34,7 @@ const YamlKeys kPlanningKeys = {"axes",
                                 "camera_height_mm",
                                 "seed",
                                 "select_run"};
-const YamlKeys kServoKeys = {"tolerance_px", "max_iterations", "gain"};
+const YamlKeys kServoKeys = {"tolerance_px", "max_iterations", "gain", "encoder_readings"};
 const YamlKeys kScoringKeys = {"configurations", "seed"};
 
 // Plausibility limits of the told values: the same as the twin's (sim/world/twin_spec.cc).
@@ -227,6 +227,11 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
     }
     if (const auto g = sm.Find("gain", false)) {
       o.servo.gain = BoundedNumber(r, *g, 0.01, 2.0, "a gain above 2 makes the servo diverge");
+    }
+    if (const auto g = sm.Find("encoder_readings", false)) {
+      o.servo.encoder_readings = BoundedInteger(r, *g, 1, 10000, "readings averaged at each "
+                                                "aligned pose; beyond 10000 a controller's "
+                                                "cycles add minutes to a calibration");
     }
   }
   o.calibration_axes = std::min(3, p.num_axes);

@@ -45,7 +45,8 @@
 //       select_run: best_fitness       # which PSO run's poses: best_fitness (the paper's
 //                                      # 1/O1) or predicted_error (PredictedPositionError,
 //                                      # pose_planner.h)
-//     servo: {tolerance_px: 0.1, max_iterations: 10, gain: 1.0}
+//     servo: {tolerance_px: 0.1, max_iterations: 10, gain: 1.0,
+//             encoder_readings: 1}     # readings averaged at each aligned pose (at rest)
 //     calibration_axes: 3              # whole axes in the calibration set; the rest validate
 //     calibration_split: best_conditioned  # which axes: best_conditioned (the subset with the
 //                                      # largest smallest identifiable singular value) or first

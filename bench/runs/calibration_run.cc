@@ -273,6 +273,9 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
     }
     DiscoveryOptions d = config.discovery;
     d.axis_source = sc.path + " scenario.calibration.diagnosis (robot " + name + ")";
+    // The stated encoder noise is per reading; each sample's joints are the mean of
+    // servo.encoder_readings readings.
+    d.joint_sigma_rad /= std::sqrt(static_cast<double>(config.options.servo.encoder_readings));
     if (!quiet) {
       d.progress = [&, name](const std::string& line) {
         std::printf("[%7.1f s] %s: %s\n", SecondsSince(t_start), name.c_str(), line.c_str());

@@ -96,6 +96,10 @@ void ValidateServoOptions(const ServoOptions& o) {
   if (!std::isfinite(o.max_step_m) || o.max_step_m <= 0) {
     throw InputError(where, "max_step_m = " + Num(o.max_step_m) + ": expected > 0 [m]");
   }
+  if (o.encoder_readings < 1) {
+    throw InputError(where, "encoder_readings = " + std::to_string(o.encoder_readings) +
+                                ": expected >= 1");
+  }
 }
 
 const char* ToString(ServoStatus status) {
@@ -131,7 +135,10 @@ ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
   auto finish = [&](ServoStatus status, const std::string& reason) {
     result.status = status;
     result.reason = reason;
-    result.q_passive = cell.ReadEncoders(passive);
+    // The arm is at rest: the mean of several readings (summed, then divided once).
+    JointVector sum = cell.ReadEncoders(passive);
+    for (int i = 1; i < options.encoder_readings; ++i) sum += cell.ReadEncoders(passive);
+    result.q_passive = sum / static_cast<double>(options.encoder_readings);
     return result;
   };
 

@@ -48,6 +48,10 @@ struct ServoOptions {
   /// length, each followed by a new image (within max_iterations).
   double max_step_m = 0.05;
   std::uint64_t ik_seed = 1;   ///< seed of nominal IK's random restarts (reproducible)
+  /// Readings of the passive encoders averaged for ServoResult::q_passive, the arm at rest at
+  /// the final pose (a controller reads them every cycle): jitter independent per reading
+  /// falls by sqrt(N), a quantization without jitter does not. 1: one reading (the paper's).
+  int encoder_readings = 1;
   /// After a detection, grab only the region where the board will be (Cell::GrabImageRegion,
   /// board_region.h); a whole frame when the board is not found there (and first, unless a
   /// first region is given).
@@ -95,7 +99,7 @@ struct ServoResult {
   cv::Point2d pixel_error{0, 0};               ///< last measured (du, dv) = (u - cx, v - cy) [px]
   int frames = 0;                              ///< images grabbed
   int moves = 0;                               ///< corrective moves commanded
-  JointVector q_passive;  ///< final passive encoder reading [rad]
+  JointVector q_passive;  ///< final passive encoder reading, mean of encoder_readings [rad]
   /// Sign of each passive joint's last commanded motion over the corrections (+1, -1; 0: no
   /// correction moved it), each target against the one before, the start pose first: the
   /// approach direction a backlash acts with.

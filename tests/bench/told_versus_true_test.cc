@@ -276,6 +276,28 @@ TEST(ToldVersusTrue, PlanningRunSelectionIsReadFromTheScenario) {
   }
 }
 
+// The encoder readings averaged per aligned pose: the paper scenario states 16, a scenario that
+// does not state it gets one reading (the paper's), and a count below 1 or a fraction is an
+// error naming the key.
+TEST(ToldVersusTrue, EncoderReadingsAreReadFromTheScenario) {
+  const std::string paper = ReadFile(kScenarioDir + "/paper_reinovo.yaml");
+  const std::string stated = ", encoder_readings: 16}";
+  ASSERT_NE(paper.find(stated), std::string::npos);
+  EXPECT_EQ(ParseCalibrationConfig(Parse(paper)).options.servo.encoder_readings, 16);
+  EXPECT_EQ(ParseCalibrationConfig(Parse(Replaced(paper, stated, "}")))
+                .options.servo.encoder_readings,
+            1);
+  for (const char* bad : {"0", "2.5", "-4"}) {
+    try {
+      ParseCalibrationConfig(
+          Parse(Replaced(paper, stated, ", encoder_readings: " + std::string(bad) + "}")));
+      ADD_FAILURE() << "no error for encoder_readings " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("encoder_readings"), std::string::npos) << e.what();
+    }
+  }
+}
+
 // The board pose test's level from the scenario: on by default (1e-6), 0 turns it off, a value
 // that is not a usable p-value is an error naming the key.
 TEST(ToldVersusTrue, BoardPoseTestLevelIsReadFromTheScenario) {

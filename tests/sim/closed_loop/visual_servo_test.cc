@@ -185,6 +185,59 @@ TEST_F(VisualServoTest, GrabsRegionsAfterTheFirstFrameAndFallsBackWhenTheBoardIs
   EXPECT_EQ(w.frames, w.moves + 1);
 }
 
+// Forwards to the twin and adds to every encoder reading of robot 1 a jitter of +j, -j, +j,
+// ... on every joint, one sign per reading: the mean of an even number of readings is the
+// twin's reading, a single reading is off by j.
+class JitteredEncoders : public Cell {
+ public:
+  explicit JitteredEncoders(TwinCell& cell) : cell_(cell) {}
+  MoveResult MoveTo(int robot, const JointVector& q) override { return cell_.MoveTo(robot, q); }
+  JointVector ReadEncoders(int robot) override {
+    JointVector q = cell_.ReadEncoders(robot);
+    if (robot == 1) {
+      q.array() += (reads % 2 == 0 ? kJitter : -kJitter);
+      ++reads;
+    }
+    return q;
+  }
+  cv::Mat GrabImage() override { return cell_.GrabImage(); }
+  cv::Mat GrabImageRegion(const cv::Rect& roi) override { return cell_.GrabImageRegion(roi); }
+  MoveResult ExchangeTools() override { return cell_.ExchangeTools(); }
+  int CameraRobot() override { return cell_.CameraRobot(); }
+  static constexpr double kJitter = 1e-6;  // [rad]: 0.001 px at the board; the servo converges
+  int reads = 0;
+
+ private:
+  TwinCell& cell_;
+};
+
+// encoder_readings: the aligned pose's joints are the mean of that many readings (the demo
+// twin has no encoder noise, so the twin's own reading is the reference). Tolerance 1e-12 rad:
+// the rounding of a mean of 16 sums.
+TEST_F(VisualServoTest, TheAlignedPosesJointsAreTheMeanOfTheEncoderReadings) {
+  const TwinSpec spec = PerturbedSpec();
+  for (const int readings : {1, 16}) {
+    TwinCell twin(spec, "visual_servo_test");
+    JitteredEncoders cell(twin);
+    const ServoSetup setup = SetupFor(spec, twin);
+    ServoOptions options;
+    options.encoder_readings = readings;
+    const ServoResult r = AlignFeatureToOpticalAxis(cell, setup, OffsetStart(), options);
+    ASSERT_EQ(r.status, ServoStatus::kAligned) << r.reason;
+    const JointVector error = r.q_passive - twin.ReadEncoders(1);
+    if (readings == 1) {
+      // One reading carries its jitter in full.
+      EXPECT_NEAR(error.cwiseAbs().minCoeff(), JitteredEncoders::kJitter, 1e-12);
+    } else {
+      EXPECT_LT(error.cwiseAbs().maxCoeff(), 1e-12) << error.transpose();
+    }
+    EXPECT_GE(cell.reads, readings);
+  }
+  ServoOptions bad;
+  bad.encoder_readings = 0;
+  EXPECT_THROW(ValidateServoOptions(bad), InputError);
+}
+
 TEST_F(VisualServoTest, OneIterationIsNotEnough) {
   const TwinSpec spec = PerturbedSpec();
   TwinCell cell(spec, "visual_servo_test");
