@@ -70,9 +70,9 @@ struct OpticalAxisOptions {
   /// identification Jacobian has the highest identifiable rank and then the largest smallest
   /// identifiable singular value (kBestConditioned, the minimum-singular-value observability
   /// index: the weakest identifiable combination is determined best). The Jacobians are taken
-  /// at the fit of every usable axis (RobotCalibration::split_at), where the directions that
-  /// the nominal model's symmetries hide are visible; that fit chooses only where the subsets
-  /// are compared, the calibration-set model is fitted to its own axes alone.
+  /// at the nominal model (RobotCalibration::split_at; taken at the fit of every usable axis,
+  /// the rank-first rule picked subsets that reach a higher rank through weakly seen
+  /// directions, and on the ABB their models missed the held-out axes, README).
   enum class Split { kFirst, kBestConditioned };
   Split split = Split::kBestConditioned;
   /// After the hold-out validation (the paper's metric, eq. 46, on the validation axes), the
@@ -191,8 +191,7 @@ struct RobotCalibration {
   /// kBestConditioned: each candidate calibration subset (plan axes) and its smallest
   /// identifiable singular value (observability.h scaling); empty for kFirst.
   std::vector<std::pair<std::vector<int>, double>> split_candidates;
-  /// Where the split's identifiability was evaluated: "all-axes fit" (the fit of every usable
-  /// axis, which is also the delivered refit) or "nominal model" (that fit failed, or kFirst).
+  /// Where the split's identifiability was evaluated: "nominal model".
   std::string split_at;
   LinearizedIdentificationResult linearized;  ///< paper, eq. 45-49, on the calibration set
   NonlinearIdentificationResult nonlinear;    ///< Ceres + scale, on the calibration set
@@ -233,8 +232,8 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
 /// options.calibration_axes of them calibrate, chosen by options.split among the axes with 3
 /// or more samples (kBestConditioned: the identifiability of every subset at `at`,
 /// NonlinearIdentifiability, and the one with the highest identifiable rank, then the largest
-/// smallest identifiable singular value, wins; the procedure passes the fit of every usable
-/// axis, RobotCalibration::split_at; `candidates` lists each subset
+/// smallest identifiable singular value, wins; the procedure passes the nominal model,
+/// RobotCalibration::split_at; `candidates` lists each subset
 /// and that value, empty for kFirst or when there is no choice).
 void SplitAxes(const KinematicModel& at, const std::vector<AxisSample>& samples,
                int num_axes, const OpticalAxisOptions& options,
@@ -246,8 +245,8 @@ void SplitAxes(const KinematicModel& at, const std::vector<AxisSample>& samples,
 /// Fills linearized, nonlinear, holdout, the misaligned summaries and per_axis (all of the
 /// calibration-set model), then identified and method (the refit on all axes when
 /// options.refit_all_axes and there are validation axes, else the calibration-set model).
-/// `all_axes_fit`, when given, is IdentifyNonlinear of every usable axis (the split's), taken
-/// as that refit instead of solving it again.
+/// `all_axes_fit`, when given, is IdentifyNonlinear of every usable axis (the procedure solves
+/// it once before the split), taken as that refit instead of solving it again.
 void IdentifyRobot(const std::vector<int>& calibration_axes,
                    const std::vector<int>& validation_axes, const OpticalAxisOptions& options,
                    RobotCalibration* robot,
