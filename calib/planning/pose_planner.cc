@@ -8,6 +8,8 @@
 #include <limits>
 #include <random>
 #include <sstream>
+#include <tuple>
+#include <utility>
 
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
@@ -235,9 +237,12 @@ void ValidatePosePlannerOptions(const PosePlannerOptions& o) {
   ValidateIkOptions(o.ik);
 }
 
-double PredictedPositionError(const KinematicModel& passive, const std::vector<PlannedAxis>& axes,
-                              double rank_tolerance, int configurations, std::uint64_t seed,
-                              PredictionGauge gauge) {
+// PredictedPositionError in `gauge` and, from the same pass, in the raw gauge (the planner
+// reports both per run; one identifiability analysis and one set of Jacobians serve both).
+static std::pair<double, double> PredictedErrorAndRaw(const KinematicModel& passive,
+                                                      const std::vector<PlannedAxis>& axes,
+                                                      double rank_tolerance, int configurations,
+                                                      std::uint64_t seed, PredictionGauge gauge) {
   if (configurations < 1) {
     throw InputError("PredictedPositionError configurations",
                      "must be >= 1, got " + std::to_string(configurations));
@@ -256,7 +261,7 @@ double PredictedPositionError(const KinematicModel& passive, const std::vector<P
   options.rank_tolerance = rank_tolerance;
   const ObservabilityReport o = NonlinearIdentifiability(passive, samples, options);
   const int n = passive.num_parameters();
-  if (o.rank < 1 || o.identifiable_basis.rows() != n) return kInf;
+  if (o.rank < 1 || o.identifiable_basis.rows() != n) return {kInf, kInf};
   // Whitened residuals: C = S V diag(1 / sigma^2) V^T S in SI units; G = S V diag(1 / sigma).
   Eigen::MatrixXd G = o.column_scale.asDiagonal() * o.identifiable_basis;
   for (int c = 0; c < o.rank; ++c) G.col(c) /= o.singular_values[c];
@@ -289,6 +294,7 @@ double PredictedPositionError(const KinematicModel& passive, const std::vector<P
       if (gauge_columns == 7) rows.col(6) = p;
     }
   }
+  const double raw = std::sqrt(E.squaredNorm() / configurations);
   if (gauge_columns > 0) {
     // Least-squares removal of the gauge's span from every column of E (all configurations
     // together, as a gauge fit over the scored configurations does).
@@ -296,7 +302,13 @@ double PredictedPositionError(const KinematicModel& passive, const std::vector<P
     const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(S.rows(), S.cols());
     E -= Q * (Q.transpose() * E);
   }
-  return std::sqrt(E.squaredNorm() / configurations);
+  return {std::sqrt(E.squaredNorm() / configurations), raw};
+}
+
+double PredictedPositionError(const KinematicModel& passive, const std::vector<PlannedAxis>& axes,
+                              double rank_tolerance, int configurations, std::uint64_t seed,
+                              PredictionGauge gauge) {
+  return PredictedErrorAndRaw(passive, axes, rank_tolerance, configurations, seed, gauge).first;
 }
 
 double PoseSetFitness(const KinematicModel& passive,
@@ -537,24 +549,18 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
   for (int run = 0; run < o.runs; ++run) {
     result.fitness_history.push_back(runs[run].history);
     result.run_fitness.push_back(runs[run].best);
-    double predicted = kInf;
+    double predicted = kInf, predicted_similarity = kInf;
     if (std::isfinite(runs[run].best)) {
       try {
-        predicted = PredictedPositionError(passive, runs[run].axes, o.rank_tolerance,
-                                           o.prediction_configurations, o.prediction_seed);
+        std::tie(predicted_similarity, predicted) = PredictedErrorAndRaw(
+            passive, runs[run].axes, o.rank_tolerance, o.prediction_configurations,
+            o.prediction_seed, PredictionGauge::kSimilarity);
       } catch (const InputError&) {
         // Samples the identification refuses (cannot happen for a feasible plan of >= 3
         // positions per axis): no prediction, the run stays selectable by 1/O1.
       }
     }
     result.run_predicted_error.push_back(predicted);
-    double predicted_similarity = kInf;
-    if (std::isfinite(predicted)) {
-      predicted_similarity =
-          PredictedPositionError(passive, runs[run].axes, o.rank_tolerance,
-                                 o.prediction_configurations, o.prediction_seed,
-                                 PredictionGauge::kSimilarity);
-    }
     result.run_predicted_similarity_error.push_back(predicted_similarity);
     const bool better = o.select_run == PosePlannerOptions::RunSelection::kPredictedError
                             ? predicted < best_predicted
