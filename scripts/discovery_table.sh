@@ -24,6 +24,7 @@ declare -A INJECTED=(
   [tracker_transmission_j1]="transmission_error (joint 1, order 1)"
   [tracker_backlash_j3]="backlash (joint 3)"
   [tracker_thermal_drift]="thermal_"   # thermal_drift or thermal_warmup (any time constant)
+  [tracker_thermal_drift_sensed]="thermal_"   # the same with the arm's temperature sensor
   [optical_clean]=""
   [optical_compliance_j2]="joint_compliance (joint 2)"
   [optical_compliance_j2_declared]=""
@@ -35,7 +36,7 @@ declare -A INJECTED=(
 case "$PROCEDURE" in
   tracker)
     ORDER=(tracker_clean tracker_compliance_j2 tracker_transmission_j1 tracker_backlash_j3
-           tracker_thermal_drift tracker_compliance_j2_declared)
+           tracker_thermal_drift tracker_thermal_drift_sensed tracker_compliance_j2_declared)
     PREFIX="" ;;
   optical)
     ORDER=(optical_clean optical_compliance_j2 optical_transmission_j3 optical_backlash_j3

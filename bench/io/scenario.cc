@@ -29,9 +29,10 @@ const Keys kTrackerKeys = {"robot",    "pose",           "reflector_mm",  "sigma
                            "sigma_um_per_m", "drift_mm_per_h", "max_range_m"};
 const Keys kSeedsKeys = {"truth", "estimator"};
 const Keys kRobot1Keys = {"name", "model", "base_link", "tip_link", "installation", "base",
-                          "initial_joints_deg"};
+                          "initial_joints_deg", "temperature_sensor"};
 const Keys kRobot2Keys = {"name", "model", "base_link", "tip_link", "installation",
-                          "base_from_robot1", "initial_joints_deg"};
+                          "base_from_robot1", "initial_joints_deg", "temperature_sensor"};
+const Keys kTemperatureSensorKeys = {"ambient_C", "sigma_K"};
 const Keys kCameraKeys = {"robot", "hand_eye", "resolution", "fx",      "fy",    "cx",
                           "cy",    "distortion", "msaa",     "near_mm", "far_mm"};
 const Keys kBoardKeys = {"robot",        "squares", "square_mm", "margin_mm",
@@ -227,6 +228,19 @@ class ScenarioParser {
       const YamlField rel = m.Get("base_from_robot1");
       robot.X_WB = out_.twin.robots[0].X_WB * Pose(rel);
       Locate(spec + ".X_WB", rel);
+    }
+
+    if (const auto sensor = m.Find("temperature_sensor", false)) {
+      const YamlMap sm(r_, *sensor, kTemperatureSensorKeys);
+      robot.temperature_sensor.present = true;
+      if (const auto v = sm.Find("ambient_C", false)) {
+        robot.temperature_sensor.ambient_C = r_.Number(*v);
+        Locate(spec + ".temperature_sensor.ambient_C", *v);
+      }
+      if (const auto v = sm.Find("sigma_K", false)) {
+        robot.temperature_sensor.sigma_K = r_.Number(*v);
+        Locate(spec + ".temperature_sensor.sigma_K", *v);
+      }
     }
 
     const YamlField q = m.Get("initial_joints_deg");

@@ -265,6 +265,10 @@ int RunTrackerScenario(const RunOptions& o) {
       c.q = cell.ReadEncoders(robot);
       c.approach = ApproachDirections(before, q);
       c.time_s = cell.MeasureTracker(robot).time_s;
+      // The sensor's reading, against the session's reference, as the procedure records it.
+      if (std::isfinite(result.temperature_reference_C)) {
+        c.temperature_delta_K = cell.ReadTemperatureC(robot) - result.temperature_reference_C;
+      }
       const TwinTruth t = cell.Truth();
       phys_true.push_back(t.X_WB[robot].inverse() * (t.X_WF[robot] * t.tracker.p_FR));
       phys_calibrated.push_back(EndPose(id.model, c).translation());
@@ -325,6 +329,10 @@ int RunTrackerScenario(const RunOptions& o) {
   j["robot"] = name;
   j["tracker"] = {{"poses", result.points.size()}, {"attempts", result.attempts},
                   {"sigma_mm", 1e3 * truth.tracker.sigma_m}};
+  // The robot's temperature sensor (the points carry their change from this first reading).
+  j["tracker"]["temperature_reference_C"] =
+      std::isfinite(result.temperature_reference_C) ? json(result.temperature_reference_C)
+                                                    : json(nullptr);
   j["tracker"]["skipped"] = json::array();
   for (const TrackerSkip& s : result.skipped) {
     j["tracker"]["skipped"].push_back({{"attempt", s.attempt}, {"reason", s.reason}});
@@ -387,12 +395,15 @@ int RunTrackerScenario(const RunOptions& o) {
   std::ostringstream csv;
   csv << std::setprecision(17) << "pose";
   for (int i = 0; i < nominal.num_joints(); ++i) csv << ",q_" << nominal.links[i].name << "_rad";
-  csv << ",x_m,y_m,z_m,sigma_m,time_s\n";
+  const bool temperatures = std::isfinite(result.temperature_reference_C);
+  csv << ",x_m,y_m,z_m,sigma_m,time_s" << (temperatures ? ",temperature_delta_K" : "") << "\n";
   for (const TrackerPoint& p : result.points) {
     csv << p.row;
     for (int i = 0; i < p.context.q.size(); ++i) csv << "," << p.context.q(i);
     csv << "," << p.p_T.x() << "," << p.p_T.y() << "," << p.p_T.z() << "," << config.told_sigma_m
-        << "," << p.context.time_s << "\n";
+        << "," << p.context.time_s;
+    if (temperatures) csv << "," << p.context.temperature_delta_K;
+    csv << "\n";
   }
   const fs::path out(o.out_dir);
   const std::string staging = CreateStagingDirectory(o.out_dir);

@@ -113,6 +113,13 @@ class Cell {
   /// simulated time), from an origin of the cell's choosing; NaN: the cell keeps no clock, the
   /// default. Time stamps of measurements (a thermal drift needs them).
   virtual double ClockSeconds() { return std::numeric_limits<double>::quiet_NaN(); }
+  /// The temperature of robot `robot`'s structure as its sensor reads it now [deg C]; NaN: no
+  /// sensor, the default. A thermal growth of the arm is a function of it (no extrapolation
+  /// in time, as a drift over the clock needs).
+  virtual double ReadTemperatureC(int robot) {
+    (void)robot;
+    return std::numeric_limits<double>::quiet_NaN();
+  }
   /// Measures the reflector (SMR) on robot `robot`'s flange with the laser tracker, the robot
   /// standing still. The default is a cell without a tracker.
   virtual TrackerReading MeasureTracker(int robot) {

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,10 @@ struct TrackerProcedureResult {
   std::vector<TrackerPoint> points;   ///< the readings (row: attempt number)
   std::vector<TrackerSkip> skipped;
   int attempts = 0;
+  /// The robot's temperature sensor at the first point [deg C], the reference of every
+  /// point's context.temperature_delta_K; NaN when the cell has no sensor on the robot (the
+  /// points then carry no temperature).
+  double temperature_reference_C = std::numeric_limits<double>::quiet_NaN();
   TrackerCalibrationResult calibration;
 };
 
@@ -43,8 +48,9 @@ KinematicModel WithReflector(KinematicModel flange_model, const Vector3& p_F);
 
 /// Runs the procedure on `robot` of `cell`. Throws InputError for bad options, or when fewer
 /// poses than the identification needs could be measured (with the skip reasons' counts).
-/// Each point's context carries the joint readings, the tracker's time stamp and each joint's
-/// approach direction (the sign of the commanded motion that reached the pose, from the
+/// Each point's context carries the joint readings, the tracker's time stamp, the robot's
+/// temperature change since the first point when the cell reads one (Cell::ReadTemperatureC:
+/// a sensor reading, not a told value), and each joint's approach direction (the sign of the commanded motion that reached the pose, from the
 /// readings before the move: what the controller knows).
 TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const KinematicModel& nominal,
                                            const TrackerProcedureOptions& options);

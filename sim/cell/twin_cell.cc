@@ -96,7 +96,7 @@ struct TwinCell::Impl {
   std::string mjcf;
   MjModelPtr m;
   MjDataPtr d;
-  std::mt19937_64 encoder_rng, image_rng, operator_rng, tracker_rng;
+  std::mt19937_64 encoder_rng, image_rng, operator_rng, tracker_rng, temperature_rng;
   double operator_sigma = 0.0;   // operator alignment error per axis [m]
   double last_gap = 0.0;         // jogged tip to aim point after the last contact [m]
   std::array<JointVector, kNumRobots> motor;      // commanded motor angles [rad]
@@ -431,6 +431,7 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
   s.image_rng = Stream(spec.seed, 2);
   s.operator_rng = Stream(spec.seed, 3);
   s.tracker_rng = Stream(spec.seed, 4);
+  s.temperature_rng = Stream(spec.seed, 5);
   for (int k = 0; k < kNumRobots; ++k) {
     s.models[k] = spec.robots[k].model;
     for (const auto& e : s.effects) e->ApplyToGeometry(k, &s.models[k], &geometry_rng);
@@ -782,6 +783,20 @@ cv::Mat TwinCell::GrabImageRegion(const cv::Rect& roi) {
 }
 
 double TwinCell::ClockSeconds() { return impl_->d->time; }
+
+double TwinCell::ReadTemperatureC(int robot) {
+  Impl& s = *impl_;
+  if (robot < 0 || robot >= kNumRobots) {
+    throw InputError("ReadTemperatureC", "robot index " + std::to_string(robot) +
+                                             ", expected 0.." + std::to_string(kNumRobots - 1));
+  }
+  const TemperatureSensorSpec& sensor = s.spec.robots[robot].temperature_sensor;
+  if (!sensor.present) return std::numeric_limits<double>::quiet_NaN();
+  double t = sensor.ambient_C;
+  for (const auto& e : s.effects) t += e->TemperatureDeltaAt(robot, s.d->time);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  return t + sensor.sigma_K * noise(s.temperature_rng);
+}
 
 TrackerReading TwinCell::MeasureTracker(int robot) {
   Impl& s = *impl_;

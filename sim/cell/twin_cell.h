@@ -72,6 +72,7 @@ class TwinCell : public Cell {
   TrackerReading MeasureTracker(int robot) override;
   /// The twin's simulated time [s] (TwinTruth::time_s).
   double ClockSeconds() override;
+  double ReadTemperatureC(int robot) override;
 
   /// Standard deviation of the operator's alignment error per world axis [m] (default 0).
   /// Throws InputError for a negative or non-finite value.

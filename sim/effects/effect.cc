@@ -8,6 +8,7 @@ namespace twin {
 void Effect::ApplyToGeometry(int, KinematicModel*, std::mt19937_64*) const {}
 bool Effect::DriftsLengths(int) const { return false; }
 double Effect::LengthScaleAt(int, double) const { return 1.0; }
+double Effect::TemperatureDeltaAt(int, double) const { return 0.0; }
 void Effect::ApplyToDrive(int, std::vector<JointDrive>*) const {}
 void Effect::ApplyToMount(int, MountCompliance*) const {}
 void Effect::ApplyToTransmission(int, const JointVector&, const JointVector&,

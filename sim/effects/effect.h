@@ -42,6 +42,10 @@ class Effect {
   /// `time_s` [s], on top of the static geometry (1 at time 0 and for effects that do not
   /// drift). The twin moves its bodies accordingly as its clock runs.
   virtual double LengthScaleAt(int robot, double time_s) const;
+  /// Robot `robot`'s temperature above the cold start at the twin's time `time_s` [K] (what
+  /// its structure's temperature sensor sees, when it has one); 0 for effects that do not warm
+  /// the arm.
+  virtual double TemperatureDeltaAt(int robot, double time_s) const;
   /// Compliance of the target mount on robot `robot`'s flange.
   virtual void ApplyToMount(int robot, MountCompliance* mount) const;
   /// Drive settings of robot `robot`'s joints.

@@ -14,8 +14,8 @@ namespace {
 // is the arm at the start of the session.
 class ThermalDrift : public Effect {
  public:
-  ThermalDrift(const EffectSpec& spec, double growth, double tau)
-      : spec_(spec), growth_(growth), tau_(tau) {}
+  ThermalDrift(const EffectSpec& spec, double delta_T, double growth, double tau)
+      : spec_(spec), delta_T_(delta_T), growth_(growth), tau_(tau) {}
 
   const EffectSpec& spec() const override { return spec_; }
 
@@ -26,8 +26,15 @@ class ThermalDrift : public Effect {
     return 1.0 - growth_ * std::expm1(-std::max(0.0, time_s) / tau_);
   }
 
+  // The growth follows the temperature: both are delta_T (1 - exp(-t / tau)) shaped.
+  double TemperatureDeltaAt(int robot, double time_s) const override {
+    if (!Applies(robot)) return 0.0;
+    return -delta_T_ * std::expm1(-std::max(0.0, time_s) / tau_);
+  }
+
  private:
   EffectSpec spec_;
+  double delta_T_;  // the warming towards equilibrium [K]
   double growth_;  // coefficient * delta_T: the final relative growth [-]
   double tau_;     // [s]
 };
@@ -45,7 +52,7 @@ std::unique_ptr<Effect> MakeThermalDrift(const EffectSpec& spec) {
              Optional("delta_T_K", kUnitless, 5.0, Between(-50.0, 50.0)),
              Optional("time_constant_s", kUnitless, 1800.0, Between(60.0, 86400.0))});
   return std::make_unique<ThermalDrift>(
-      spec, params.Get("coefficient_per_K") * params.Get("delta_T_K"),
+      spec, params.Get("delta_T_K"), params.Get("coefficient_per_K") * params.Get("delta_T_K"),
       params.Get("time_constant_s"));
 }
 

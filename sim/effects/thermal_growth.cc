@@ -8,7 +8,8 @@ namespace {
 // (1 + coefficient [1/K] * delta_T [K]); angles are unchanged.
 class ThermalGrowth : public Effect {
  public:
-  ThermalGrowth(const EffectSpec& spec, double scale) : spec_(spec), scale_(scale) {}
+  ThermalGrowth(const EffectSpec& spec, double delta_T, double scale)
+      : spec_(spec), delta_T_(delta_T), scale_(scale) {}
 
   const EffectSpec& spec() const override { return spec_; }
 
@@ -20,8 +21,14 @@ class ThermalGrowth : public Effect {
     }
   }
 
+  // The arm stands at its temperature change for the whole run.
+  double TemperatureDeltaAt(int robot, double) const override {
+    return Applies(robot) ? delta_T_ : 0.0;
+  }
+
  private:
   EffectSpec spec_;
+  double delta_T_;  // [K]
   double scale_;  // 1 + coefficient * delta_T [-]
 };
 
@@ -36,7 +43,7 @@ std::unique_ptr<Effect> MakeThermalGrowth(const EffectSpec& spec) {
       spec, {Optional("coefficient_per_K", kUnitless, 1.2e-5, Between(0.0, 1e-3)),
              Required("delta_T_K", kUnitless, Between(-100.0, 100.0))});
   return std::make_unique<ThermalGrowth>(
-      spec, 1.0 + params.Get("coefficient_per_K") * params.Get("delta_T_K"));
+      spec, params.Get("delta_T_K"), 1.0 + params.Get("coefficient_per_K") * params.Get("delta_T_K"));
 }
 
 }  // namespace twin::effects

@@ -199,6 +199,19 @@ void CheckRobot(const Checker& c, const RobotSpec& robot, int i, const std::stri
                                            robot.model.name + "), got " +
                                            std::to_string(robot.q_initial.size()));
   }
+  if (robot.temperature_sensor.present) {
+    // Bounds: a working cell's air; a sensor noisier than 10 K is no thermometer.
+    const double ambient = robot.temperature_sensor.ambient_C;
+    if (!(ambient >= -40.0 && ambient <= 80.0)) {
+      c.Fail(RobotField(i, "temperature_sensor.ambient_C"),
+             "must be -40 to 80 deg C, got " + Checker::Num(ambient));
+    }
+    const double sigma = robot.temperature_sensor.sigma_K;
+    if (!(sigma >= 0.0 && sigma <= 10.0)) {
+      c.Fail(RobotField(i, "temperature_sensor.sigma_K"),
+             "must be 0 to 10 K, got " + Checker::Num(sigma));
+    }
+  }
   for (int j = 0; j < robot.model.num_joints(); ++j) {
     const std::string field = RobotField(i, "q_initial[" + std::to_string(j) + "]");
     const double q = robot.q_initial(j);

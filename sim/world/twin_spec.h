@@ -24,11 +24,21 @@ enum class Installation { kFloor, kWall, kCeiling };
 const char* ToString(Installation installation);
 
 /// One arm of the cell.
+/// A temperature sensor on a robot's structure, as controllers log one: it reads the cell's
+/// ambient temperature plus the arm's own warming (the twin's thermal effects on that robot),
+/// with noise per reading.
+struct TemperatureSensorSpec {
+  bool present = false;
+  double ambient_C = 20.0;   ///< what it reads on the cold arm [deg C]
+  double sigma_K = 0.1;      ///< noise per reading [K]
+};
+
 struct RobotSpec {
   KinematicModel model;                     ///< true geometry before geometry effects
   Installation installation = Installation::kFloor;
   Transform X_WB = Transform::Identity();   ///< base pose in the world
   JointVector q_initial = JointVector::Zero(kDefaultJoints);  ///< motor-side start angles [rad]
+  TemperatureSensorSpec temperature_sensor; ///< absent unless present
 };
 
 /// Pinhole intrinsics in OpenCV's convention (pixel centres at integer coordinates).

@@ -418,7 +418,7 @@ TEST(ScenarioErrorTest, Robot2TakesItsBaseRelativeToRobot1) {
   const std::string msg = ParseError(text);
   EXPECT_TRUE(Contains(msg, "scenario.robots[1].base: unknown key 'base' (allowed: name, model, "
                             "base_link, tip_link, installation, base_from_robot1, "
-                            "initial_joints_deg)"));
+                            "initial_joints_deg, temperature_sensor)"));
 }
 
 TEST(ScenarioErrorTest, MissingKeyIsNamed) {
@@ -538,6 +538,29 @@ TEST(ScenarioErrorTest, InitialJointOutOfLimitsAtItsItem) {
   EXPECT_TRUE(Contains(msg, At(LineOf(text, "-150")) + " scenario.robots[1].initial_joints_deg[2]: "
                             "robots[1].q_initial[2] must be within joint 3's limits "
                             "[-140, 140] deg, got -150 deg"));
+}
+
+// A robot's temperature sensor (robots[i].temperature_sensor): absent unless given, its
+// values as written; an absurd noise or ambient is refused at its line.
+TEST(ScenarioTest, ATemperatureSensorIsReadFromItsRobotEntry) {
+  EXPECT_FALSE(Parse(DemoText()).twin.robots[1].temperature_sensor.present);
+  const std::string text =
+      Replaced(DemoText(), "[0, 39, -36, 0, 87, 90]",
+               "[0, 39, -36, 0, 87, 90]\n      temperature_sensor: {ambient_C: 22.5, sigma_K: 0.2}");
+  const TemperatureSensorSpec s = Parse(text).twin.robots[1].temperature_sensor;
+  EXPECT_TRUE(s.present);
+  EXPECT_EQ(s.ambient_C, 22.5);
+  EXPECT_EQ(s.sigma_K, 0.2);
+  EXPECT_FALSE(Parse(text).twin.robots[0].temperature_sensor.present);
+  const std::string noisy = Replaced(text, "sigma_K: 0.2", "sigma_K: 50");
+  EXPECT_TRUE(Contains(ParseError(noisy),
+                       At(LineOf(noisy, "sigma_K: 50")) +
+                           " scenario.robots[1].temperature_sensor.sigma_K: "
+                           "robots[1].temperature_sensor.sigma_K must be 0 to 10 K, got 50"));
+  const std::string hot = Replaced(text, "ambient_C: 22.5", "ambient_C: 295");
+  EXPECT_TRUE(Contains(ParseError(hot), "robots[1].temperature_sensor.ambient_C must be -40 to "
+                                        "80 deg C, got 295"));
+  EXPECT_TRUE(Contains(ParseError(Replaced(text, "sigma_K", "sigma_k")), "sigma_k"));
 }
 
 TEST(ScenarioErrorTest, WallInstallationWithUprightBase) {

@@ -200,5 +200,41 @@ TEST(TrackerRun, AnArmWarmingUpIsDiscoveredAsThermalDriftOrDeclared) {
   EXPECT_LT(j["diagnosis"]["heldout_rms_mm"]["start"].get<double>(), 0.03);
 }
 
+// The same warming arm with a temperature sensor on it (robots[1].temperature_sensor): the
+// points carry the sensor's change since the first point (measurements.csv's
+// temperature_delta_K), and the thermal growth in kelvin is named among the time-dependent
+// terms; the physical-truth poses after the session are scored at their own readings, so
+// nothing is extrapolated in time.
+TEST(TrackerRun, AWarmingArmWithATemperatureSensorIsDiscoveredAsThermalGrowth) {
+  const fs::path dir = Folder("discovery_thermal_sensed");
+  const std::string text = DiscoveryScenario(
+      "tracker_thermal_drift_sensed.yaml",
+      "joint_compliance:2, thermal_drift, thermal_warmup::10, thermal_growth", 100);
+  std::ofstream(dir / "s.yaml") << text;
+  const testing::ProcessRun r = testing::TwinbenchArgs(
+      {"run", (dir / "s.yaml").string(), "--out", (dir / "out").string(), "--quiet"}, 600);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(std::ifstream(dir / "out" / "report.json"));
+  // The sensor reads the cold arm at first: 21 deg C, noise 0.1 K (5 sigma).
+  EXPECT_NEAR(j["tracker"]["temperature_reference_C"].get<double>(), 21.0, 0.5);
+  const std::string csv = testing::ReadFile((dir / "out" / "measurements.csv").string());
+  EXPECT_NE(csv.substr(0, csv.find('\n')).find(",temperature_delta_K"), std::string::npos);
+  const nlohmann::json& d = j["diagnosis"];
+  ASSERT_EQ(d["verdict"], "effects_added") << d.dump(1);
+  ASSERT_EQ(d["effects_added"].size(), 1u) << d["effects_added"].dump(1);
+  EXPECT_EQ(d["effects_added"][0]["term"], "thermal_growth");
+  // The aluminium's 2.3e-5 /K within 10 % (its sigma is about 6e-7 /K: 4 sigma). While the
+  // estimator's term also grew the reflector's bracket (the tool link), which the twin does
+  // not, it came out 3-11 % low in the 11 of 20 trials of the study that chose it (README).
+  EXPECT_NEAR(d["effects_added"][0]["parameters"][0]["estimated"].get<double>(), 2.3e-5,
+              0.1 * 2.3e-5);
+  const double calibrated = j["truth_position_error_mm_physical"]["calibrated_model"]["rigid"]["rms"];
+  const double discovered = j["truth_position_error_mm_discovered_model"]["rigid"]["rms"];
+  // The effect-free calibration of these seeds is at 0.011 mm (tracker_clean.yaml, trial 0):
+  // 0.015 mm is within 1.4 times it, where the geometric model is at about 0.07 mm.
+  EXPECT_LT(discovered, 0.015);
+  EXPECT_GT(calibrated, 3.0 * discovered);
+}
+
 }  // namespace
 }  // namespace twin

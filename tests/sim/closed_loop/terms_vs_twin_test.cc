@@ -52,6 +52,17 @@ TwinSpec TightSpec() {
   return spec;
 }
 
+// The spec with robot 0's tool link of zero length. The twin's thermal effects grow every
+// link of its model, the tool link too; the estimator's thermal terms grow the joint links and
+// not the tool link (what the flange carries is not the arm's structure: robot_model.h). The
+// two are written independently and differ there on purpose; with no tool link length the
+// comparison is of the arm alone.
+TwinSpec WithoutToolLength(TwinSpec spec) {
+  spec.robots[0].model.tool().dh.d = 0.0;
+  spec.robots[0].model.tool().dh.a = 0.0;
+  return spec;
+}
+
 // Robot 0's pose targets around the demo pose, loading its joints differently.
 std::vector<JointVector> Targets() {
   std::vector<JointVector> out;
@@ -199,7 +210,7 @@ TEST_F(TermsVsTwin, BacklashTermTakesTheSideOfTheApproach) {
 }
 
 TEST_F(TermsVsTwin, ThermalGrowthTermScalesTheArmLikeTheTwin) {
-  TwinSpec spec = TightSpec();
+  TwinSpec spec = WithoutToolLength(TightSpec());
   spec.effects.push_back(EffectOf("thermal_growth", {{"delta_T_K", 12.0}, {"coefficient_per_K",
                                                                           2.3e-5}}, 0, -1));
   TwinCell cell(spec);
@@ -224,7 +235,7 @@ TEST_F(TermsVsTwin, ThermalDriftTermScalesTheArmLikeTheTwinsWarmUp) {
   // scale(t) = 1 + 2.3e-5 * 20 * (1 - exp(-t / 60 s)), written here from the effect's
   // definition, not taken from the twin.
   constexpr double kGrowth = 2.3e-5 * 20.0, kTau = 60.0;
-  TwinSpec spec = TightSpec();
+  TwinSpec spec = WithoutToolLength(TightSpec());
   spec.effects.push_back(EffectOf("thermal_drift", {{"delta_T_K", 20.0}, {"coefficient_per_K",
                                                                           2.3e-5},
                                                     {"time_constant_s", kTau}}, 0, -1));
@@ -265,6 +276,47 @@ TEST_F(TermsVsTwin, ThermalDriftTermScalesTheArmLikeTheTwinsWarmUp) {
   // After the moves (several seconds) the arm has grown measurably: tens of micrometres
   // over its ~1 m reach, far above the 1e-9 m agreement.
   EXPECT_GT(last_gap, 1e-5) << "t = " << last_time << " s";
+}
+
+// A temperature sensor on the drifting arm (noise-free here) reads the ambient plus the
+// warming, and the estimator's thermal growth (d, a of every joint link times 1 + k dT) with the
+// material's coefficient and the sensor's change since the first reading predicts the twin's
+// flange-and-tool point at every time: the drift becomes a function of a measured quantity.
+TEST_F(TermsVsTwin, ATemperatureSensorTurnsTheWarmUpIntoAThermalGrowth) {
+  constexpr double kCoefficient = 2.3e-5, kDeltaT = 20.0, kTau = 60.0, kAmbient = 21.5;
+  TwinSpec spec = WithoutToolLength(TightSpec());
+  spec.effects.push_back(EffectOf("thermal_drift", {{"delta_T_K", kDeltaT},
+                                                    {"coefficient_per_K", kCoefficient},
+                                                    {"time_constant_s", kTau}}, 0, -1));
+  spec.robots[0].temperature_sensor = {true, kAmbient, 0.0};
+  TwinCell cell(spec);
+  EXPECT_TRUE(std::isnan(cell.ReadTemperatureC(1)));  // robot 1 has no sensor
+  const KinematicModel chain = spec.robots[0].model;
+  const double first = cell.ReadTemperatureC(0);
+  const double first_time = cell.Truth().time_s;
+  for (const JointVector& target : Targets()) {
+    ASSERT_EQ(cell.MoveTo(0, target).status, MoveStatus::kSettled);
+    const TwinTruth truth = cell.Truth();
+    const double reading = cell.ReadTemperatureC(0);
+    // The sensor against the effect's definition, written here (1e-12 K: rounding).
+    EXPECT_NEAR(reading, kAmbient + kDeltaT * (1.0 - std::exp(-truth.time_s / kTau)), 1e-12);
+    // The model's reference is the first reading, whose growth the geometry carries: scale
+    // the chain to that moment (the identification would absorb it in the lengths).
+    KinematicModel at_first = chain;
+    const double s0 = 1.0 + kCoefficient * kDeltaT * (1.0 - std::exp(-first_time / kTau));
+    for (Link& l : at_first.links) {
+      l.dh.d *= s0;
+      l.dh.a *= s0;
+    }
+    RobotModel g = WithTerm(MakeRobotModel(at_first),
+                            MakeErrorTerm({"thermal_growth", -1, {}}, at_first, "r1"));
+    // s0 (1 + k' (T - T0)) with k' = k / s0 is 1 + k T: the twin's scale, exactly.
+    g.term_values << kCoefficient / s0;
+    MeasurementContext c = ContextOf(cell.ReadEncoders(0));
+    c.temperature_delta_K = reading - first;
+    EXPECT_LT((TwinTool(cell, 0) - TermTool(g, c, spec.robots[0].X_WB)).norm(), kAgreement)
+        << "t = " << truth.time_s << " s";
+  }
 }
 
 TEST_F(TermsVsTwin, MountDeflectionTermPredictsTheSpringMountedBoard) {

@@ -288,6 +288,12 @@ TEST(ThermalDrift, WarmsUpWithItsTimeConstantAndOnlyOnItsRobot) {
   EXPECT_NEAR(effect->LengthScaleAt(1, 600.0), 1.0 + 2.3e-4 * (1.0 - std::exp(-1.0)), 1e-15);
   EXPECT_NEAR(effect->LengthScaleAt(1, 1e6), 1.0 + 2.3e-4, 1e-15);  // settled
   EXPECT_EQ(effect->LengthScaleAt(0, 600.0), 1.0);
+  // The temperature its sensor sees follows the same curve: 10 K (1 - 1/e) at one time
+  // constant, 10 K settled, none at the start or on the other robot (1e-12 K: rounding).
+  EXPECT_EQ(effect->TemperatureDeltaAt(1, 0.0), 0.0);
+  EXPECT_NEAR(effect->TemperatureDeltaAt(1, 600.0), 10.0 * (1.0 - std::exp(-1.0)), 1e-12);
+  EXPECT_NEAR(effect->TemperatureDeltaAt(1, 1e6), 10.0, 1e-12);
+  EXPECT_EQ(effect->TemperatureDeltaAt(0, 600.0), 0.0);
   // The static geometry is untouched (the twin moves its bodies as its clock runs).
   KinematicModel model = testing::ReinovoLikeModel();
   const KinematicModel before = model;
@@ -317,6 +323,9 @@ TEST(ThermalGrowth, ScalesLengthsAndNotAngles) {
     EXPECT_EQ(b.alpha, a.alpha);
     EXPECT_EQ(b.beta, a.beta);
   }
+  // The arm stands at its temperature change all the time (what a sensor on it reads).
+  EXPECT_EQ(effect->TemperatureDeltaAt(1, 0.0), 15.0);
+  EXPECT_EQ(effect->TemperatureDeltaAt(0, 1e4), 15.0);  // robot -1: both
   // The default coefficient (steel, 1.2e-5 /K) applies when none is given.
   KinematicModel steel = nominal;
   MakeEffect(Spec("thermal_growth", {{"delta_T_K", 10.0}}))->ApplyToGeometry(0, &steel, nullptr);
