@@ -71,16 +71,21 @@ void EndPointJacobian(const RobotModel& model, const double* params, const Measu
   // Frames at those angles and that scale.
   std::array<RigidT<double>, kMaxJoints + 2> X;
   ChainFramesT<double>(chain, params, q.data(), s, X.data());
+  // The tool link does not grow with the arm (robot_model.h, stage 2).
+  X[nj + 1] = X[nj] * LinkTransformT(params + kParamsPerLink * nj, 0.0, 1.0);
   const RigidT<double>& X_BLt = X[chain.num_links()];
   *p = X_BLt * chain.X_LtE.translation();
-  // Geometric columns (eq. 5-9; IdentificationJacobian's screws, lengths times s).
+  // Geometric columns (eq. 5-9; IdentificationJacobian's screws, the joint links' lengths
+  // times s, the tool link's at scale 1).
   ParameterJacobian G;
   IdentificationColumns(chain.num_links(), X.data(), params, *p, s, &G);
+  G.col(kParamsPerLink * nj + 1) /= s;  // the tool link's d and a
+  G.col(kParamsPerLink * nj + 2) /= s;
   J->leftCols(g) = G.topRows<3>();
-  // Term columns through the joint angles and the length scale.
+  // Term columns through the joint angles and the length scale: every translation from the
+  // base frame L0 to the flange L_N scales with s.
   if (terms > 0) {
-    const Vector3 dp_ds =
-        (*p - chain.X_BL0.translation() - X_BLt.R * chain.X_LtE.translation()) / s;
+    const Vector3 dp_ds = (X[nj].p - chain.X_BL0.translation()) / s;
     for (int k = 0; k < terms; ++k) {
       Vector3 col = ds[k] * dp_ds;
       for (int i = 0; i < nj; ++i) {

@@ -5,7 +5,9 @@
 //
 // Forward kinematics of the model (RobotEndPoseT), for a measurement context c:
 //   q_link   = c.q + sum of the terms' joint offsets                              (stage 1)
-//   s        = product of the terms' length scales; every d and a times s         (stage 2)
+//   s        = product of the terms' length scales; d and a of every joint link times s,
+//              not the tool link's: what the flange carries (a reflector's bracket, a
+//              board) is not the arm's structure, which its drives warm        (stage 2)
 //   q_link  += sum of the terms' sags c_i * tau_i(q_link), tau the gravity torques of the
 //              nominal masses in the model's own geometry, solved by fixed-point iteration
 //              (kSagIterations; the sag of a compliant joint changes the torques)   (stage 3)
@@ -109,6 +111,7 @@ void LinkAnglesT(const RobotModel& model, const T* params, const MeasurementCont
   T tau[kMaxJoints];
   for (int it = 0; it < kSagIterations; ++it) {
     ChainFramesT<T>(chain, params, q_link, *length_scale, X.data());
+    X[n + 1] = X[n] * LinkTransformT(params + kParamsPerLink * n, T(0.0), T(1.0));  // stage 2
     GravityTorquesT<T>(chain, X.data(), model.gravity_B, model.gravity, tau);
     for (int i = 0; i < n; ++i) q_link[i] = q0[i];
     p = params + chain.num_parameters();
@@ -130,7 +133,7 @@ RigidT<T> RobotEndPoseT(const RobotModel& model, const T* params, const Measurem
   LinkAnglesT<T>(model, params, c, q, &s);
   RigidT<T> X_BF = RigidT<T>::FromTransform(chain.X_BL0);
   for (int i = 0; i < n; ++i) X_BF = X_BF * LinkTransformT(params + kParamsPerLink * i, q[i], s);
-  const RigidT<T> X_FE = LinkTransformT(params + kParamsPerLink * n, T(0.0), s) *
+  const RigidT<T> X_FE = LinkTransformT(params + kParamsPerLink * n, T(0.0), T(1.0)) *
                          RigidT<T>::FromTransform(chain.X_LtE);
   Vec3T<T> dp_F = Vec3T<T>::Zero();
   const T* p = params + chain.num_parameters();

@@ -5,7 +5,7 @@ namespace {
 
 // Thermal drift of the whole arm over the measurement session (the arm warming up as it
 // works, temperature not recorded):
-//   d_i, a_i (every link, the tool link too) *= 1 + r t
+//   d_i, a_i (every joint link; not the tool link, robot_model.h stage 2) *= 1 + r t
 // with t the measurement's time stamp [s] from the start of the session and r the growth
 // rate [1/s]. Needs a time stamp.
 class ThermalDrift : public ErrorTermT<ThermalDrift> {

@@ -4,7 +4,7 @@ namespace twin::terms {
 namespace {
 
 // Thermal growth of the whole arm with a recorded temperature change:
-//   d_i, a_i (every link, the tool link too) *= 1 + k dT
+//   d_i, a_i (every joint link; not the tool link, robot_model.h stage 2) *= 1 + k dT
 // with dT the measurement's temperature change from the nominal model's reference [K] and k
 // the effective expansion coefficient [1/K] (steel 1.2e-5, aluminium 2.3e-5). Needs a
 // temperature. With dT the same for every measurement, k dT is a uniform scale of the arm,

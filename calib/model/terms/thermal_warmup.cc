@@ -7,7 +7,7 @@ namespace {
 
 // The arm warming up over the session as a first-order lag (a cold start; temperature not
 // recorded): its lengths approach a final growth g with time constant tau,
-//   d_i, a_i (every link, the tool link too) *= 1 + g (1 - exp(-t / tau)),
+//   d_i, a_i *= 1 + g (1 - exp(-t / tau))  (every joint link; not the tool link: robot_model.h),
 //   tau = tau0 exp(l),
 // with t the measurement's time stamp [s] from the start of the session, tau0 the term's
 // order in minutes (where the time constant starts) and l its estimated log-ratio. For tau much

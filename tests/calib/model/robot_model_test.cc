@@ -29,6 +29,30 @@ TEST(RobotModel, WithoutTermsItIsTheChainsForwardKinematics) {
   }
 }
 
+// A thermal growth k dT grows d and a of every joint link and not the tool link (what the
+// flange carries): the model's end pose at dT is the chain's with the joint links' lengths
+// times 1 + k dT and the tool link as it is. Written here from that statement, not from the
+// model's code; 1e-12 m: a few operations on metre values.
+TEST(RobotModel, AThermalGrowthGrowsTheJointLinksAndNotTheToolLink) {
+  std::mt19937_64 rng(37);
+  const KinematicModel chain = Perturbed(ReinovoLikeModel(), rng, 0.01, 0.05);
+  ASSERT_GT(std::abs(chain.tool().dh.a) + std::abs(chain.tool().dh.d), 0.01);  // a real tool
+  RobotModel m = WithTerm(MakeRobotModel(chain), MakeErrorTerm({"thermal_growth", -1, {}},
+                                                               chain, chain.name));
+  m.term_values << 2.3e-5;
+  const double scale = 1.0 + 2.3e-5 * 20.0;
+  KinematicModel grown = chain;
+  for (int i = 0; i < chain.num_joints(); ++i) {
+    grown.links[i].dh.d *= scale;
+    grown.links[i].dh.a *= scale;
+  }
+  for (int trial = 0; trial < 10; ++trial) {
+    MeasurementContext c = ContextOf(RandomJoints(chain, rng));
+    c.temperature_delta_K = 20.0;
+    EXPECT_LT((EndPose(m, c).translation() - EndPose(grown, c.q).translation()).norm(), 1e-12);
+  }
+}
+
 // Potential energy of the nominal masses in gravity g g_B at link angles q [J].
 double PotentialEnergy(const RobotModel& m, const JointVector& q) {
   const FrameSet f = ForwardKinematics(m.chain, q);
