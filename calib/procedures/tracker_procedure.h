@@ -50,8 +50,9 @@ KinematicModel WithReflector(KinematicModel flange_model, const Vector3& p_F);
 /// poses than the identification needs could be measured (with the skip reasons' counts).
 /// Each point's context carries the joint readings, the tracker's time stamp, the robot's
 /// temperature change since the first point when the cell reads one (Cell::ReadTemperatureC:
-/// a sensor reading, not a told value), and each joint's approach direction (the sign of the commanded motion that reached the pose, from the
-/// readings before the move: what the controller knows).
+/// a sensor reading, not a told value), and each joint's approach direction (the sign of the
+/// commanded motion that reached the pose, from the readings before the move: what the
+/// controller knows).
 TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const KinematicModel& nominal,
                                            const TrackerProcedureOptions& options);
 /// The same, identifying `start`: the nominal chain plus the error terms the engineer declares.
