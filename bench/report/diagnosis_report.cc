@@ -52,6 +52,8 @@ json CandidateJson(const CandidateScore& c, int step) {
           {"heldout_gain_percent", c.tested ? json(c.gain_percent) : json(nullptr)},
           {"p_value", c.tested ? json(c.p_value) : json(nullptr)},
           {"p_adjusted", c.tested ? json(c.p_adjusted) : json(nullptr)},
+          {"size_test",
+           {{"statistic", c.size_statistic}, {"dof", c.size_dof}, {"p_value", c.size_p_value}}},
           {"max_geometry_correlation", c.max_geometry_correlation},
           {"correlated_with", c.correlated_with},
           {"restarted", c.restarted},
@@ -209,13 +211,14 @@ std::string DiagnosisHtml(const json& d) {
   os << "<h3>Region-disjoint held-out RMS</h3><p>" << Esc(d["region_rule"]) << "</p>"
      << Bars(bars, "mm");
   os << "<h3>Decision chain</h3><table><tr><th>step</th><th>candidate</th><th>tested</th>"
-        "<th>held-out gain [%]</th><th>p</th><th>Holm p</th><th>max |rho| geometry</th>"
-        "<th>accepted</th><th>note</th></tr>";
+        "<th>held-out gain [%]</th><th>p</th><th>Holm p</th><th>size p (Wald)</th>"
+        "<th>max |rho| geometry</th><th>accepted</th><th>note</th></tr>";
   for (const json& c : d["candidates"]) {
     os << "<tr><td>" << c["step"] << "</td><td>" << Esc(c["label"]) << "</td><td>"
        << (c["tested"].get<bool>() ? "yes" : "no") << "</td><td>"
        << Fmt(c["heldout_gain_percent"], "%.1f") << "</td><td>" << Fmt(c["p_value"], "%.2g")
        << "</td><td>" << Fmt(c["p_adjusted"], "%.2g") << "</td><td>"
+       << Fmt(c["size_test"]["p_value"], "%.2g") << "</td><td>"
        << Fmt(c["max_geometry_correlation"], "%.3f") << "</td><td>"
        << (c["accepted"].get<bool>() ? "<b>yes</b>" : "") << "</td><td style=\"text-align:left\">"
        << Esc(c["note"]) << "</td></tr>";

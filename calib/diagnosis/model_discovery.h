@@ -29,8 +29,10 @@
 //    with the geometric columns below correlation_limit: TermGeometryDependence). The
 //    paired test is Wilcoxon's signed rank on per-point differences of held-out squared error
 //    (base minus candidate, one-sided), Holm-corrected over the candidates tested in the
-//    step. The candidate with the largest held-out gain is accepted only if its adjusted p is
-//    below alpha and its gain at least min_gain_percent; then the next step starts from the
+//    step. The candidate with the largest held-out gain among those whose size the data tell
+//    from zero (Wald's test of its amplitudes on the all-data fit, p below alpha: the size
+//    test) is accepted only if its adjusted p is below alpha and its gain at least
+//    min_gain_percent; then the next step starts from the
 //    extended model, until none passes, the residual test of the extended model finds it
 //    consistent with the noise (nothing left to explain), or max_effects are in.
 // 4. Verdict: "consistent_with_noise" (step 2 passes: nothing searched; every candidate is
@@ -164,6 +166,13 @@ struct CandidateScore {
   double heldout_rms_m = 0;         ///< region-disjoint held-out RMS with the term [m]
   double gain_percent = 0;          ///< held-out sum-of-squares reduction vs the step's base [%]
   double p_value = 1, p_adjusted = 1;  ///< Wilcoxon one-sided, and after Holm
+  /// Size test: Wald's chi-square of the term's amplitudes (ErrorTerm::amplitude_parameters)
+  /// against zero on the all-data fit, a' C^+ a over the rank of their covariance block C
+  /// (size_dof), and its p-value. A candidate whose size the data do not tell from zero
+  /// (size_p_value >= alpha) is not accepted, whatever its held-out gain.
+  double size_statistic = 0;
+  int size_dof = 0;
+  double size_p_value = 1;
   bool tested = false;              ///< applicable, identifiable, and entered the correction
   /// Its fits started from its first all-data fit's term values rather than zero: a term with
   /// dormant parameters (ErrorTerm::has_dormant_parameters: a time constant while the

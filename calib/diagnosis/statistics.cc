@@ -6,6 +6,8 @@
 #include <numeric>
 #include <stdexcept>
 
+#include <Eigen/Eigenvalues>
+
 namespace twin::stats {
 namespace {
 
@@ -55,6 +57,26 @@ double UpperIncompleteGammaRatio(double a, double x) {
 double ChiSquareUpperTail(double x, double dof) {
   if (!(dof > 0.0)) throw std::invalid_argument("ChiSquareUpperTail: dof must be > 0");
   return UpperIncompleteGammaRatio(0.5 * dof, std::max(0.0, 0.5 * x));
+}
+
+WaldTest WaldTestZero(const Eigen::VectorXd& a, const Eigen::MatrixXd& C) {
+  if (C.rows() != a.size() || C.cols() != a.size()) {
+    throw std::invalid_argument("WaldTestZero: the covariance must be square of the estimate's size");
+  }
+  WaldTest t;
+  if (a.size() == 0) return t;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (C + C.transpose()));
+  const double largest = eig.eigenvalues().cwiseAbs().maxCoeff();
+  if (!(largest > 0.0)) return t;
+  for (int k = 0; k < a.size(); ++k) {
+    const double lambda = eig.eigenvalues()(k);
+    if (lambda <= 1e-12 * largest) continue;
+    const double along = eig.eigenvectors().col(k).dot(a);
+    t.statistic += along * along / lambda;
+    ++t.dof;
+  }
+  t.p_value = ChiSquareUpperTail(t.statistic, t.dof);
+  return t;
 }
 
 double NormalUpperTail(double z) { return 0.5 * std::erfc(z / std::sqrt(2.0)); }

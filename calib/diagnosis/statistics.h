@@ -7,6 +7,8 @@
 
 #include <vector>
 
+#include <Eigen/Core>
+
 namespace twin::stats {
 
 /// Regularized upper incomplete gamma Q(a, x) = Gamma(a, x) / Gamma(a), a > 0, x >= 0: the
@@ -38,6 +40,18 @@ PairedTest WilcoxonSignedRankGreater(const std::vector<double>& d);
 /// (k = 1..m), max over j <= k of min(1, (m - j + 1) p_(j)). Rejecting where adjusted < alpha
 /// keeps the family-wise error rate at alpha.
 std::vector<double> HolmAdjust(const std::vector<double>& p);
+
+/// Wald's test that an estimate `a` with covariance `C` is zero: W = a' C^+ a, C^+ the
+/// pseudo-inverse over the eigenvalues above 1e-12 of the largest (a direction without
+/// variance is one the data did not estimate and counts for nothing), against chi-square with
+/// that many dof (Wald 1943; e.g. Seber and Lee, Linear Regression Analysis, 4.3). No
+/// direction with variance: statistic 0, dof 0, p 1.
+struct WaldTest {
+  double statistic = 0;
+  int dof = 0;
+  double p_value = 1;
+};
+WaldTest WaldTestZero(const Eigen::VectorXd& a, const Eigen::MatrixXd& C);
 
 /// Pearson's correlation of x and y (same size >= 3); 0 when either is constant.
 double Correlation(const std::vector<double>& x, const std::vector<double>& y);

@@ -66,10 +66,16 @@ class ErrorTerm {
   virtual bool sags_under_gravity() const { return false; }
   /// True for terms with a tool-offset stage (stage 4).
   virtual bool offsets_tool() const { return false; }
+  /// How many of its parameters, leading its slice, are amplitudes: at zero the term does
+  /// nothing. The rest shape the effect (a time constant) and have no "no effect" value; model
+  /// discovery tests a term's size on its amplitudes only. Default: every parameter.
+  virtual int amplitude_parameters() const { return static_cast<int>(parameters().size()); }
   /// True when some parameters act only once others are non-zero (a time constant while the
   /// amplitude is zero): at zero they have no gradient, so model discovery fits such a term a
   /// second time from its first solution.
-  virtual bool has_dormant_parameters() const { return false; }
+  bool has_dormant_parameters() const {
+    return amplitude_parameters() < static_cast<int>(parameters().size());
+  }
 
   /// Stage 1: adds to the link angles q (N entries) [rad].
   virtual void OffsetJoints(const double* p, const MeasurementContext& c, double* q) const = 0;

@@ -24,7 +24,7 @@ class ThermalWarmup : public ErrorTermT<ThermalWarmup> {
   std::string Requires(const MeasurementContext& c) const override {
     return c.has_time() ? "" : "a time stamp";
   }
-  bool has_dormant_parameters() const override { return true; }
+  int amplitude_parameters() const override { return 1; }  // the growth; l shapes it
 
   template <typename T>
   void ScaleLengthsT(const T* p, const MeasurementContext& c, T* s) const {

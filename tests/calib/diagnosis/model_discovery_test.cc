@@ -93,6 +93,9 @@ TEST(ModelDiscovery, OneUndeclaredEffectIsNamedAndTheHeldOutErrorFallsToTheNoise
   ASSERT_EQ(r.effects_added[0].parameters.size(), 1u);
   const DiscoveredParameter& p = r.effects_added[0].parameters[0];
   EXPECT_NEAR(p.estimated, kSoftJoint2[0], 3.0 * p.sigma + 1e-9) << p.name;
+  // Its size told from zero (Wald, its one parameter): the compliance is ~100 sigma.
+  EXPECT_EQ(r.effects_added[0].size_dof, 1);
+  EXPECT_LT(r.effects_added[0].size_p_value, 0.05);
   // Held out, a point carries sqrt(3) sigma of noise (17 um) plus the estimation error of a
   // region it did not see; 1.5x that is the bound. Before, the compliance left ~0.5 mm.
   EXPECT_LT(r.heldout_rms_discovered_m, 1.5 * std::sqrt(3.0) * kSigma);
@@ -182,6 +185,11 @@ TEST(ModelDiscovery, AWarmUpIsAddedWithItsTimeConstantEstimated) {
   EXPECT_NEAR(w.parameters[1].estimated, l_true, 3.0 * w.parameters[1].sigma + 1e-6)
       << "tau " << w.spec.orders[0] * std::exp(w.parameters[1].estimated) << " min";
   EXPECT_NEAR(w.parameters[0].estimated, 2e-4, 3.0 * w.parameters[0].sigma + 1e-9);
+  // The size test covers the growth alone: the log-ratio has no "no effect" value.
+  EXPECT_EQ(w.size_dof, 1);
+  EXPECT_NEAR(w.size_statistic, std::pow(w.parameters[0].estimated / w.parameters[0].sigma, 2),
+              1e-6 * w.size_statistic);  // one parameter: W = z^2, to the covariance's rounding
+  EXPECT_LT(w.size_p_value, 0.05);
   // The discovered model carries the estimated time constant (its own term, same values).
   const int n = static_cast<int>(r.model.term_values.size());
   ASSERT_EQ(n, 2);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <random>
+#include <stdexcept>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -29,6 +30,35 @@ TEST(Statistics, ChiSquareTailMatchesClosedForms) {
   // Its median is close to dof (1 - 2 / (9 dof))^3 for many dof (Wilson-Hilferty): 0.5 to 1e-3.
   const double k = 600.0;
   EXPECT_NEAR(ChiSquareUpperTail(k * std::pow(1.0 - 2.0 / (9.0 * k), 3.0), k), 0.5, 1e-3);
+}
+
+// Wald by hand: C = diag(4, 1) and a = (2, 3) give W = 4 / 4 + 9 / 1 = 10 on 2 dof, tail
+// exp(-5); rotated by 30 deg (a -> R a, C -> R C R') nothing changes. A singular C (rank 1,
+// direction u) counts only a's component along u: W = (u.a)^2 / lambda on 1 dof. A zero C, or
+// an empty estimate, is no test (p 1).
+TEST(Statistics, WaldTestZeroIsTheChiSquareOfTheEstimateOverTheDirectionsWithVariance) {
+  Eigen::Vector2d a(2.0, 3.0);
+  Eigen::Matrix2d C = Eigen::Vector2d(4.0, 1.0).asDiagonal();
+  WaldTest w = WaldTestZero(a, C);
+  EXPECT_EQ(w.dof, 2);
+  EXPECT_NEAR(w.statistic, 10.0, 1e-12);
+  EXPECT_NEAR(w.p_value, std::exp(-5.0), 1e-12);
+  const double c = std::cos(0.5236), s = std::sin(0.5236);
+  Eigen::Matrix2d R;
+  R << c, -s, s, c;
+  w = WaldTestZero(R * a, R * C * R.transpose());
+  EXPECT_EQ(w.dof, 2);
+  EXPECT_NEAR(w.statistic, 10.0, 1e-9);  // rounding of the rotation and the eigen-solver
+  const Eigen::Vector2d u = Eigen::Vector2d(1.0, 1.0).normalized();
+  w = WaldTestZero(a, 9.0 * u * u.transpose());
+  EXPECT_EQ(w.dof, 1);
+  EXPECT_NEAR(w.statistic, std::pow(u.dot(a), 2) / 9.0, 1e-12);
+  EXPECT_NEAR(w.p_value, std::erfc(std::sqrt(0.5 * w.statistic)), 1e-12);
+  w = WaldTestZero(a, Eigen::Matrix2d::Zero());
+  EXPECT_EQ(w.dof, 0);
+  EXPECT_EQ(w.p_value, 1.0);
+  EXPECT_EQ(WaldTestZero(Eigen::VectorXd(), Eigen::MatrixXd()).p_value, 1.0);
+  EXPECT_THROW(WaldTestZero(a, Eigen::Matrix3d::Identity()), std::invalid_argument);
 }
 
 // Holm by hand: sorted 0.01, 0.03, 0.04 times 3, 2, 1 = 0.03, 0.06, 0.04 -> running maximum
