@@ -241,7 +241,7 @@ void SplitAxes(const KinematicModel& at, const std::vector<AxisSample>& samples,
 
 void IdentifyRobot(const std::vector<int>& calibration_axes,
                    const std::vector<int>& validation_axes, const OpticalAxisOptions& options,
-                   RobotCalibration* rc, const NonlinearIdentificationResult* all_axes_fit) {
+                   RobotCalibration* rc) {
   std::vector<int> cal_kept, val_kept;
   const std::vector<AxisSample> cal = Subset(rc->samples, calibration_axes, &cal_kept);
   const std::vector<AxisSample> val = Subset(rc->samples, validation_axes, &val_kept);
@@ -311,9 +311,7 @@ void IdentifyRobot(const std::vector<int>& calibration_axes,
     std::sort(all.begin(), all.end());
     const auto t1 = Clock::now();
     const std::vector<AxisSample> all_samples = Subset(rc->samples, all);
-    // The split's fit of every usable axis is this fit (the same samples and options).
-    NonlinearIdentificationResult f =
-        all_axes_fit ? *all_axes_fit : IdentifyNonlinear(rc->nominal, all_samples, options.nonlinear);
+    NonlinearIdentificationResult f = IdentifyNonlinear(rc->nominal, all_samples, options.nonlinear);
     rc->identification_s += SecondsSince(t1);
     if (f.status != NonlinearIdentificationStatus::kFailed) {
       rc->covariance = EstimateIdentificationCovariance(rc->nominal, all_samples, f);
@@ -662,22 +660,9 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
     // at the fit of every usable axis, rank first: that mended one validation miss at twice
     // Table 3's errors, 0.051 -> 0.011 mm, but on the ABB it picked subsets whose higher rank
     // came from weakly seen directions, and their six-axis models missed the held-out axes by
-    // 0.1-0.2 mm in most calibrations; README, "Reverted".) The fit of every usable axis is
-    // still solved here once: it is the delivered all-axes refit.
-    std::optional<NonlinearIdentificationResult> all_axes_fit;
+    // 0.1-0.2 mm in most calibrations; README, "Reverted".)
     const KinematicModel& split_at = rc.nominal;
     rc.split_at = "nominal model";
-    if (options.split == OpticalAxisOptions::Split::kBestConditioned && options.refit_all_axes) {
-      std::vector<int> plan_axes(num_axes);
-      std::iota(plan_axes.begin(), plan_axes.end(), 0);
-      const std::vector<AxisSample> usable = Subset(rc.samples, plan_axes);
-      int usable_axes = 0;
-      for (const AxisSample& s : usable) usable_axes = std::max(usable_axes, s.axis + 1);
-      if (usable_axes >= 2) {
-        all_axes_fit = IdentifyNonlinear(rc.nominal, usable, options.nonlinear);
-        if (all_axes_fit->status == NonlinearIdentificationStatus::kFailed) all_axes_fit.reset();
-      }
-    }
     SplitAxes(split_at, rc.samples, num_axes, options, &cal_axes, &val_axes,
               &rc.split_candidates);
     rc.identification_s += SecondsSince(t_split);
@@ -689,7 +674,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
     }
     say(name(r) + ": identifying from " + std::to_string(rc.samples.size()) + " aligned poses (" +
         std::to_string(rc.failed.size()) + " skipped)");
-    IdentifyRobot(cal_axes, val_axes, options, &rc, all_axes_fit ? &*all_axes_fit : nullptr);
+    IdentifyRobot(cal_axes, val_axes, options, &rc);
     say(name(r) + ": mean misaligned error (eq. 46) calibration " +
         Fixed(1000 * rc.calibration_error.before, 4) + " -> " +
         Fixed(1000 * rc.calibration_error.after, 4) + " mm, validation " +

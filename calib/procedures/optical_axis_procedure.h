@@ -245,11 +245,8 @@ void SplitAxes(const KinematicModel& at, const std::vector<AxisSample>& samples,
 /// Fills linearized, nonlinear, holdout, the misaligned summaries and per_axis (all of the
 /// calibration-set model), then identified and method (the refit on all axes when
 /// options.refit_all_axes and there are validation axes, else the calibration-set model).
-/// `all_axes_fit`, when given, is IdentifyNonlinear of every usable axis (the procedure solves
-/// it once before the split), taken as that refit instead of solving it again.
 void IdentifyRobot(const std::vector<int>& calibration_axes,
                    const std::vector<int>& validation_axes, const OpticalAxisOptions& options,
-                   RobotCalibration* robot,
-                   const NonlinearIdentificationResult* all_axes_fit = nullptr);
+                   RobotCalibration* robot);
 
 }  // namespace twin

@@ -98,27 +98,5 @@ TEST(AxisSplit, IdentificationFromASingleUsableAxisIsRefused) {
   }
 }
 
-// The procedure ranks the subsets at the fit of every usable axis and hands that fit to
-// IdentifyRobot as the all-axes refit: the delivered model must be the one IdentifyRobot
-// solves itself from the same samples (bit for bit: same samples, options and start).
-TEST(AxisSplit, TheSplitsAllAxesFitIsTheDeliveredRefit) {
-  const auto sc = MakeOpticalAxisScenario(33);
-  OpticalAxisOptions o;
-  RobotCalibration solved, reused;
-  solved.nominal = reused.nominal = sc.nominal;
-  solved.samples = reused.samples = sc.samples;
-  IdentifyRobot({0, 1, 2}, {3, 4}, o, &solved);
-  const NonlinearIdentificationResult fit = IdentifyNonlinear(sc.nominal, sc.samples, o.nonlinear);
-  ASSERT_NE(fit.status, NonlinearIdentificationStatus::kFailed) << fit.reason;
-  IdentifyRobot({0, 1, 2}, {3, 4}, o, &reused, &fit);
-  ASSERT_TRUE(solved.refit);
-  ASSERT_TRUE(reused.refit);
-  EXPECT_EQ(solved.method, reused.method);
-  EXPECT_EQ(GetParameters(solved.identified), GetParameters(reused.identified));
-  // The calibration-set model does not depend on it.
-  EXPECT_EQ(GetParameters(solved.holdout), GetParameters(reused.holdout));
-  EXPECT_EQ(solved.validation_error.after, reused.validation_error.after);
-}
-
 }  // namespace
 }  // namespace twin
