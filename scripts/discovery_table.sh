@@ -31,6 +31,7 @@ declare -A INJECTED=(
   [optical_transmission_j3]="transmission_error (joint 3, order 1)"
   [optical_backlash_j3]="backlash (joint 3)"
   [optical_thermal_drift]="thermal_"   # thermal_drift or thermal_warmup (any time constant)
+  [optical_thermal_drift_sensed]="thermal_"   # the same with the arm's temperature sensor
   [optical_mount_deflection]="mount_deflection"
 )
 case "$PROCEDURE" in
@@ -40,7 +41,8 @@ case "$PROCEDURE" in
     PREFIX="" ;;
   optical)
     ORDER=(optical_clean optical_compliance_j2 optical_transmission_j3 optical_backlash_j3
-           optical_thermal_drift optical_mount_deflection optical_compliance_j2_declared)
+           optical_thermal_drift optical_thermal_drift_sensed optical_mount_deflection
+           optical_compliance_j2_declared)
     PREFIX="robots.r2." ;;
   *) echo "discovery_table: procedure must be tracker or optical, got '$PROCEDURE'" >&2; exit 2 ;;
 esac

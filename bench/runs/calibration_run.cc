@@ -98,12 +98,18 @@ std::string Csv(double v, int precision = 10) {
   return os.str();
 }
 
+// A figure, or an empty field where it is NaN (no clock, no temperature sensor).
+std::string CsvOrEmpty(double v, int precision) {
+  return std::isfinite(v) ? Csv(v, precision) : std::string();
+}
+
 // Header of measurements.csv for robots of up to `joints` joints (q1_deg..qN_deg; a robot with
 // fewer joints leaves the last ones empty).
 std::string CsvHeader(int joints) {
   std::string h = "robot,camera_robot,axis,index,set";
   for (int i = 1; i <= joints; ++i) h += ",q" + std::to_string(i) + "_deg";
-  return h + ",du_px,dv_px,depth_mm,offset_x_mm,offset_y_mm,offset_z_mm,frames,moves,du0_px,dv0_px,pose_rms_px";
+  return h + ",du_px,dv_px,depth_mm,offset_x_mm,offset_y_mm,offset_z_mm,frames,moves,du0_px,dv0_px,"
+             "pose_rms_px,time_s,temperature_delta_K";
 }
 
 // One CSV row per aligned pose (what a hardware cell records).
@@ -124,7 +130,8 @@ void AppendRows(const RobotCalibration& rc, const std::string& robot, const std:
          << Csv(1000 * p.p_C.z()) << ',' << Csv(1000 * p.offset.x()) << ','
          << Csv(1000 * p.offset.y()) << ',' << Csv(1000 * p.offset.z()) << ',' << p.frames << ','
          << p.moves << ',' << Csv(p.first_pixel_error.x, 6) << ',' << Csv(p.first_pixel_error.y, 6)
-         << ',' << Csv(p.pose_rms_px, 4) << '\n';
+         << ',' << Csv(p.pose_rms_px, 4) << ',' << CsvOrEmpty(p.time_s, 10) << ','
+         << CsvOrEmpty(p.temperature_delta_K, 6) << '\n';
   }
 }
 
@@ -186,7 +193,8 @@ cv::Mat RefusedPoseFigure(const RefusedPoseImage& im) {
 }
 
 // A Cell that forwards to another and adds up where the time goes (the benchmark's split of
-// servoing into rendering and motion).
+// servoing into rendering and motion). It forwards every method of Cell: one left out would
+// answer with Cell's default (no sensor, no tracker) while the cell behind has it.
 class TimedCell : public Cell {
  public:
   explicit TimedCell(Cell& cell) : cell_(cell) {}
@@ -218,6 +226,11 @@ class TimedCell : public Cell {
   int CameraRobot() override { return cell_.CameraRobot(); }
   MoveResult MountTarget(BracketTarget target) override { return cell_.MountTarget(target); }
   double ClockSeconds() override { return cell_.ClockSeconds(); }
+  double ReadTemperatureC(int robot) override { return cell_.ReadTemperatureC(robot); }
+  MoveResult JogTipToContact(int jogged_robot) override {
+    return cell_.JogTipToContact(jogged_robot);
+  }
+  TrackerReading MeasureTracker(int robot) override { return cell_.MeasureTracker(robot); }
 
   double move_s = 0, grab_s = 0;
   int moves = 0, frames = 0, region_frames = 0;
@@ -429,6 +442,9 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
                   {"failures", failures},
                   {"images", images},
                   {"time_s", rc.servoing_s}};
+    if (std::isfinite(rc.temperature_reference_C)) {
+      r["temperature_reference_C"] = rc.temperature_reference_C;
+    }
     r["split"] = {{"calibration_axes", rc.calibration_axes},
                   {"validation_axes", rc.validation_axes},
                   {"rule", rc.split_candidates.empty() ? "first" : "best_conditioned"},
@@ -633,6 +649,9 @@ void ScorePhysicalTruth(TwinCell& cell, const Scenario& sc, const CalibrationCon
         c.q = cell.ReadEncoders(rc.robot);
         c.approach = ApproachDirections(before, q);
         c.time_s = cell.ClockSeconds();
+        if (std::isfinite(rc.temperature_reference_C)) {
+          c.temperature_delta_K = cell.ReadTemperatureC(rc.robot) - rc.temperature_reference_C;
+        }
         if (!MissingContext(discovered_model, c).empty()) break;  // a term needs what is not read
         const TwinTruth t = cell.Truth();
         m.p_true.push_back(t.X_WB[rc.robot].inverse() * t.X_WT.translation());

@@ -598,6 +598,14 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
         ap.region_frames = sr.region_frames;
         ap.full_frame_fallbacks = sr.full_frame_fallbacks;
         ap.first_pixel_error = sr.first_pixel_error;
+        ap.time_s = cell.ClockSeconds();  // NaN where the cell keeps no clock
+        // The arm's temperature sensor where it has one (a thermal growth is then a function
+        // of the reading, no extrapolation in time): relative to the first aligned pose's.
+        const double temperature = cell.ReadTemperatureC(r);
+        if (std::isfinite(temperature)) {
+          if (!std::isfinite(rc.temperature_reference_C)) rc.temperature_reference_C = temperature;
+          ap.temperature_delta_K = temperature - rc.temperature_reference_C;
+        }
         rc.aligned.push_back(ap);
         AxisSample smp;
         smp.axis = k;
@@ -607,7 +615,8 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
         smp.sigma_offset = std::sqrt(0.5 * (fp->covariance(0, 0) + fp->covariance(1, 1)));
         smp.sigma_depth = std::sqrt(fp->covariance(2, 2));
         smp.approach = sr.approach;
-        smp.time_s = cell.ClockSeconds();  // NaN where the cell keeps no clock
+        smp.time_s = ap.time_s;
+        smp.temperature_delta_K = ap.temperature_delta_K;
         rc.samples.push_back(smp);
         const Vector3 aligned_P = EndPose(rc.nominal, sr.q_passive).translation();
         correction = aligned_P - planned_P;

@@ -18,6 +18,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -140,6 +141,10 @@ struct AlignedPose {
   int region_frames = 0;              ///< of `frames`, regions (ServoResult)
   int full_frame_fallbacks = 0;       ///< regions without the board
   cv::Point2d first_pixel_error{0, 0};  ///< (du, dv) of the first image [px]
+  double time_s = std::numeric_limits<double>::quiet_NaN();  ///< the cell's clock [s]; NaN none
+  /// The robot's temperature reading less RobotCalibration::temperature_reference_C [K]; NaN:
+  /// no sensor.
+  double temperature_delta_K = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// One pose the servo could not align; skipped, the run goes on.
@@ -186,6 +191,9 @@ struct RobotCalibration {
   std::vector<AlignedPose> aligned;
   std::vector<FailedPose> failed;
   std::vector<AxisSample> samples;     ///< all aligned poses, axis = plan axis index
+  /// The robot's temperature sensor (Cell::ReadTemperatureC) at its first aligned pose [deg C];
+  /// each sample's temperature_delta_K is its reading less this one. NaN: no sensor.
+  double temperature_reference_C = std::numeric_limits<double>::quiet_NaN();
   std::vector<int> calibration_axes;   ///< plan axis indices in the calibration set
   std::vector<int> validation_axes;    ///< ... in the validation set
   /// kBestConditioned: each candidate calibration subset (plan axes) and its smallest

@@ -3,7 +3,9 @@
 #include "tests/bench/cli_run.h"
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -106,6 +108,61 @@ TEST(CalibrationCli, RunDiagnosesEachCalibratedRobotUnlessTold) {
   const nlohmann::json k = nlohmann::json::parse(in2);
   EXPECT_TRUE(k["robots"]["r2"]["diagnosis"]["verdict"].is_null());
   EXPECT_EQ(k["robots"]["r2"]["diagnosis"]["skipped"], "--no-diagnosis");
+}
+
+// The reduced scenario with a temperature sensor on r2 (21 deg C cold, 0.1 K per reading) and
+// r2 warming up fast (30 K, 5 min: some 4 K over the session): every aligned pose records the
+// clock and the reading less the first pose's, and report.json the first reading. The twin's
+// warming at each row's clock, 30 (1 - exp(-t / 300 s)) K, is what the sensor must read to
+// within its noise: 0.7 K is 5 sigma of a difference of two readings (0.14 K).
+TEST(CalibrationCli, ATemperatureSensorIsReadAtEveryAlignedPose) {
+  const fs::path dir = TempDir("temperature");
+  std::string text = testing::AbsoluteModels(testing::ReadFile(kScenarios + "study_small.yaml"));
+  text = testing::Replaced(text, "      initial_joints_deg: [11.86, 21.16, -15.50, -64.86, 76.88, -25.73]\n",
+                           "      initial_joints_deg: [11.86, 21.16, -15.50, -64.86, 76.88, -25.73]\n"
+                           "      temperature_sensor: {ambient_C: 21.0, sigma_K: 0.1}\n");
+  text = testing::Replaced(text, "  effects:\n",
+                           "  effects:\n    - {type: thermal_drift, declared: false, robot: r2, coefficient_per_K: "
+                           "2.3e-5, delta_T_K: 30, time_constant_s: 300}\n");
+  std::ofstream(dir / "scenario.yaml") << text;
+  const CliRun r = Twinbench("run " + (dir / "scenario.yaml").string() +
+                             " --quiet --no-diagnosis --no-images --out " + (dir / "out").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto warming = [](double t) { return -30.0 * std::expm1(-t / 300.0); };
+  std::ifstream in(dir / "out" / "measurements.csv");
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  std::vector<std::string> header;
+  for (std::stringstream ss(line); std::getline(ss, line, ',');) header.push_back(line);
+  const auto column = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    return it == header.end() ? -1 : static_cast<int>(it - header.begin());
+  };
+  const int time_col = column("time_s"), temp_col = column("temperature_delta_K");
+  ASSERT_GE(time_col, 0);
+  ASSERT_GE(temp_col, 0);
+  int rows = 0;
+  double t_first = 0;
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    for (std::stringstream ss(line); std::getline(ss, line, ',');) f.push_back(line);
+    ASSERT_GT(static_cast<int>(f.size()), temp_col) << "row " << rows + 1;
+    const double t = std::stod(f[time_col]), delta = std::stod(f[temp_col]);
+    if (rows == 0) {
+      t_first = t;
+      EXPECT_EQ(delta, 0.0);  // the reference is the first reading itself
+    }
+    EXPECT_GE(t, t_first) << "row " << rows + 1;
+    EXPECT_NEAR(delta, warming(t) - warming(t_first), 0.7) << "row " << rows + 1 << ", t " << t;
+    ++rows;
+  }
+  EXPECT_GE(rows, 10);
+  std::ifstream rj(dir / "out" / "report.json");
+  const nlohmann::json j = nlohmann::json::parse(rj);
+  ASSERT_TRUE(j["robots"]["r2"].contains("temperature_reference_C")) << j["robots"]["r2"].dump();
+  // 21 deg C plus the warming at the first pose, to 5 sigma of one reading.
+  EXPECT_NEAR(j["robots"]["r2"]["temperature_reference_C"].get<double>(),
+              21.0 + warming(t_first), 0.5);
 }
 
 TEST(CalibrationCli, BadDiagnosisSettingsAndBoardMassNameFileLineAndKey) {
