@@ -1,5 +1,8 @@
 #include "calib/cell/cell.h"
 
+#include <cmath>
+#include <limits>
+
 namespace twin {
 
 const char* ToString(MoveStatus status) {
@@ -36,6 +39,13 @@ cv::Mat Cell::GrabImageRegion(const cv::Rect& roi) {
   const cv::Rect r = roi & cv::Rect(0, 0, frame.cols, frame.rows);
   if (r.empty()) return cv::Mat();
   return frame(r).clone();
+}
+
+double ReadTemperatureDeltaK(Cell& cell, int robot, double* reference_C) {
+  const double temperature = cell.ReadTemperatureC(robot);
+  if (!std::isfinite(temperature)) return std::numeric_limits<double>::quiet_NaN();
+  if (!std::isfinite(*reference_C)) *reference_C = temperature;
+  return temperature - *reference_C;
 }
 
 }  // namespace twin

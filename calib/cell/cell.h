@@ -129,4 +129,9 @@ class Cell {
   }
 };
 
+/// Robot `robot`'s temperature sensor now, less a session's reference reading [K]: the first
+/// finite reading sets *reference_C (and reads 0); NaN where the cell has no sensor. What a
+/// procedure records per measurement (MeasurementContext::temperature_delta_K).
+double ReadTemperatureDeltaK(Cell& cell, int robot, double* reference_C);
+
 }  // namespace twin

@@ -601,11 +601,7 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
         ap.time_s = cell.ClockSeconds();  // NaN where the cell keeps no clock
         // The arm's temperature sensor where it has one (a thermal growth is then a function
         // of the reading, no extrapolation in time): relative to the first aligned pose's.
-        const double temperature = cell.ReadTemperatureC(r);
-        if (std::isfinite(temperature)) {
-          if (!std::isfinite(rc.temperature_reference_C)) rc.temperature_reference_C = temperature;
-          ap.temperature_delta_K = temperature - rc.temperature_reference_C;
-        }
+        ap.temperature_delta_K = ReadTemperatureDeltaK(cell, r, &rc.temperature_reference_C);
         rc.aligned.push_back(ap);
         AxisSample smp;
         smp.axis = k;

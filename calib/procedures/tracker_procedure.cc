@@ -64,13 +64,8 @@ TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const RobotMod
     TrackerPoint p;
     p.context.q = reading;
     p.context.time_s = t.time_s;
-    const double temperature = cell.ReadTemperatureC(robot);
-    if (std::isfinite(temperature)) {
-      if (out.points.empty()) out.temperature_reference_C = temperature;
-      if (std::isfinite(out.temperature_reference_C)) {
-        p.context.temperature_delta_K = temperature - out.temperature_reference_C;
-      }
-    }
+    p.context.temperature_delta_K =
+        ReadTemperatureDeltaK(cell, robot, &out.temperature_reference_C);
     p.context.approach = ApproachDirections(before, q);
     p.p_T = t.p_T;
     p.row = a + 1;

@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../calib/optical_axis_synthetic.h"
+#include "bench/io/csv.h"
 #include "bench/io/model_yaml.h"
 #include "tests/bench/text_edit.h"
 
@@ -132,8 +133,7 @@ TEST(CalibrationCli, ATemperatureSensorIsReadAtEveryAlignedPose) {
   std::ifstream in(dir / "out" / "measurements.csv");
   std::string line;
   ASSERT_TRUE(std::getline(in, line));
-  std::vector<std::string> header;
-  for (std::stringstream ss(line); std::getline(ss, line, ',');) header.push_back(line);
+  const std::vector<std::string> header = SplitCsv(line);
   const auto column = [&](const std::string& name) {
     const auto it = std::find(header.begin(), header.end(), name);
     return it == header.end() ? -1 : static_cast<int>(it - header.begin());
@@ -144,10 +144,10 @@ TEST(CalibrationCli, ATemperatureSensorIsReadAtEveryAlignedPose) {
   int rows = 0;
   double t_first = 0;
   while (std::getline(in, line)) {
-    std::vector<std::string> f;
-    for (std::stringstream ss(line); std::getline(ss, line, ',');) f.push_back(line);
-    ASSERT_GT(static_cast<int>(f.size()), temp_col) << "row " << rows + 1;
-    const double t = std::stod(f[time_col]), delta = std::stod(f[temp_col]);
+    const std::vector<std::string> f = SplitCsv(line);
+    ASSERT_EQ(f.size(), header.size()) << "row " << rows + 1;
+    const double t = CsvNumber(f[time_col], "time_s");
+    const double delta = CsvNumber(f[temp_col], "temperature_delta_K");
     if (rows == 0) {
       t_first = t;
       EXPECT_EQ(delta, 0.0);  // the reference is the first reading itself
