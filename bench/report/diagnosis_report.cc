@@ -56,6 +56,10 @@ json CandidateJson(const CandidateScore& c, int step) {
            {{"statistic", c.size_statistic}, {"dof", c.size_dof}, {"p_value", c.size_p_value}}},
           {"max_geometry_correlation", c.max_geometry_correlation},
           {"correlated_with", c.correlated_with},
+          {"versus_leader_p_value", std::isfinite(c.versus_leader_p_value)
+                                        ? json(c.versus_leader_p_value)
+                                        : json(nullptr)},
+          {"preferred_over", c.preferred_over.empty() ? json(nullptr) : json(c.preferred_over)},
           {"restarted", c.restarted},
           {"accepted", c.accepted},
           {"note", c.note}};

@@ -32,7 +32,13 @@
 //    step. The candidate with the largest held-out gain among those whose size the data tell
 //    from zero (Wald's test of its amplitudes on the all-data fit, p below alpha: the size
 //    test) is accepted only if its adjusted p is below alpha and its gain at least
-//    min_gain_percent; then the next step starts from the
+//    min_gain_percent. A leader driven by the session's clock alone (ErrorTerm::
+//    driven_by_clock: a drift with time) gives way to an acceptable candidate with a measured
+//    driver (a temperature, the joint angles) that the held-out data cannot tell from it (the
+//    leader's held-out loss below the other's, summed per region fold, one-sided sign-flip
+//    test over the folds: p >= alpha): the region folds are parts of one session and cannot
+//    test the extrapolation of the clock to the next one, which a measured driver does not
+//    need. Then the next step starts from the
 //    extended model, until none passes, the residual test of the extended model finds it
 //    consistent with the noise (nothing left to explain), or max_effects are in.
 // 4. Verdict: "consistent_with_noise" (step 2 passes: nothing searched; every candidate is
@@ -72,6 +78,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -174,6 +181,18 @@ struct CandidateScore {
   int size_dof = 0;
   double size_p_value = 1;
   bool tested = false;              ///< applicable, identifiable, and entered the correction
+  /// ErrorTerm::driven_by_clock: the term extrapolates the session's clock (a drift with time)
+  bool driven_by_clock = false;
+  /// Per unit of data (a point, an axis sample), its held-out loss in the region folds, in the
+  /// units' order; what the paired tests compare.
+  std::vector<double> heldout_loss;
+  /// The measured-driver preference (header, step 3). Where the step's leader is clock-driven
+  /// and this candidate, with a measured driver, would be accepted on its own: the one-sided
+  /// sign-flip p (stats::SignFlipTestGreater) of the leader's held-out loss being below this
+  /// one's, summed per region fold; NaN where not compared.
+  double versus_leader_p_value = std::numeric_limits<double>::quiet_NaN();
+  /// Accepted in place of that leader (versus_leader_p_value >= alpha): the leader's label.
+  std::string preferred_over;
   /// Its fits started from its first all-data fit's term values rather than zero: a term with
   /// dormant parameters (ErrorTerm::has_dormant_parameters: a time constant while the
   /// amplitude is zero) that became identifiable there; an accepted term keeps that start in

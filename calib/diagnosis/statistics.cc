@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numeric>
 #include <stdexcept>
@@ -113,6 +114,29 @@ PairedTest WilcoxonSignedRankGreater(const std::vector<double>& d) {
   t.z = (t.w_plus - mean - 0.5) / std::sqrt(var);
   t.p_value = NormalUpperTail(t.z);
   return t;
+}
+
+double SignFlipTestGreater(const std::vector<double>& d) {
+  const int n = static_cast<int>(d.size());
+  if (n == 0) return 1.0;
+  double observed = 0.0, sum_squares = 0.0;
+  for (double v : d) {
+    observed += v;
+    sum_squares += v * v;
+  }
+  if (n > 20) {
+    return sum_squares > 0.0 ? NormalUpperTail(observed / std::sqrt(sum_squares)) : 1.0;
+  }
+  // A sum equal to the observed one up to rounding counts as at least it.
+  const double slack = 1e-12 * std::sqrt(sum_squares) * n;
+  std::uint64_t at_least = 0;
+  const std::uint64_t assignments = std::uint64_t{1} << n;
+  for (std::uint64_t mask = 0; mask < assignments; ++mask) {
+    double sum = 0.0;
+    for (int i = 0; i < n; ++i) sum += (mask >> i & 1u) ? -std::abs(d[i]) : std::abs(d[i]);
+    if (sum >= observed - slack) ++at_least;
+  }
+  return static_cast<double>(at_least) / static_cast<double>(assignments);
 }
 
 std::vector<double> HolmAdjust(const std::vector<double>& p) {

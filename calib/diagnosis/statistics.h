@@ -1,6 +1,6 @@
 // The statistics of model discovery (calib/diagnosis/model_discovery.h): a chi-square tail for
 // the residual test against the noise floor, a paired one-sided test of held-out residuals for
-// a candidate effect, Holm's step-down correction for the number of candidates tried, Wald's
+// a candidate effect, a sign-flip test of fold-level differences, Holm's step-down correction for the number of candidates tried, Wald's
 // test of a candidate's size against zero, and correlations for the residual maps. Written from the textbook definitions (references at
 // each function); no statistics library is among the project's dependencies.
 #pragma once
@@ -35,6 +35,15 @@ struct PairedTest {
 /// with the tie correction of the variance (valid for 20 or more pairs; fewer give p = 1, i.e.
 /// no evidence). Zero differences are dropped.
 PairedTest WilcoxonSignedRankGreater(const std::vector<double>& d);
+
+/// Fisher's sign-flip randomization test that the differences d (e.g. one model's held-out
+/// loss less another's, summed per cross-validation fold) are centred above zero, one-sided:
+/// p is the share of the 2^n sign assignments s whose sum of s_i |d_i| is at least sum(d_i)
+/// (Fisher 1935, The Design of Experiments, 21; e.g. Good, Permutation Tests, 3.1). It assumes
+/// only that each d_i is symmetric about zero under no difference, independently of the others.
+/// Exact for n <= 20; above, the normal approximation z = sum(d) / sqrt(sum(d^2)). With n
+/// differences the smallest p is 2^-n (n = 5: 0.031). Empty: p = 1.
+double SignFlipTestGreater(const std::vector<double>& d);
 
 /// Holm's step-down adjusted p-values (Holm 1979), same order as `p`: for the k-th smallest
 /// (k = 1..m), max over j <= k of min(1, (m - j + 1) p_(j)). Rejecting where adjusted < alpha

@@ -70,6 +70,12 @@ class ErrorTerm {
   /// nothing. The rest shape the effect (a time constant) and have no "no effect" value; model
   /// discovery tests a term's size on its amplitudes only. Default: every parameter.
   virtual int amplitude_parameters() const { return static_cast<int>(parameters().size()); }
+  /// True when the term is driven by the session's clock alone (a drift with time), not by a
+  /// quantity read with each measurement (joint angles, a temperature, the flange's attitude).
+  /// Such a model extrapolates the clock: it holds for the session it was fitted on, not for
+  /// the next one. Model discovery prefers a measured driver where the held-out data cannot
+  /// tell the two apart.
+  virtual bool driven_by_clock() const { return false; }
   /// True when some parameters act only once others are non-zero (a time constant while the
   /// amplitude is zero): at zero they have no gradient, so model discovery fits such a term a
   /// second time from its first solution.

@@ -200,6 +200,88 @@ TEST(ModelDiscovery, AWarmUpIsAddedWithItsTimeConstantEstimated) {
   EXPECT_LT(w.max_geometry_correlation, 0.99) << w.correlated_with;
 }
 
+// An arm growing linearly over the hour (2e-4 in all, ~0.2 mm at the tool) with a
+// temperature sensor that follows the clock (10 K over the hour, 0.03 K of sensor noise): the
+// time-linear drift (the truth) and the measured growth fit the points alike (the sensor's
+// noise, ~0.6 um at the tool, against 10 um of tracker noise). Where the drift leads and the
+// region folds cannot tell the two apart (sign-flip p >= 0.05), the measured growth is taken:
+// a clock-driven model would extrapolate the session's clock into the next session; where they
+// can, the drift stays. Four draws; the preference must have acted in at least one of them,
+// else this test would not test it.
+TEST(ModelDiscovery, AMeasuredDriverIsPreferredToTheClockWhereTheHeldOutDataCannotTellThemApart) {
+  const double rate = 2e-4 / 3600.0;  // [1/s]
+  const Case c = MakeCase(19, {{kThermalDrift, {rate}}});
+  int preferred = 0;
+  for (std::uint64_t seed = 11; seed < 15; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    auto points = SyntheticTrackerPoints(c.truth, 150, seed, kSigma);
+    std::mt19937_64 rng(100 + seed);
+    std::normal_distribution<double> sensor(0.0, 0.03);  // [K]
+    // The truth is driven by time alone: rewriting the readings leaves the points as they were.
+    for (TrackerPoint& p : points) {
+      p.context.temperature_delta_K = p.context.time_s / 360.0 + sensor(rng);
+    }
+    const DiscoveryResult r = DiscoverTrackerModel(
+        c.nominal, points, Options({kCompliance2, kThermalDrift, kThermalGrowth}));
+    ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+    ASSERT_EQ(r.effects_added.size(), 1u);
+    // A second step may search on (the sensor's noise leaves the growth a little residual);
+    // it adds nothing.
+    ASSERT_GE(r.steps.size(), 1u);
+    const std::vector<CandidateScore>& s = r.steps[0].candidates;
+    ASSERT_EQ(s.size(), 3u);
+    const CandidateScore &drift = s[1], &growth = s[2];
+    ASSERT_TRUE(drift.driven_by_clock);
+    ASSERT_FALSE(growth.driven_by_clock);
+    // Both explain the drift: each passes Holm and the size test on its own.
+    EXPECT_LT(growth.p_adjusted, 0.05);
+    EXPECT_LT(growth.size_p_value, 0.05);
+    if (drift.gain_percent > growth.gain_percent) {
+      // Compared with the clock-driven leader.
+      ASSERT_TRUE(std::isfinite(growth.versus_leader_p_value));
+      const bool tie = growth.versus_leader_p_value >= 0.05;
+      EXPECT_EQ(growth.accepted, tie) << growth.note;
+      EXPECT_EQ(drift.accepted, !tie) << drift.note;
+      EXPECT_EQ(r.effects_added[0].spec.type, tie ? "thermal_growth" : "thermal_drift");
+      if (tie) {
+        ++preferred;
+        EXPECT_EQ(growth.preferred_over, TermLabel(kThermalDrift));
+        EXPECT_NE(drift.note.find("driven by the clock"), std::string::npos) << drift.note;
+      }
+    } else {
+      // The measured driver leads: nothing to compare.
+      EXPECT_TRUE(growth.accepted) << growth.note;
+      EXPECT_TRUE(growth.preferred_over.empty()) << growth.preferred_over;
+      EXPECT_FALSE(std::isfinite(growth.versus_leader_p_value));
+    }
+    if (r.effects_added[0].spec.type == "thermal_growth") {
+      // Its coefficient: the rate over the sensor's 10 K per hour, within 3 sigma (the sensor
+      // noise's attenuation of the slope, 1e-4 of it at 0.03 K against a 10 K spread, is far
+      // inside the tolerance).
+      ASSERT_EQ(r.effects_added[0].parameters.size(), 1u);
+      const DiscoveredParameter& k = r.effects_added[0].parameters[0];
+      EXPECT_NEAR(k.estimated, rate * 360.0, 3.0 * k.sigma);
+    }
+    EXPECT_LT(r.heldout_rms_discovered_m, 1.5 * std::sqrt(3.0) * kSigma);
+  }
+  EXPECT_GE(preferred, 1);
+}
+
+// The same drift with the default synthetic temperatures (random, not following the clock):
+// the growth is a placebo there, and the drift is accepted as the leader.
+TEST(ModelDiscovery, AClockDrivenLeaderIsKeptWhereNoMeasuredDriverMatchesIt) {
+  const double rate = 2e-4 / 3600.0;  // [1/s]
+  const Case c = MakeCase(19, {{kThermalDrift, {rate}}});
+  const auto points = SyntheticTrackerPoints(c.truth, 150, 11, kSigma);
+  const DiscoveryResult r =
+      DiscoverTrackerModel(c.nominal, points, Options({kCompliance2, kThermalDrift, kThermalGrowth}));
+  ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+  ASSERT_EQ(r.effects_added.size(), 1u);
+  EXPECT_EQ(r.effects_added[0].spec.type, "thermal_drift");
+  EXPECT_TRUE(r.effects_added[0].preferred_over.empty());
+  EXPECT_FALSE(r.steps[0].candidates[2].accepted);
+}
+
 TEST(ModelDiscovery, RepeatedPosesGiveTheirSpreadAsASecondNoiseEstimate) {
   const Case c = MakeCase(16, {});
   std::vector<TrackerPoint> points = SyntheticTrackerPoints(c.truth, 120, 8, 0.0);

@@ -107,6 +107,26 @@ TEST(Statistics, WilcoxonHoldsItsLevelUnderTheNull) {
   EXPECT_LE(rejected, 36);
 }
 
+// The sign-flip test counted by hand: of the 2^n sign assignments on |d|, the share whose sum
+// is at least the observed one.
+TEST(Statistics, SignFlipTestCountsSignAssignmentsByHand) {
+  // {1, 2, 3}: only all-positive reaches 6: 1 of 8.
+  EXPECT_DOUBLE_EQ(SignFlipTestGreater({1.0, 2.0, 3.0}), 1.0 / 8.0);
+  // {3, -1, 2} (sum 4): +3+1+2 = 6 and +3-1+2 = 4 reach it: 2 of 8.
+  EXPECT_DOUBLE_EQ(SignFlipTestGreater({3.0, -1.0, 2.0}), 2.0 / 8.0);
+  // {1, -1} (sum 0): 2, 0, 0 reach it, -2 does not: 3 of 4 (ties count).
+  EXPECT_DOUBLE_EQ(SignFlipTestGreater({1.0, -1.0}), 3.0 / 4.0);
+  // Five folds all one way is the smallest p five can give: 1 / 32 (< 0.05); four of five
+  // cannot go below 2 / 32 (> 0.05) whatever the sizes.
+  EXPECT_DOUBLE_EQ(SignFlipTestGreater({0.5, 1.0, 2.0, 0.1, 3.0}), 1.0 / 32.0);
+  EXPECT_GT(SignFlipTestGreater({0.5, 1.0, 2.0, -0.1, 3.0}), 0.05);
+  // A zero difference doubles both counts: the p is as without it.
+  EXPECT_DOUBLE_EQ(SignFlipTestGreater({1.0, 2.0, 3.0, 0.0}), 1.0 / 8.0);
+  EXPECT_DOUBLE_EQ(SignFlipTestGreater({}), 1.0);
+  // Above 20 differences, the normal approximation: 25 ones give z = 25 / 5.
+  EXPECT_NEAR(SignFlipTestGreater(std::vector<double>(25, 1.0)), NormalUpperTail(5.0), 1e-15);
+}
+
 TEST(Statistics, CorrelationOfLinearAndConstantSeries) {
   const std::vector<double> x{1, 2, 3, 4, 5};
   EXPECT_NEAR(Correlation(x, {2, 4, 6, 8, 10}), 1.0, 1e-15);
