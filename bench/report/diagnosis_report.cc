@@ -56,6 +56,9 @@ json CandidateJson(const CandidateScore& c, int step) {
            {{"statistic", c.size_statistic}, {"dof", c.size_dof}, {"p_value", c.size_p_value}}},
           {"max_geometry_correlation", c.max_geometry_correlation},
           {"correlated_with", c.correlated_with},
+          {"driver", c.driver == TermDriver::kMeasured         ? "measured"
+                     : c.driver == TermDriver::kClockLevelling ? "clock_levelling"
+                                                               : "clock_unbounded"},
           {"versus_leader_p_value", std::isfinite(c.versus_leader_p_value)
                                         ? json(c.versus_leader_p_value)
                                         : json(nullptr)},

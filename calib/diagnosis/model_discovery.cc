@@ -612,6 +612,16 @@ void SizeTest(const IdentificationResult& fit, int first, int amplitudes, Candid
   c->size_p_value = w.p_value;
 }
 
+// TermDriver in words, for the notes.
+const char* DriverText(TermDriver d) {
+  switch (d) {
+    case TermDriver::kMeasured: return "a measured quantity";
+    case TermDriver::kClockLevelling: return "the clock, levelling off";
+    case TermDriver::kClockUnbounded: return "the clock, without bound";
+  }
+  return "?";
+}
+
 // Scores one candidate against the step's base (its region cross-validation `base_cv`).
 CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base_rank,
                               const TermSpec& spec, const std::vector<int>& region, int folds,
@@ -636,7 +646,7 @@ CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base
     }
   }
   const int added = static_cast<int>(model.terms.back()->parameters().size());
-  c.driven_by_clock = model.terms.back()->driven_by_clock();
+  c.driver = model.terms.back()->driver();
   Fit all = data.FitOn(model, {}, "candidate " + c.label + ", all data");
   const int first = model.num_parameters() - added;
   int rank = all.result.observability.rank;
@@ -911,50 +921,60 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
         }
         return why.str();
       };
-      // The measured-driver preference: the region folds are parts of one session, so they
-      // cannot test a clock-driven term's extrapolation to the next session. Where the leader
-      // is clock-driven and an acceptable candidate with a measured driver is not told apart
-      // from it (the leader's held-out loss below the other's, summed per region fold, by the
-      // sign-flip test: p >= alpha), the one of those with the largest gain is taken instead.
-      // The folds are the independent units here, not the points: a fold's points share the
-      // error of the model fitted without them, and between two near-equal models that shared
-      // error is the whole difference. Per point, Wilcoxon called a 0.14-point gain difference
-      // (a time-linear growth against the same growth read by a 0.03 K sensor, synthetic
-      // tracker data) significant at p = 0.0007.
-      if (best >= 0 && s.candidates[best].driven_by_clock && refusal(s.candidates[best]).empty()) {
+      // The driver preference (header, step 3): the region folds are parts of one session, so
+      // they cannot test how a clock-driven term carries over to later times. Where the leader
+      // is clock-driven and an acceptable candidate with an earlier driver (TermDriver) is not
+      // told apart from it (the leader's held-out loss below the other's, summed per region
+      // fold, by the sign-flip test: p >= alpha), that candidate is taken instead: of several,
+      // the earliest driver, then the largest gain. The folds are the independent units here,
+      // not the points: a fold's points share the error of the model fitted without them, and
+      // between two near-equal models that shared error is the whole difference. Per point,
+      // Wilcoxon called a 0.14-point gain difference (a time-linear growth against the same
+      // growth read by a 0.03 K sensor, synthetic tracker data) significant at p = 0.0007.
+      if (best >= 0 && s.candidates[best].driver != TermDriver::kMeasured &&
+          refusal(s.candidates[best]).empty()) {
+        const CandidateScore& lead = s.candidates[best];
         int preferred = -1;
         for (int k : tested) {
           CandidateScore& c = s.candidates[k];
-          if (c.driven_by_clock || c.size_p_value >= o.alpha || !refusal(c).empty()) continue;
-          const std::vector<double>& lead = s.candidates[best].heldout_loss;
-          if (c.heldout_loss.size() != lead.size() || region.size() != lead.size()) continue;
+          if (c.driver >= lead.driver || c.size_p_value >= o.alpha || !refusal(c).empty()) {
+            continue;
+          }
+          if (c.heldout_loss.size() != lead.heldout_loss.size() ||
+              region.size() != lead.heldout_loss.size()) {
+            continue;
+          }
           std::vector<double> d(folds, 0.0);
-          for (std::size_t i = 0; i < lead.size(); ++i) {
-            d[region[i]] += c.heldout_loss[i] - lead[i];
+          for (std::size_t i = 0; i < region.size(); ++i) {
+            d[region[i]] += c.heldout_loss[i] - lead.heldout_loss[i];
           }
           c.versus_leader_p_value = stats::SignFlipTestGreater(d);
           if (c.versus_leader_p_value < o.alpha) {
             std::ostringstream why;
-            why << "its measured driver is not preferred: the clock-driven "
-                << s.candidates[best].label << " is better in the region folds (sign-flip p = "
-                << c.versus_leader_p_value << " < " << o.alpha << ")";
+            why << "not preferred for its driver (" << DriverText(c.driver) << "): "
+                << lead.label << " (" << DriverText(lead.driver)
+                << ") is better in the region folds (sign-flip p = " << c.versus_leader_p_value
+                << " < " << o.alpha << ")";
             c.note = c.note.empty() ? why.str() : c.note + "; " + why.str();
             continue;
           }
-          if (preferred < 0 || c.gain_percent > s.candidates[preferred].gain_percent) {
+          const CandidateScore* q = preferred >= 0 ? &s.candidates[preferred] : nullptr;
+          if (!q || c.driver < q->driver ||
+              (c.driver == q->driver && c.gain_percent > q->gain_percent)) {
             preferred = k;
           }
         }
         if (preferred >= 0) {
-          CandidateScore& lead = s.candidates[best];
+          CandidateScore& leader = s.candidates[best];
           CandidateScore& c = s.candidates[preferred];
-          c.preferred_over = lead.label;
+          c.preferred_over = leader.label;
           std::ostringstream why;
-          why << "largest held-out gain (" << lead.gain_percent << " %), but driven by the clock "
-              << "and not told apart from " << c.label << " (" << c.gain_percent
-              << " %, sign-flip p over the region folds = " << c.versus_leader_p_value
-              << " >= " << o.alpha << "), whose driver is measured";
-          lead.note = lead.note.empty() ? why.str() : lead.note + "; " + why.str();
+          why << "largest held-out gain (" << leader.gain_percent << " %), but driven by "
+              << DriverText(leader.driver) << " and not told apart from " << c.label << " ("
+              << c.gain_percent << " %, sign-flip p over the region folds = "
+              << c.versus_leader_p_value << " >= " << o.alpha << "), driven by "
+              << DriverText(c.driver);
+          leader.note = leader.note.empty() ? why.str() : leader.note + "; " + why.str();
           best = preferred;
         }
       }
@@ -966,7 +986,8 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
           why << "largest held-out gain, but " << refused;
         } else if (!c.preferred_over.empty()) {
           c.accepted = true;
-          why << "accepted in place of " << c.preferred_over << " (measured driver, fold p = "
+          why << "accepted in place of " << c.preferred_over << " (driven by "
+              << DriverText(c.driver) << ", fold p = "
               << c.versus_leader_p_value << "): held-out gain " << c.gain_percent
               << " %, Holm-adjusted p = " << c.p_adjusted << " over " << tested.size()
               << " candidates";

@@ -32,13 +32,14 @@
 //    step. The candidate with the largest held-out gain among those whose size the data tell
 //    from zero (Wald's test of its amplitudes on the all-data fit, p below alpha: the size
 //    test) is accepted only if its adjusted p is below alpha and its gain at least
-//    min_gain_percent. A leader driven by the session's clock alone (ErrorTerm::
-//    driven_by_clock: a drift with time) gives way to an acceptable candidate with a measured
-//    driver (a temperature, the joint angles) that the held-out data cannot tell from it (the
-//    leader's held-out loss below the other's, summed per region fold, one-sided sign-flip
-//    test over the folds: p >= alpha): the region folds are parts of one session and cannot
-//    test the extrapolation of the clock to the next one, which a measured driver does not
-//    need. Then the next step starts from the
+//    min_gain_percent. A leader driven by the session's clock (ErrorTerm::driver: a warm-up,
+//    a drift linear in time) gives way to an acceptable candidate with a driver earlier in
+//    TermDriver's order (a measured quantity before a warm-up that levels off, before a drift
+//    that grows without end) that the held-out data cannot tell from it (the leader's
+//    held-out loss below the other's, summed per region fold, one-sided sign-flip test over
+//    the folds: p >= alpha); of several, the earliest driver, then the largest gain. The
+//    region folds are parts of one session and cannot test how a clock-driven model carries
+//    over to the later times it is used at. Then the next step starts from the
 //    extended model, until none passes, the residual test of the extended model finds it
 //    consistent with the noise (nothing left to explain), or max_effects are in.
 // 4. Verdict: "consistent_with_noise" (step 2 passes: nothing searched; every candidate is
@@ -181,15 +182,15 @@ struct CandidateScore {
   int size_dof = 0;
   double size_p_value = 1;
   bool tested = false;              ///< applicable, identifiable, and entered the correction
-  /// ErrorTerm::driven_by_clock: the term extrapolates the session's clock (a drift with time)
-  bool driven_by_clock = false;
+  /// ErrorTerm::driver: a measured quantity, or the session's clock (levelling off or not)
+  TermDriver driver = TermDriver::kMeasured;
   /// Per unit of data (a point, an axis sample), its held-out loss in the region folds, in the
   /// units' order; what the paired tests compare.
   std::vector<double> heldout_loss;
-  /// The measured-driver preference (header, step 3). Where the step's leader is clock-driven
-  /// and this candidate, with a measured driver, would be accepted on its own: the one-sided
-  /// sign-flip p (stats::SignFlipTestGreater) of the leader's held-out loss being below this
-  /// one's, summed per region fold; NaN where not compared.
+  /// The driver preference (header, step 3). Where the step's leader is clock-driven and this
+  /// candidate, with a driver earlier in TermDriver's order, would be accepted on its own: the
+  /// one-sided sign-flip p (stats::SignFlipTestGreater) of the leader's held-out loss being
+  /// below this one's, summed per region fold; NaN where not compared.
   double versus_leader_p_value = std::numeric_limits<double>::quiet_NaN();
   /// Accepted in place of that leader (versus_leader_p_value >= alpha): the leader's label.
   std::string preferred_over;

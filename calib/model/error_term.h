@@ -51,6 +51,14 @@ struct TermSpec {
   std::vector<int> orders;  ///< harmonic orders (transmission error), >= 1 each
 };
 
+/// What drives an error term, in the order model discovery prefers them where the held-out
+/// data cannot tell two candidates apart (calib/diagnosis/model_discovery.h, step 3): a
+/// quantity read with each measurement (joint angles, a temperature, the flange's attitude);
+/// the session's clock through an effect that levels off (a warm-up); the clock through one
+/// that grows without end (a drift linear in time). A clock-driven model is used at later
+/// times than it was fitted on, and the held-out regions of one session cannot test that.
+enum class TermDriver { kMeasured = 0, kClockLevelling = 1, kClockUnbounded = 2 };
+
 /// One error term (interface). Parameters are passed as a pointer to the term's own slice of
 /// the model's flat parameter vector (ParameterLayout); stages add to what they are given.
 class ErrorTerm {
@@ -70,12 +78,8 @@ class ErrorTerm {
   /// nothing. The rest shape the effect (a time constant) and have no "no effect" value; model
   /// discovery tests a term's size on its amplitudes only. Default: every parameter.
   virtual int amplitude_parameters() const { return static_cast<int>(parameters().size()); }
-  /// True when the term is driven by the session's clock alone (a drift with time), not by a
-  /// quantity read with each measurement (joint angles, a temperature, the flange's attitude).
-  /// Such a model extrapolates the clock: it holds for the session it was fitted on, not for
-  /// the next one. Model discovery prefers a measured driver where the held-out data cannot
-  /// tell the two apart.
-  virtual bool driven_by_clock() const { return false; }
+  /// What drives the term (TermDriver); a quantity read with each measurement by default.
+  virtual TermDriver driver() const { return TermDriver::kMeasured; }
   /// True when some parameters act only once others are non-zero (a time constant while the
   /// amplitude is zero): at zero they have no gradient, so model discovery fits such a term a
   /// second time from its first solution.

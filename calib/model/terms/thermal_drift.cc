@@ -16,7 +16,7 @@ class ThermalDrift : public ErrorTermT<ThermalDrift> {
     return c.has_time() ? "" : "a time stamp";
   }
 
-  bool driven_by_clock() const override { return true; }
+  TermDriver driver() const override { return TermDriver::kClockUnbounded; }
   template <typename T>
   void ScaleLengthsT(const T* p, const MeasurementContext& c, T* s) const {
     *s *= T(1.0) + p[0] * c.time_s;

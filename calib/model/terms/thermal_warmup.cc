@@ -24,7 +24,7 @@ class ThermalWarmup : public ErrorTermT<ThermalWarmup> {
   std::string Requires(const MeasurementContext& c) const override {
     return c.has_time() ? "" : "a time stamp";
   }
-  bool driven_by_clock() const override { return true; }
+  TermDriver driver() const override { return TermDriver::kClockLevelling; }
   int amplitude_parameters() const override { return 1; }  // the growth; l shapes it
 
   template <typename T>

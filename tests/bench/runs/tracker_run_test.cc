@@ -182,6 +182,14 @@ TEST(TrackerRun, AnArmWarmingUpIsDiscoveredAsThermalDriftOrDeclared) {
   const std::string term = d["effects_added"][0]["term"];
   EXPECT_EQ(term.rfind("thermal_", 0), 0u) << term;
   EXPECT_NE(term, "thermal_growth");  // needs temperatures, which this procedure lacks
+  // The report says what drives each candidate: the two time-dependent terms run on the clock.
+  EXPECT_EQ(d["effects_added"][0]["driver"],
+            term == "thermal_drift" ? "clock_unbounded" : "clock_levelling");
+  for (const auto& c : d["candidates"]) {
+    if (c["term"] == "joint_compliance") {
+      EXPECT_EQ(c["driver"], "measured") << c.dump();
+    }
+  }
   EXPECT_TRUE(d["effects_added"][0]["joint"].is_null());
   EXPECT_LT(d["heldout_rms_mm"]["discovered"].get<double>(), 0.03);
   EXPECT_LT(d["heldout_rms_mm"]["discovered"].get<double>(),
@@ -223,6 +231,7 @@ TEST(TrackerRun, AWarmingArmWithATemperatureSensorIsDiscoveredAsThermalGrowth) {
   ASSERT_EQ(d["verdict"], "effects_added") << d.dump(1);
   ASSERT_EQ(d["effects_added"].size(), 1u) << d["effects_added"].dump(1);
   EXPECT_EQ(d["effects_added"][0]["term"], "thermal_growth");
+  EXPECT_EQ(d["effects_added"][0]["driver"], "measured");
   // The aluminium's 2.3e-5 /K within 10 % (its sigma is about 6e-7 /K: 4 sigma). While the
   // estimator's term also grew the reflector's bracket (the tool link), which the twin does
   // not, it came out 3-11 % low in the 11 of 20 trials of the study that chose it (README).
