@@ -30,7 +30,7 @@
 //    paired test is Wilcoxon's signed rank on per-point differences of held-out squared error
 //    (base minus candidate, one-sided), Holm-corrected over the candidates tested in the
 //    step. The candidate with the largest held-out gain among those whose size the data tell
-//    from zero (Wald's test of its amplitudes on the all-data fit, p below alpha: the size
+//    from zero (Wald's test of its size on the all-data fit, p below alpha: the size
 //    test) is accepted only if its adjusted p is below alpha and its gain at least
 //    min_gain_percent. A leader driven by the session's clock (ErrorTerm::driver: a warm-up,
 //    a drift linear in time) gives way to an acceptable candidate with a driver earlier in
@@ -174,10 +174,12 @@ struct CandidateScore {
   double heldout_rms_m = 0;         ///< region-disjoint held-out RMS with the term [m]
   double gain_percent = 0;          ///< held-out sum-of-squares reduction vs the step's base [%]
   double p_value = 1, p_adjusted = 1;  ///< Wilcoxon one-sided, and after Holm
-  /// Size test: Wald's chi-square of the term's amplitudes (ErrorTerm::amplitude_parameters)
-  /// against zero on the all-data fit, a' C^+ a over the rank of their covariance block C
-  /// (size_dof), and its p-value. A candidate whose size the data do not tell from zero
-  /// (size_p_value >= alpha) is not accepted, whatever its held-out gain.
+  /// Size test: Wald's chi-square of the term's size measures s (ErrorTerm::SizeMeasures: its
+  /// amplitudes; a warm-up's growth by the data's latest time stamp) against zero on the
+  /// all-data fit, s' (J C J')^+ s over the rank of their covariance (size_dof; C the term's
+  /// covariance block, J the measures' Jacobian), and its p-value. A candidate whose size the
+  /// data do not tell from zero (size_p_value >= alpha) is not accepted, whatever its held-out
+  /// gain.
   double size_statistic = 0;
   int size_dof = 0;
   double size_p_value = 1;

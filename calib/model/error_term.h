@@ -75,11 +75,25 @@ class ErrorTerm {
   /// True for terms with a tool-offset stage (stage 4).
   virtual bool offsets_tool() const { return false; }
   /// How many of its parameters, leading its slice, are amplitudes: at zero the term does
-  /// nothing. The rest shape the effect (a time constant) and have no "no effect" value; model
-  /// discovery tests a term's size on its amplitudes only. Default: every parameter.
+  /// nothing. The rest shape the effect (a time constant) and have no "no effect" value.
+  /// Default: every parameter.
   virtual int amplitude_parameters() const { return static_cast<int>(parameters().size()); }
   /// What drives the term (TermDriver); a quantity read with each measurement by default.
   virtual TermDriver driver() const { return TermDriver::kMeasured; }
+  /// What model discovery's size test tells from zero: measures of the term's effect as
+  /// functions of its parameters p, with their Jacobian (measures x parameters). By default its
+  /// amplitude parameters themselves. A term whose amplitude alone is poorly determined where its
+  /// effect is not says what the effect amounts to instead: a warm-up slow against the session
+  /// trades its final growth against its time constant, while the growth it reaches by the
+  /// data's latest time stamp `session_s` [s] (NaN: none) is well determined.
+  virtual Eigen::VectorXd SizeMeasures(const double* p, double session_s,
+                                       Eigen::MatrixXd* jacobian) const {
+    (void)session_s;
+    const int a = amplitude_parameters();
+    *jacobian = Eigen::MatrixXd::Zero(a, static_cast<Eigen::Index>(parameters().size()));
+    jacobian->leftCols(a).setIdentity();
+    return Eigen::Map<const Eigen::VectorXd>(p, a);
+  }
   /// True when some parameters act only once others are non-zero (a time constant while the
   /// amplitude is zero): at zero they have no gradient, so model discovery fits such a term a
   /// second time from its first solution.

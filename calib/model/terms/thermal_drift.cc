@@ -17,6 +17,7 @@ class ThermalDrift : public ErrorTermT<ThermalDrift> {
   }
 
   TermDriver driver() const override { return TermDriver::kClockUnbounded; }
+
   template <typename T>
   void ScaleLengthsT(const T* p, const MeasurementContext& c, T* s) const {
     *s *= T(1.0) + p[0] * c.time_s;

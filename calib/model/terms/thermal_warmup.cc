@@ -27,6 +27,19 @@ class ThermalWarmup : public ErrorTermT<ThermalWarmup> {
   TermDriver driver() const override { return TermDriver::kClockLevelling; }
   int amplitude_parameters() const override { return 1; }  // the growth; l shapes it
 
+  // The growth reached by the session's end, g (1 - exp(-u)) with u = T / tau: for a time
+  // constant long against the session g and l trade off (only about g / tau is seen), while
+  // this is what the data measure. d/dg = 1 - exp(-u), d/dl = -g u exp(-u).
+  Eigen::VectorXd SizeMeasures(const double* p, double session_s,
+                               Eigen::MatrixXd* jacobian) const override {
+    if (!(session_s > 0.0)) return ErrorTerm::SizeMeasures(p, session_s, jacobian);
+    const double u = session_s * std::exp(-p[1]) / tau0_s_;
+    *jacobian = Eigen::MatrixXd(1, 2);
+    (*jacobian)(0, 0) = -std::expm1(-u);
+    (*jacobian)(0, 1) = -p[0] * u * std::exp(-u);
+    return Eigen::VectorXd::Constant(1, -p[0] * std::expm1(-u));
+  }
+
   template <typename T>
   void ScaleLengthsT(const T* p, const MeasurementContext& c, T* s) const {
     using std::exp;

@@ -2,6 +2,7 @@
 // forward kinematics with respect to the term's parameters (autodiff, as the engine uses it)
 // against central finite differences, and each term's stage formula on hand-computed cases.
 #include <cmath>
+#include <limits>
 #include <random>
 #include <set>
 
@@ -220,6 +221,53 @@ TEST(ErrorTermStages, EachFormulaHoldsOnAHandComputedCase) {
   EXPECT_NEAR(dp(0), 4e-5, 1e-20);
   EXPECT_NEAR(dp(1), 0.0, 1e-20);
   EXPECT_NEAR(dp(2), 0.0, 1e-20);
+}
+
+// What model discovery's size test tells from zero (ErrorTerm::SizeMeasures) and what drives
+// each term (ErrorTerm::driver).
+TEST(ErrorTermSize, AmplitudesByDefaultAndAWarmUpsGrowthByTheSessionsEnd) {
+  const KinematicModel chain = ReinovoLikeModel();
+  // The default: the amplitudes themselves, with an identity Jacobian.
+  const auto te = MakeErrorTerm({"transmission_error", 3, {1, 2}}, chain, "r1");
+  const std::vector<double> a{1e-4, -2e-4, 3e-4, 4e-4};
+  Eigen::MatrixXd J;
+  Eigen::VectorXd size = te->SizeMeasures(a.data(), 900.0, &J);
+  ASSERT_EQ(size.size(), 4);
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(size(k), a[k]);
+  EXPECT_TRUE(J.isApprox(Eigen::MatrixXd::Identity(4, 4))) << J;
+  // The warm-up of order 30 (tau0 = 1800 s), g = 2e-4, l = 0.3, over a 900 s session:
+  // g (1 - exp(-900 / (1800 e^0.3))).
+  const auto w = MakeErrorTerm({"thermal_warmup", -1, {30}}, chain, "r1");
+  const std::vector<double> p{2e-4, 0.3};
+  size = w->SizeMeasures(p.data(), 900.0, &J);
+  ASSERT_EQ(size.size(), 1);
+  ASSERT_EQ(J.rows(), 1);
+  ASSERT_EQ(J.cols(), 2);
+  const auto growth = [&](double g, double l) {
+    return g * (1.0 - std::exp(-900.0 / (1800.0 * std::exp(l))));
+  };
+  // 1e-18: the closed form against the same in other words, rounding of a 1e-4 figure.
+  EXPECT_NEAR(size(0), growth(p[0], p[1]), 1e-18);
+  // Its Jacobian against central differences (steps 1e-9 and 1e-5: the truncation error is
+  // their square times the second derivative, below 1e-10 relative; the tolerance 1e-7).
+  const double dg = (growth(p[0] + 1e-9, p[1]) - growth(p[0] - 1e-9, p[1])) / 2e-9;
+  const double dl = (growth(p[0], p[1] + 1e-5) - growth(p[0], p[1] - 1e-5)) / 2e-5;
+  EXPECT_NEAR(J(0, 0), dg, 1e-7 * std::abs(dg));
+  EXPECT_NEAR(J(0, 1), dl, 1e-7 * std::abs(dl));
+  // Without a time stamp: the final growth alone, as the default.
+  size = w->SizeMeasures(p.data(), std::numeric_limits<double>::quiet_NaN(), &J);
+  ASSERT_EQ(size.size(), 1);
+  EXPECT_EQ(size(0), p[0]);
+  EXPECT_TRUE(J.isApprox((Eigen::MatrixXd(1, 2) << 1.0, 0.0).finished())) << J;
+  // Drivers: the clock for the drift (without bound) and the warm-up (levelling off), a
+  // measured quantity for every other term.
+  for (const TermSpec& spec : ExampleSpecs()) {
+    const TermDriver d = MakeErrorTerm(spec, chain, "r1")->driver();
+    const TermDriver expected = spec.type == "thermal_drift"    ? TermDriver::kClockUnbounded
+                                : spec.type == "thermal_warmup" ? TermDriver::kClockLevelling
+                                                                : TermDriver::kMeasured;
+    EXPECT_EQ(d, expected) << spec.type;
+  }
 }
 
 TEST(ErrorTermContext, TermsNameWhatTheContextLacks) {
