@@ -1,7 +1,8 @@
 // The statistics of model discovery (calib/diagnosis/model_discovery.h): a chi-square tail for
 // the residual test against the noise floor, a paired one-sided test of held-out residuals for
-// a candidate effect, a sign-flip test of fold-level differences, Holm's step-down correction for the number of candidates tried, Wald's
-// test of a candidate's size against zero, and correlations for the residual maps. Written from the textbook definitions (references at
+// a candidate effect, a sign-flip test of fold-level differences, Holm's step-down correction
+// for the number of candidates tried, Wald's test of a candidate's size against zero, and
+// correlations for the residual maps. Written from the textbook definitions (references at
 // each function); no statistics library is among the project's dependencies.
 #pragma once
 
