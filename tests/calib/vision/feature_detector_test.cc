@@ -1,5 +1,6 @@
 #include "calib/vision/feature_detector.h"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -107,6 +108,75 @@ TEST(FeatureDetectorTest, WrongBoardSizeIsNotFound) {
   const cv::Mat image = Warp(Pattern(4), Homography(0.0, 1.0, 0.0, 320.0, 240.0));
   EXPECT_EQ(DetectFeaturePoint(image, BoardGeometry{6, 6, 0.02}).status,
             DetectionStatus::kNotFound);
+}
+
+// An nx x ny chessboard of `square` px squares with a white border of one square, seen
+// through H on a w x h grey background and lit unevenly: the brightness falls from 1 at column
+// x1 to 0.1 at column x0 (and stays there beyond), so that the white squares on one side are
+// darker than the black ones on the other and no global threshold separates them. Then blurred (sigma 1 px, about a lens'
+// and a sensor's spread) with Gaussian pixel noise of sigma 2 grey levels from a fixed seed.
+// BGR.
+cv::Mat UnevenlyLitBoard(int nx, int ny, int square, const cv::Matx33d& H, cv::Size size,
+                         int x0, int x1) {
+  cv::Mat p((ny + 2) * square, (nx + 2) * square, CV_8UC1, cv::Scalar(230));
+  for (int j = 0; j < ny; ++j) {
+    for (int i = 0; i < nx; ++i) {
+      if ((i + j) % 2 == 0) p(cv::Rect((i + 1) * square, (j + 1) * square, square, square)).setTo(30);
+    }
+  }
+  cv::Mat warped, lit(size, CV_32FC1), noise(size, CV_32FC1), grey, bgr;
+  cv::warpPerspective(p, warped, cv::Mat(H), size, cv::INTER_LINEAR, cv::BORDER_CONSTANT,
+                      cv::Scalar(128));
+  warped.convertTo(lit, CV_32FC1);
+  for (int x = 0; x < size.width; ++x) {
+    lit.col(x) *= 0.1 + 0.9 * std::clamp((x - x0) / (x1 - x0 + 0.0), 0.0, 1.0);
+  }
+  cv::GaussianBlur(lit, lit, cv::Size(0, 0), 1.0);
+  cv::RNG rng(7);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 2.0);
+  lit += noise;
+  lit.convertTo(grey, CV_8UC1);  // rounds and saturates
+  cv::cvtColor(grey, bgr, cv::COLOR_GRAY2BGR);
+  return bgr;
+}
+
+// Largest distance from a corner of `a` to the nearest corner of `b` [px] (the two searches
+// may start their ordering at different grid corners).
+double LargestCornerGap(const FeatureDetection& a, const FeatureDetection& b) {
+  double largest = 0.0;
+  for (const cv::Point2f& p : a.corners) {
+    double nearest = 1e9;
+    for (const cv::Point2f& q : b.corners) nearest = std::min<double>(nearest, cv::norm(p - q));
+    largest = std::max(largest, nearest);
+  }
+  return largest;
+}
+
+TEST(FeatureDetectorTest, TheHalfSizeAdaptiveSearchEndsOnTheFullSizeOnesCorners) {
+  // The intrinsics target's 14 x 10 squares filling much of a 1024 x 768 frame, tilted.
+  const BoardGeometry board{14, 10, 0.02};
+  const int square = 48;
+  const double c = 8 * square;  // about the pattern's centre [px]
+  const cv::Matx33d centre(1, 0, -c, 0, 1, -0.7 * c, 0, 0, 1);
+  const double a = 0.2;
+  const cv::Matx33d tilt(std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0, 2e-4, 1e-4, 1);
+  const cv::Matx33d place(1, 0, 512, 0, 1, 384, 0, 0, 1);
+  const cv::Mat image =
+      UnevenlyLitBoard(14, 10, square, place * tilt * centre, cv::Size(1024, 768), 0, 1023);
+  DetectorOptions full_size;
+  full_size.coarse_search = false;
+  const FeatureDetection coarse = DetectFeaturePoint(image, board);
+  const FeatureDetection full = DetectFeaturePoint(image, board, full_size);
+  ASSERT_EQ(coarse.status, DetectionStatus::kFound) << coarse.reason;
+  ASSERT_EQ(full.status, DetectionStatus::kFound) << full.reason;
+  EXPECT_TRUE(coarse.found_in_half_size);  // the global threshold found nothing
+  EXPECT_FALSE(full.found_in_half_size);
+  ASSERT_EQ(coarse.corners.size(), 13u * 9u);
+  // Both refine on the full image from starts under a pixel apart; cornerSubPix stops when a
+  // step is under 1e-4 px, so the two end on the same saddle points to a few thousandths of a
+  // pixel. 0.01 px is a tenth of the servo's tolerance.
+  EXPECT_LT(LargestCornerGap(coarse, full), 0.01);
+  EXPECT_LT(cv::norm(coarse.feature_px - full.feature_px), 0.01);
 }
 
 TEST(FeatureDetectorTest, BadInputThrowsNamingTheField) {
