@@ -151,6 +151,17 @@ int RunTwinBenchmark(const TwinBenchmarkOptions& o) {
   t0 = Clock::now();
   for (int f = 0; f < o.frames; ++f) cell.GrabImageRegion(roi);
   const double region_ms = 1e3 * SecondsSince(t0) / o.frames;
+  // Centred squares of growing side: a line through their times splits a region frame into a
+  // fixed cost per frame and a cost per pixel.
+  std::vector<std::pair<int, double>> sides;
+  for (int side : {32, 128, 256}) {
+    if (side > first.rows) break;
+    const cv::Rect square((first.cols - side) / 2, (first.rows - side) / 2, side, side);
+    cell.GrabImageRegion(square);
+    t0 = Clock::now();
+    for (int f = 0; f < o.frames; ++f) cell.GrabImageRegion(square);
+    sides.emplace_back(side, 1e3 * SecondsSince(t0) / o.frames);
+  }
 
   const int robot = scenario.twin.board.robot;
   const JointVector q0 = scenario.twin.robots[robot].q_initial;
@@ -172,6 +183,10 @@ int RunTwinBenchmark(const TwinBenchmarkOptions& o) {
   std::printf("  bare mjr_render + mjr_readPixels:                %7.2f ms/frame\n", bare_ms);
   std::printf("  GrabImageRegion, %dx%d centred region:          %7.2f ms/frame\n", roi.width,
               roi.height, region_ms);
+  for (const auto& [side, ms] : sides) {
+    std::printf("  GrabImageRegion, %dx%d centred square:%*s%7.2f ms/frame\n", side, side,
+                side >= 100 ? 10 : 12, "", ms);
+  }
   std::printf("  settled move (6-deg wrist moves, %d/%d settled):  %7.2f ms/move, %.0f steps, "
               "%.3f s simulated\n", settled, o.moves, move_ms,
               static_cast<double>(steps) / o.moves, sim_s / o.moves);
