@@ -639,24 +639,52 @@ void ScorePhysicalTruth(TwinCell& cell, const Scenario& sc, const CalibrationCon
       std::vector<Vector3> p_true, p_delivered, p_discovered;
     };
     const int wanted = config.diagnosis.truth_poses;
+    // The draws are taken in order, in batches of as many as are still wanted, and each batch
+    // is visited nearest first from where the robot stands (by the largest joint difference,
+    // which sets how long a move's ramp lasts): the same seeded poses as in draw order, on a
+    // shorter way round them (about half the moves' simulated time on the paper scenario).
     const auto measure = [&](const std::vector<JointVector>& configurations) {
       Measured m;
-      for (const JointVector& q : configurations) {
-        if (static_cast<int>(m.p_true.size()) >= wanted) break;
-        const JointVector before = cell.ReadEncoders(rc.robot);
-        if (cell.MoveTo(rc.robot, q).status != MoveStatus::kSettled) continue;
-        MeasurementContext c;
-        c.q = cell.ReadEncoders(rc.robot);
-        c.approach = ApproachDirections(before, q);
-        c.time_s = cell.ClockSeconds();
-        if (std::isfinite(rc.temperature_reference_C)) {
-          c.temperature_delta_K = cell.ReadTemperatureC(rc.robot) - rc.temperature_reference_C;
+      const size_t want = static_cast<size_t>(wanted);
+      size_t next = 0;
+      for (bool stop = false; !stop && m.p_true.size() < want && next < configurations.size();) {
+        const size_t count = std::min(configurations.size() - next, want - m.p_true.size());
+        std::vector<JointVector> batch(configurations.begin() + next,
+                                       configurations.begin() + next + count);
+        next += count;
+        JointVector at = cell.ReadEncoders(rc.robot);
+        while (!stop && !batch.empty()) {
+          size_t nearest = 0;
+          for (size_t i = 1; i < batch.size(); ++i) {
+            if ((batch[i] - at).cwiseAbs().maxCoeff() <
+                (batch[nearest] - at).cwiseAbs().maxCoeff()) {
+              nearest = i;
+            }
+          }
+          const JointVector q = batch[nearest];
+          batch.erase(batch.begin() + nearest);
+          const JointVector before = cell.ReadEncoders(rc.robot);
+          at = q;
+          if (cell.MoveTo(rc.robot, q).status != MoveStatus::kSettled) {
+            at = cell.ReadEncoders(rc.robot);
+            continue;
+          }
+          MeasurementContext c;
+          c.q = cell.ReadEncoders(rc.robot);
+          c.approach = ApproachDirections(before, q);
+          c.time_s = cell.ClockSeconds();
+          if (std::isfinite(rc.temperature_reference_C)) {
+            c.temperature_delta_K = cell.ReadTemperatureC(rc.robot) - rc.temperature_reference_C;
+          }
+          if (!MissingContext(discovered_model, c).empty()) {  // a term needs what is not read
+            stop = true;
+            break;
+          }
+          const TwinTruth t = cell.Truth();
+          m.p_true.push_back(t.X_WB[rc.robot].inverse() * t.X_WT.translation());
+          m.p_delivered.push_back(EndPose(delivered, c).translation());
+          m.p_discovered.push_back(EndPose(discovered_model, c).translation());
         }
-        if (!MissingContext(discovered_model, c).empty()) break;  // a term needs what is not read
-        const TwinTruth t = cell.Truth();
-        m.p_true.push_back(t.X_WB[rc.robot].inverse() * t.X_WT.translation());
-        m.p_delivered.push_back(EndPose(delivered, c).translation());
-        m.p_discovered.push_back(EndPose(discovered_model, c).translation());
       }
       return m;
     };
