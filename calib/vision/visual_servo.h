@@ -56,7 +56,7 @@ struct ServoOptions {
   /// board_region.h); a whole frame when the board is not found there (and first, unless a
   /// first region is given).
   bool use_regions = true;
-  double region_margin_squares = 2.5;  ///< region grown by this many squares per side [-]
+  double region_margin_squares = 2.0;  ///< region grown by this many squares per side [-]
   double region_slack_px = 12.0;       ///< and by this much for the prediction's error [px]
 };
 
