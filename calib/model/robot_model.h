@@ -16,7 +16,9 @@
 // With no terms it is exactly the geometric forward kinematics of the chain.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -33,10 +35,20 @@ namespace twin {
 /// Standard gravity [m/s^2].
 constexpr double kStandardGravity = 9.80665;
 
-/// Fixed-point iterations of the gravity sag (stage 3). The error after k iterations is about
-/// (c dtau/dq)^k times the sag: with c = 1e-4 rad/(N m) (a soft joint) and dtau/dq ~ 100 N m/rad
-/// that is 1e-2 per iteration, so 4 iterations leave 1e-8 of a sag of ~1e-2 rad (~1e-10 rad).
+/// Fixed-point iterations of the gravity sag (stage 3), at most. The error after k iterations is
+/// about (c dtau/dq)^k times the sag: with c = 1e-4 rad/(N m) (a soft joint) and dtau/dq ~ 100
+/// N m/rad that is 1e-2 per iteration, so 4 iterations leave 1e-8 of a sag of ~1e-2 rad (~1e-10
+/// rad). The iteration stops early once no link angle moved by more than kSagTolerance (a
+/// derivative carried along converges at the same rate as the value).
 constexpr int kSagIterations = 4;
+constexpr double kSagTolerance = 1e-12;  ///< [rad]: a picometre a metre from the joint
+
+/// The value of a double or of a ceres::Jet (its scalar part).
+inline double ScalarPart(double x) { return x; }
+template <typename Jet>
+double ScalarPart(const Jet& x) {
+  return x.a;
+}
 
 /// An estimator-side robot model. Immutable in use: free functions compute with it.
 struct RobotModel {
@@ -113,12 +125,21 @@ void LinkAnglesT(const RobotModel& model, const T* params, const MeasurementCont
     ChainFramesT<T>(chain, params, q_link, *length_scale, X.data());
     X[n + 1] = X[n] * LinkTransformT(params + kParamsPerLink * n, T(0.0), T(1.0));  // stage 2
     GravityTorquesT<T>(chain, X.data(), model.gravity_B, model.gravity, tau);
-    for (int i = 0; i < n; ++i) q_link[i] = q0[i];
+    T before[kMaxJoints];
+    for (int i = 0; i < n; ++i) {
+      before[i] = q_link[i];
+      q_link[i] = q0[i];
+    }
     p = params + chain.num_parameters();
     for (const auto& term : model.terms) {
       term->Sag(p, tau, q_link);
       p += term->parameters().size();
     }
+    double moved = 0.0;
+    for (int i = 0; i < n; ++i) {
+      moved = std::max(moved, std::abs(ScalarPart(q_link[i]) - ScalarPart(before[i])));
+    }
+    if (moved <= kSagTolerance) break;
   }
 }
 

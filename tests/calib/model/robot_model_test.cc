@@ -106,6 +106,42 @@ TEST(RobotModel, ComplianceSagSolvesItsFixedPoint) {
   }
 }
 
+TEST(RobotModel, ComplianceSagStopsEarlyWithItsDerivativeConverged) {
+  // The sag iteration stops once the angles stop moving (kSagTolerance); the derivative a Jet
+  // carries must have converged with them. At the fixed point q3 = q3_0 + c tau3(q), the
+  // implicit function theorem gives dq3/dc = tau3 / (1 - c dtau3/dq3) at the converged q. A
+  // stiff joint (1e-7 rad/(N m): the iteration stops after three rounds) and a zero compliance
+  // (after one: the start of a candidate in model discovery).
+  std::mt19937_64 rng(35);
+  const KinematicModel chain = ReinovoLikeModel();
+  RobotModel m = WithTerm(MakeRobotModel(chain), MakeErrorTerm({"joint_compliance", 2, {}}, chain, "r1"));
+  for (double c : {0.0, 1e-7}) {
+    m.term_values << c;
+    const Eigen::VectorXd p = GetParameters(m);
+    std::vector<Jet> pj(p.size());
+    for (int i = 0; i < p.size(); ++i) pj[i] = Jet(p(i));
+    pj.back().v(0) = 1.0;  // d/dc (twin::Jet, the terms' Jet type; its other slots stay 0)
+    for (int trial = 0; trial < 10; ++trial) {
+      const MeasurementContext ctx = ContextOf(RandomJoints(chain, rng));
+      Jet qj[kMaxJoints], sj;
+      LinkAnglesT<Jet>(m, pj.data(), ctx, qj, &sj);
+      JointVector q(6);
+      for (int i = 0; i < 6; ++i) q(i) = qj[i].a;
+      const double h = 1e-6;
+      JointVector plus = q, minus = q;
+      plus(2) += h;
+      minus(2) -= h;
+      const double slope = (GravityTorques(m, plus)(2) - GravityTorques(m, minus)(2)) / (2 * h);
+      const double expected = GravityTorques(m, q)(2) / (1.0 - c * slope);
+      // Stopping after one round at c = 1e-7 would leave c (tau3 slope + tau3 dtau3/dq3) ~ 1e-3
+      // N m of error (tau3 ~ 50 N m, slopes ~ 100 N m/rad); the central difference's own error
+      // is ~1e-9 N m/rad times c. 1e-6 N m separates the two.
+      EXPECT_NEAR(qj[2].v(0), expected, 1e-6) << "c " << c << ", trial " << trial;
+      EXPECT_GT(std::abs(expected), 1e-3) << "the pose loads joint 3";
+    }
+  }
+}
+
 TEST(RobotModel, MountDeflectionMovesTheEndPointAlongGravityInTheFlange) {
   const KinematicModel chain = ReinovoLikeModel();
   RobotModel m = WithTerm(MakeRobotModel(chain), MakeErrorTerm({"mount_deflection", -1, {}},
