@@ -46,7 +46,8 @@ bool FindGridAdaptive(const cv::Mat& grey, const cv::Size& pattern,
                       std::vector<cv::Point2f>* corners) {
   cv::Mat smooth;
   cv::GaussianBlur(grey, smooth, cv::Size(5, 5), 1.0);
-  return cv::findChessboardCorners(smooth, pattern, *corners, kFlags | cv::CALIB_CB_ADAPTIVE_THRESH);
+  return cv::findChessboardCorners(smooth, pattern, *corners,
+                                   kFlags | cv::CALIB_CB_ADAPTIVE_THRESH);
 }
 
 }  // namespace
@@ -72,11 +73,11 @@ FeatureDetection DetectFeaturePoint(const cv::Mat& bgr, const BoardGeometry& boa
   // A global threshold first: the rendered board is evenly lit and this is fast. Adaptive
   // thresholding only as the fallback, and in a large image on its half-size copy (cv::pyrDown,
   // itself a blur). Whole-frame adaptive searches cost 0.15-0.2 s each on a 1024 x 768 frame
-  // and found no grid the global one had not in the paper scenario's frames (its intrinsics
-  // views at 40-60 deg of tilt that the global threshold misses: 11 of 40 per run, 2.6 s). The
-  // half-size copy's pixel (i, j) is the Gaussian average centred on the full image's (2i, 2j),
-  // so its corners map back by a factor of 2; either way they are only the starting points of
-  // the refinement below, on the full image.
+  // and, in a paper-scenario run, found none of the grids the global threshold had missed (its
+  // intrinsics views at 40-60 deg of tilt: 11 of 40, 2.6 s). The half-size copy's pixel
+  // (i, j) is the Gaussian average centred on the full image's (2i, 2j), so its corners map
+  // back by a factor of 2; either way they are only the starting points of the refinement
+  // below, on the full image.
   bool found = cv::findChessboardCorners(grey, pattern, corners, kFlags);
   if (!found) {
     if (options.coarse_search && std::min(grey.cols, grey.rows) >= kCoarseSearchMinSide) {

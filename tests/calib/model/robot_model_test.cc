@@ -114,7 +114,8 @@ TEST(RobotModel, ComplianceSagStopsEarlyWithItsDerivativeConverged) {
   // (after one: the start of a candidate in model discovery).
   std::mt19937_64 rng(35);
   const KinematicModel chain = ReinovoLikeModel();
-  RobotModel m = WithTerm(MakeRobotModel(chain), MakeErrorTerm({"joint_compliance", 2, {}}, chain, "r1"));
+  RobotModel m =
+      WithTerm(MakeRobotModel(chain), MakeErrorTerm({"joint_compliance", 2, {}}, chain, "r1"));
   for (double c : {0.0, 1e-7}) {
     m.term_values << c;
     const Eigen::VectorXd p = GetParameters(m);

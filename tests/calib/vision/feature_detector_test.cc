@@ -111,17 +111,19 @@ TEST(FeatureDetectorTest, WrongBoardSizeIsNotFound) {
 }
 
 // An nx x ny chessboard of `square` px squares with a white border of one square, seen
-// through H on a w x h grey background and lit unevenly: the brightness falls from 1 at column
-// x1 to 0.1 at column x0 (and stays there beyond), so that the white squares on one side are
-// darker than the black ones on the other and no global threshold separates them. Then blurred (sigma 1 px, about a lens'
-// and a sensor's spread) with Gaussian pixel noise of sigma 2 grey levels from a fixed seed.
-// BGR.
+// through H on a `size` grey background and lit unevenly: the brightness falls from 1 at
+// column x1 to 0.1 at column x0 (and stays there beyond), so that the white squares on one side
+// are darker than the black ones on the other and no global threshold separates them. Then
+// blurred (sigma 1 px, about a lens' and a sensor's spread), with Gaussian pixel noise of
+// sigma 2 grey levels from a fixed seed. BGR.
 cv::Mat UnevenlyLitBoard(int nx, int ny, int square, const cv::Matx33d& H, cv::Size size,
                          int x0, int x1) {
   cv::Mat p((ny + 2) * square, (nx + 2) * square, CV_8UC1, cv::Scalar(230));
   for (int j = 0; j < ny; ++j) {
     for (int i = 0; i < nx; ++i) {
-      if ((i + j) % 2 == 0) p(cv::Rect((i + 1) * square, (j + 1) * square, square, square)).setTo(30);
+      if ((i + j) % 2 == 0) {
+        p(cv::Rect((i + 1) * square, (j + 1) * square, square, square)).setTo(30);
+      }
     }
   }
   cv::Mat warped, lit(size, CV_32FC1), noise(size, CV_32FC1), grey, bgr;
