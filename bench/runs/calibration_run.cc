@@ -655,9 +655,11 @@ void ScorePhysicalTruth(TwinCell& cell, const Scenario& sc, const CalibrationCon
         JointVector at = cell.ReadEncoders(rc.robot);
         while (!stop && !batch.empty()) {
           size_t nearest = 0;
-          for (size_t i = 1; i < batch.size(); ++i) {
-            if ((batch[i] - at).cwiseAbs().maxCoeff() <
-                (batch[nearest] - at).cwiseAbs().maxCoeff()) {
+          double shortest = std::numeric_limits<double>::infinity();
+          for (size_t i = 0; i < batch.size(); ++i) {
+            const double d = (batch[i] - at).cwiseAbs().maxCoeff();
+            if (d < shortest) {
+              shortest = d;
               nearest = i;
             }
           }
