@@ -620,6 +620,17 @@ void SizeTest(const IdentificationResult& fit, int first, const ErrorTerm& term,
   c->size_p_value = w.p_value;
 }
 
+// The RMS of every residual norm of an identification's sets at its solution [m].
+double ResidualRms(const IdentificationResult& r) {
+  double sum = 0;
+  int count = 0;
+  for (const SetSummary& s : r.sets) {
+    sum += s.rms_after * s.rms_after * s.measurements;
+    count += s.measurements;
+  }
+  return count > 0 ? std::sqrt(sum / count) : 0.0;
+}
+
 // TermDriver in words, for the notes.
 const char* DriverText(TermDriver d) {
   switch (d) {
@@ -662,11 +673,15 @@ CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base
       rank < base_rank + added) {
     // Some parameters only have a gradient once the term acts (a time constant while the
     // amplitude is zero): start again from the first solution's term values, and keep that
-    // start (for the cross-validation too) if more of the term is then identifiable.
+    // start (for the cross-validation too) if more of the term is then identifiable and the
+    // fit is no worse. (A restart can run off to another minimum: a warm-up whose time
+    // constant fell to seconds, a step that the geometry's scale absorbs, fitted the session
+    // as the geometry alone did, and its candidate lost the gain its first solution had.)
     RobotModel restart = model;
     restart.term_values.tail(added) = all.result.model.term_values.tail(added);
     Fit again = data.FitOn(restart, {}, "candidate " + c.label + ", all data, restarted");
-    if (again.result.observability.rank > rank) {
+    if (again.result.observability.rank > rank &&
+        ResidualRms(again.result) <= (1.0 + 1e-6) * ResidualRms(all.result)) {
       model = std::move(restart);
       all = std::move(again);
       rank = all.result.observability.rank;

@@ -229,6 +229,64 @@ std::vector<Eigen::VectorXd> AllInvariants(const RobotModel& model, const Parame
   return out;
 }
 
+// Removes the directions `held` (vectors over the flat model parameters, SI) from the model
+// columns of J: in the layout's scaled coordinates, A <- A (I - W W^T) with W an orthonormal
+// basis of them, so that they lie in the null space the analysis finds, before its rank is
+// taken. (Added to the known invariants instead, directions that the numerical null space
+// already holds up to a small rotation would leave remnants that Gram-Schmidt normalises into
+// arbitrary directions, and those took a warm-up's time constant out of the identifiable ones.)
+void HoldDirections(const std::vector<Eigen::VectorXd>& held, const ParameterLayout& layout,
+                    Eigen::MatrixXd* J) {
+  if (held.empty()) return;
+  const int n = layout.size();
+  Eigen::VectorXd scale(n);
+  for (int i = 0; i < n; ++i) scale(i) = layout[i].scale;
+  Eigen::MatrixXd W(n, held.size());
+  for (std::size_t k = 0; k < held.size(); ++k) W.col(k) = held[k].cwiseQuotient(scale);
+  const Eigen::MatrixXd Q = SpanBasis(W);
+  const Eigen::MatrixXd A = J->leftCols(n) * scale.asDiagonal();
+  J->leftCols(n) = (A - (A * Q) * Q.transpose()) * scale.cwiseInverse().asDiagonal();
+}
+
+// The free geometric combinations the data cannot see while every term is off (its values at
+// zero), as vectors over the flat parameters [SI]; empty when the terms already are. A term that
+// acts can make such a combination look identifiable through its own values alone: a thermal
+// scale of the joint links at 1e-4 tells a joint link's length from the tool's at 1e-4 of their
+// columns, far above the rank cut, yet what it "measures" is the term's model, not the arm (on
+// a tracker session the restart of a warm-up candidate raised the rank by 3 such directions,
+// and the time constant's own direction, under the cut, was held while the rank rise passed for
+// it). They are held as they are at the terms' zero. `params` is the assembly's model block;
+// it is restored.
+std::vector<Eigen::VectorXd> GeometryNullSpaceWithTermsOff(
+    const Assembly& a, Eigen::VectorXd& params, const ParameterLayout& layout,
+    const std::vector<int>& free, const std::vector<Eigen::VectorXd>& invariants,
+    double rank_tolerance) {
+  const int n = layout.size();
+  const int g = layout.geometry_size();
+  if (n == g || params.tail(n - g).isZero(0.0)) return {};
+  std::vector<int> geometric;
+  for (int i : free) {
+    if (layout[i].term < 0) geometric.push_back(i);
+  }
+  if (geometric.empty()) return {};
+  const Eigen::VectorXd values = params.tail(n - g);
+  params.tail(n - g).setZero();
+  double cost = 0;
+  const Eigen::MatrixXd J = DenseJacobian(a.problem.get(), a.blocks, &cost);
+  params.tail(n - g) = values;
+  const ObservabilityReport off =
+      AnalyseJacobian(J, n, geometric, layout, invariants, rank_tolerance);
+  std::vector<Eigen::VectorXd> out;
+  for (int k = 0; k < off.null_basis.cols(); ++k) {
+    Eigen::VectorXd v = Eigen::VectorXd::Zero(n);
+    for (std::size_t c = 0; c < geometric.size(); ++c) {
+      v(geometric[c]) = off.column_scale(c) * off.null_basis(c, k);
+    }
+    out.push_back(std::move(v));
+  }
+  return out;
+}
+
 }  // namespace
 
 void ValidateIdentificationOptions(const IdentificationOptions& o) {
@@ -274,10 +332,15 @@ ObservabilityReport AnalyseIdentifiability(const RobotModel& model,
   for (MeasurementSet* s : sets) s->Initialize(model);
   Eigen::VectorXd params = GetParameters(model);
   Assembly a = Assemble(model, params.data(), sets, options);
+  const std::vector<int> free = FreeParameters(layout, options);
+  const std::vector<Eigen::VectorXd> invariants = AllInvariants(model, layout, sets);
+  const std::vector<Eigen::VectorXd> held =
+      GeometryNullSpaceWithTermsOff(a, params, layout, free, invariants, options.rank_tolerance);
   double cost = 0;
-  const Eigen::MatrixXd J = DenseJacobian(a.problem.get(), a.blocks, &cost);
-  return AnalyseJacobian(J, model.num_parameters(), FreeParameters(layout, options), layout,
-                         AllInvariants(model, layout, sets), options.rank_tolerance);
+  Eigen::MatrixXd J = DenseJacobian(a.problem.get(), a.blocks, &cost);
+  HoldDirections(held, layout, &J);
+  return AnalyseJacobian(J, model.num_parameters(), free, layout, invariants,
+                         options.rank_tolerance);
 }
 
 IdentificationResult Identify(const RobotModel& start, const std::vector<MeasurementSet*>& sets,
@@ -303,11 +366,15 @@ IdentificationResult Identify(const RobotModel& start, const std::vector<Measure
   Eigen::VectorXd params = phi0;
   Assembly a = Assemble(start, params.data(), sets, options);
 
-  // 1. Observability at the start.
-  const Eigen::MatrixXd J0 = DenseJacobian(a.problem.get(), a.blocks, &res.cost_before);
+  // 1. Observability at the start, the geometry's null space taken with the terms off (header).
+  const std::vector<Eigen::VectorXd> invariants = AllInvariants(start, layout, sets);
+  const std::vector<Eigen::VectorXd> held = GeometryNullSpaceWithTermsOff(
+      a, params, layout, res.free_parameters, invariants, options.rank_tolerance);
+  Eigen::MatrixXd J0 = DenseJacobian(a.problem.get(), a.blocks, &res.cost_before);
   res.residual_rows = static_cast<int>(J0.rows());
-  res.observability = AnalyseJacobian(J0, n, res.free_parameters, layout,
-                                      AllInvariants(start, layout, sets), options.rank_tolerance);
+  HoldDirections(held, layout, &J0);
+  res.observability = AnalyseJacobian(J0, n, res.free_parameters, layout, invariants,
+                                      options.rank_tolerance);
   const int rank = res.observability.rank;
   const int f = static_cast<int>(res.free_parameters.size());
   res.identifiable_directions = Eigen::MatrixXd::Zero(n, rank);

@@ -5,6 +5,11 @@
 //    point, with the nuisance parameters (lines, tracker pose) profiled out, column-scaled by
 //    the layout's scales, is analysed by SVD (AnalyseObservability): the identifiable
 //    combinations are its row space, the rest are named (with the sets' known invariants).
+//    The geometry's unidentifiable combinations are those with every term at zero: a term
+//    that acts (a start from an earlier solution) scales or bends the geometric columns a
+//    little, which would make such combinations look identifiable through the term's model
+//    alone (a thermal growth of 1e-4 separates a joint link's length from the tool's); they
+//    are held as at the terms' zero.
 // 2. The model's parameters move only in the identifiable subspace: phi = phi0 + S V z, a
 //    linear manifold on the model block, so unidentifiable combinations keep their values.
 //    Parameters the caller fixes are left out of the analysis and held.

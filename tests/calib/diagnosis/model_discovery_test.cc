@@ -267,15 +267,17 @@ TEST(ModelDiscovery, AMeasuredDriverIsPreferredToTheClockWhereTheHeldOutDataCann
   EXPECT_GE(preferred, 1);
 }
 
-// A slow warm-up (time constant 120 min, 2e-4 of growth over the hour's session), no sensor:
+// A slow warm-up (time constant 240 min, 2e-4 of growth over the hour's session), no sensor:
 // over the hour it is nearly straight, and a drift linear in time fits it almost as well as a
 // warm-up (its time constant estimated from 80 min). Where the drift leads, the warm-up would
 // be accepted on its own and the region folds cannot tell the two apart, the warm-up is
 // taken: it levels off, where the linear drift would grow without end after the session. Four
-// draws; the preference must have acted in at least one.
+// draws; the preference must have acted in at least one. (At 120 min the warm-up led in 14
+// of 16 draws once the engine stopped letting the warm-up's scale make geometric
+// combinations identifiable, and in none of these four the rule had anything to decide.)
 TEST(ModelDiscovery, AWarmUpThatLevelsOffIsPreferredToADriftWithoutBoundWhereTheyTie) {
-  const TermSpec truth_term{"thermal_warmup", -1, {120}};
-  const Case c = MakeCase(19, {{truth_term, {5.1e-4, 0.0}}});
+  const TermSpec truth_term{"thermal_warmup", -1, {240}};
+  const Case c = MakeCase(19, {{truth_term, {8.8e-4, 0.0}}});
   const TermSpec warmup80{"thermal_warmup", -1, {80}};
   int preferred = 0;
   for (std::uint64_t seed = 11; seed < 15; ++seed) {
