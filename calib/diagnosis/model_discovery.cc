@@ -631,6 +631,16 @@ double ResidualRms(const IdentificationResult& r) {
   return count > 0 ? std::sqrt(sum / count) : 0.0;
 }
 
+// Whether the term of `spec` has parameters that act only once others are non-zero
+// (ErrorTerm::has_dormant_parameters: a warm-up's time constant).
+bool HasDormantParameters(const TermSpec& spec, const RobotModel& start) {
+  try {
+    return MakeErrorTerm(spec, start.chain, start.name())->has_dormant_parameters();
+  } catch (const InputError&) {
+    return false;
+  }
+}
+
 // TermDriver in words, for the notes.
 const char* DriverText(TermDriver d) {
   switch (d) {
@@ -1006,12 +1016,65 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
           best = preferred;
         }
       }
+      // A shape held at its start (header, step 3): a term whose shape (a warm-up's time
+      // constant) the data left at the value its search started from is that start's
+      // assumption; where the same term with its shape estimated from another start would be
+      // accepted and the region folds cannot tell the two apart, the estimated one is taken.
+      std::string shape_choice;  // why this rule changed the choice
+      if (best >= 0 && !s.candidates[best].restarted && refusal(s.candidates[best]).empty() &&
+          HasDormantParameters(s.candidates[best].spec, start)) {
+        const CandidateScore& held = s.candidates[best];
+        int estimated = -1;
+        double estimated_p = 1.0;
+        for (int k : tested) {
+          const CandidateScore& c = s.candidates[k];
+          if (k == best || c.spec.type != held.spec.type || !c.restarted ||
+              c.size_p_value >= o.alpha || !refusal(c).empty() ||
+              c.heldout_loss.size() != region.size() ||
+              held.heldout_loss.size() != region.size()) {
+            continue;
+          }
+          std::vector<double> d(folds, 0.0);
+          for (std::size_t i = 0; i < region.size(); ++i) {
+            d[region[i]] += c.heldout_loss[i] - held.heldout_loss[i];
+          }
+          const double p_fold = stats::SignFlipTestGreater(d);
+          if (p_fold < o.alpha) continue;
+          if (estimated < 0 || c.gain_percent > s.candidates[estimated].gain_percent) {
+            estimated = k;
+            estimated_p = p_fold;
+          }
+        }
+        if (estimated >= 0) {
+          CandidateScore& was = s.candidates[best];
+          CandidateScore& c = s.candidates[estimated];
+          std::ostringstream why;
+          why << "its shape stayed at the start of its search (the data did not identify it "
+                 "there), and "
+              << c.label << " estimates it with a held-out loss the region folds do not tell "
+              << "apart (sign-flip p = " << estimated_p << " >= " << o.alpha << ")";
+          was.note = was.note.empty() ? why.str() : was.note + "; " + why.str();
+          std::ostringstream accepted_why;
+          accepted_why << "accepted in place of " << was.label
+                       << ", whose shape stayed at the start of its search: this one estimates "
+                          "it, and the region folds do not tell the two apart (sign-flip p = "
+                       << estimated_p << ")";
+          shape_choice = accepted_why.str();
+          c.preferred_over = was.label;
+          best = estimated;
+        }
+      }
       if (best >= 0) {
         CandidateScore& c = s.candidates[best];
         const std::string refused = refusal(c);
         std::ostringstream why;
         if (!refused.empty()) {
           why << "largest held-out gain, but " << refused;
+        } else if (!shape_choice.empty()) {
+          c.accepted = true;
+          why << shape_choice << "; held-out gain " << c.gain_percent
+              << " %, Holm-adjusted p = " << c.p_adjusted << " over " << tested.size()
+              << " candidates";
         } else if (!c.preferred_over.empty()) {
           c.accepted = true;
           why << "accepted in place of " << c.preferred_over << " (driven by "

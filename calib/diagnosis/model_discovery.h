@@ -39,8 +39,12 @@
 //    held-out loss below the other's, summed per region fold, one-sided sign-flip test over
 //    the folds: p >= alpha); of several, the earliest driver, then the largest gain. The
 //    region folds are parts of one session and cannot test how a clock-driven model carries
-//    over to the later times it is used at. Then the next step starts from the
-//    extended model, until none passes, the residual test of the extended model finds it
+//    over to the later times it is used at. A choice whose shape parameter (a warm-up's time
+//    constant) stayed at the value its search started from, the data not identifying it
+//    there, gives way to the same term with its shape estimated from another start where that
+//    one would be accepted and the region folds do not tell the two apart (the same
+//    sign-flip test): the start is the search's assumption, not the data's. Then the next
+//    step starts from the extended model, until none passes, the residual test of the extended model finds it
 //    consistent with the noise (nothing left to explain), or max_effects are in.
 // 4. Verdict: "consistent_with_noise" (step 2 passes: nothing searched; every candidate is
 //    still fitted on all the data and reported, DiscoveryResult::screened), "effects_added", or
