@@ -327,16 +327,14 @@ TEST(ModelDiscovery, AWarmUpThatLevelsOffIsPreferredToADriftWithoutBoundWhereThe
 // is the truth's within 3 of its sigmas. Four draws; the rule must have acted at least once
 // (it did in three of these).
 TEST(ModelDiscovery, AWarmUpWithItsTimeConstantEstimatedIsPreferredToOneHeldAtItsStart) {
-  const TermSpec truth_term{"thermal_warmup", -1, {60}};
-  const Case c = MakeCase(19, {{truth_term, {1.2e-4, 0.0}}});
-  const TermSpec warmup20{"thermal_warmup", -1, {20}};
-  const TermSpec warmup400{"thermal_warmup", -1, {400}};
+  const auto warmup = [](int minutes) { return TermSpec{"thermal_warmup", -1, {minutes}}; };
+  const Case c = MakeCase(19, {{warmup(60), {1.2e-4, 0.0}}});
+  const DiscoveryOptions o = Options({kCompliance2, warmup(20), warmup(400)});
   int acted = 0;
   for (std::uint64_t seed = 11; seed < 15; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
-    const auto points = SyntheticTrackerPoints(c.truth, 100, seed, kSigma);
     const DiscoveryResult r =
-        DiscoverTrackerModel(c.nominal, points, Options({kCompliance2, warmup20, warmup400}));
+        DiscoverTrackerModel(c.nominal, SyntheticTrackerPoints(c.truth, 100, seed, kSigma), o);
     ASSERT_EQ(r.verdict, "effects_added") << r.reason;
     const std::vector<CandidateScore>& s = r.steps.at(0).candidates;
     ASSERT_EQ(s.size(), 3u);
