@@ -641,6 +641,17 @@ bool HasDormantParameters(const TermSpec& spec, const RobotModel& start) {
   }
 }
 
+// The one-sided sign-flip p (stats::SignFlipTestGreater) of `better`'s region-fold held-out
+// loss being below `c`'s: their loss differences summed per fold (`region`: each unit's fold).
+double FoldSignFlipP(const CandidateScore& c, const CandidateScore& better,
+                     const std::vector<int>& region, int folds) {
+  std::vector<double> d(folds, 0.0);
+  for (std::size_t i = 0; i < region.size(); ++i) {
+    d[region[i]] += c.heldout_loss[i] - better.heldout_loss[i];
+  }
+  return stats::SignFlipTestGreater(d);
+}
+
 // TermDriver in words, for the notes.
 const char* DriverText(TermDriver d) {
   switch (d) {
@@ -982,11 +993,7 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
               region.size() != lead.heldout_loss.size()) {
             continue;
           }
-          std::vector<double> d(folds, 0.0);
-          for (std::size_t i = 0; i < region.size(); ++i) {
-            d[region[i]] += c.heldout_loss[i] - lead.heldout_loss[i];
-          }
-          c.versus_leader_p_value = stats::SignFlipTestGreater(d);
+          c.versus_leader_p_value = FoldSignFlipP(c, lead, region, folds);
           if (c.versus_leader_p_value < o.alpha) {
             std::ostringstream why;
             why << "not preferred for its driver (" << DriverText(c.driver) << "): "
@@ -1034,11 +1041,7 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
               held.heldout_loss.size() != region.size()) {
             continue;
           }
-          std::vector<double> d(folds, 0.0);
-          for (std::size_t i = 0; i < region.size(); ++i) {
-            d[region[i]] += c.heldout_loss[i] - held.heldout_loss[i];
-          }
-          const double p_fold = stats::SignFlipTestGreater(d);
+          const double p_fold = FoldSignFlipP(c, held, region, folds);
           if (p_fold < o.alpha) continue;
           if (estimated < 0 || c.gain_percent > s.candidates[estimated].gain_percent) {
             estimated = k;

@@ -44,8 +44,9 @@
 //    there, gives way to the same term with its shape estimated from another start where that
 //    one would be accepted and the region folds do not tell the two apart (the same
 //    sign-flip test): the start is the search's assumption, not the data's. Then the next
-//    step starts from the extended model, until none passes, the residual test of the extended model finds it
-//    consistent with the noise (nothing left to explain), or max_effects are in.
+//    step starts from the extended model, until none passes, the residual test of the
+//    extended model finds it consistent with the noise (nothing left to explain), or
+//    max_effects are in.
 // 4. Verdict: "consistent_with_noise" (step 2 passes: nothing searched; every candidate is
 //    still fitted on all the data and reported, DiscoveryResult::screened), "effects_added", or
 //    "unexplained" (systematic and no candidate passes), with the residual's strongest
