@@ -2,6 +2,8 @@
 // input or a refused procedure, with `error: <where>: <what>` on stderr; 3 a run that missed
 // its acceptance criteria; 1 only for our own bugs (`internal error: ...`). An interrupted run
 // (SIGINT, SIGTERM, SIGHUP) removes its staging folder and ends by the signal.
+#include <malloc.h>
+
 #include <cmath>
 #include <filesystem>
 #include <cstdio>
@@ -216,6 +218,14 @@ int main(int argc, char** argv) {
   // exceptions, reported on stderr).
   InstallInterruptCleanup();
   InstallMujocoErrorHandlers();
+  // glibc's allocator keeps what is freed for reuse instead of handing it back to the system at
+  // once (trimmed only above 256 MiB; mmap only for blocks of 64 MiB and more). The planner's
+  // threads allocate and free their Jacobians and SVD work thousands of times a second; with
+  // the defaults each round trip to the system cost page faults (benchmark-planning of
+  // paper_reinovo.yaml: 53.2 -> 38.0 s wall, system time 12.6 -> 0.1 s; README "Speed of
+  // trials"). What a process holds at its peak stays with it until it exits.
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);
+  mallopt(M_TRIM_THRESHOLD, 256 << 20);
   CLI::App app{"twinbench: digital-twin test bench for dual-robot kinematic calibration"};
   app.require_subcommand(1);
 

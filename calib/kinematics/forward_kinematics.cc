@@ -63,11 +63,29 @@ Transform EndPose(const KinematicModel& model, const JointVector& q, const Chain
                                            trig ? trig->link.data() : nullptr));
 }
 
+Transform FramesAndEndPose(const KinematicModel& model, const JointVector& q,
+                           const ChainTrig* trig, FrameSet* frames) {
+  assert(q.size() == model.num_joints());
+  const FlatParameters flat(model);
+  std::array<RigidT<double>, kMaxJoints + 2> X;
+  ChainFramesT<double>(model, flat.phi.data(), q.data(), 1.0, X.data(),
+                       trig ? trig->link.data() : nullptr);
+  const int links = model.num_links();
+  frames->num_joints = model.num_joints();
+  for (int i = 0; i <= links; ++i) frames->X_BL[i] = ToTransform(X[i]);
+  frames->X_BE = frames->X_BL[links] * model.X_LtE;
+  // ChainEndPoseT's last step on the same chain product.
+  return ToTransform(X[links] * RigidT<double>::FromTransform(model.X_LtE));
+}
+
 JointJacobian ManipulatorJacobian(const KinematicModel& model, const JointVector& q,
                                   const ChainTrig* trig) {
-  const FrameSet f = ForwardKinematics(model, q, trig);
+  return ManipulatorJacobian(ForwardKinematics(model, q, trig));
+}
+
+JointJacobian ManipulatorJacobian(const FrameSet& f) {
   const Vector3 p = f.X_BE.translation();
-  const int n = model.num_joints();
+  const int n = f.num_joints;
   JointJacobian J(6, n);
   // Joint i turns link i about the z axis of frame L(i-1).
   for (int i = 0; i < n; ++i) {

@@ -115,8 +115,17 @@ FrameSet ForwardKinematics(const KinematicModel& model, const JointVector& q,
 Transform EndPose(const KinematicModel& model, const JointVector& q,
                   const ChainTrig* trig = nullptr);
 
+/// ForwardKinematics and EndPose from one pass over the chain (IK needs both at every
+/// iterate): fills `frames` as ForwardKinematics gives them and returns EndPose, each bit for
+/// bit (the chain's products are the same operations in the same order).
+Transform FramesAndEndPose(const KinematicModel& model, const JointVector& q,
+                           const ChainTrig* trig, FrameSet* frames);
+
 /// 6 x N matrix with inline storage (Jacobians with respect to joint angles).
 using JointJacobian = Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, kMaxJoints>;
+
+/// ManipulatorJacobian from frames ForwardKinematics (or FramesAndEndPose) computed.
+JointJacobian ManipulatorJacobian(const FrameSet& frames);
 
 /// 6xN geometric Jacobian of the end frame: rows 0-2 map qdot to the velocity of E's origin,
 /// rows 3-5 to its angular velocity, both expressed in B [m/rad, rad/rad].

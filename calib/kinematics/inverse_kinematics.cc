@@ -3,6 +3,7 @@
 #include <cmath>
 #include <random>
 #include <sstream>
+#include <utility>
 
 #include <Eigen/Cholesky>
 
@@ -23,10 +24,9 @@ struct Attempt {
   bool converged = false;
 };
 
-// Pose error of q against the target: translation [m] and rotation vector in B [rad].
-Error6 PoseError(const KinematicModel& model, const Transform& X_target, const JointVector& q,
-                 const ChainTrig& trig) {
-  const Transform X = EndPose(model, q, &trig);
+// Pose error of the end pose X against the target: translation [m] and rotation vector in B
+// [rad].
+Error6 PoseError(const Transform& X_target, const Transform& X) {
   Error6 e;
   e.head<3>() = X_target.translation() - X.translation();
   const Eigen::AngleAxisd aa(X_target.linear() * X.linear().transpose());
@@ -81,7 +81,10 @@ Attempt Descend(const KinematicModel& model, const Transform& X_target, JointVec
     return e.head<3>().squaredNorm() + w * w * e.tail<3>().squaredNorm();
   };
   Attempt a;
-  Error6 e = PoseError(model, X_target, q, trig);
+  // The frames of the current iterate, for its Jacobian: one pass over the chain gives them and
+  // the end pose of the error (FramesAndEndPose).
+  FrameSet frames, trial_frames;
+  Error6 e = PoseError(X_target, FramesAndEndPose(model, q, &trig, &frames));
   double lambda = o.damping;
   for (a.iterations = 0; a.iterations < o.max_iterations; ++a.iterations) {
     if (e.head<3>().norm() <= o.position_tolerance &&
@@ -89,7 +92,7 @@ Attempt Descend(const KinematicModel& model, const Transform& X_target, JointVec
       a.converged = true;
       break;
     }
-    JointJacobian J = ManipulatorJacobian(model, q, &trig);
+    JointJacobian J = ManipulatorJacobian(frames);
     Error6 ew = e;
     J.bottomRows<3>() *= w;
     ew.tail<3>() *= w;
@@ -102,10 +105,12 @@ Attempt Descend(const KinematicModel& model, const Transform& X_target, JointVec
       if (n > o.max_step) dq *= o.max_step / n;
       JointVector q_new = q + dq;
       if (limits) q_new = Clamp(model, q_new);
-      const Error6 e_new = PoseError(model, X_target, q_new, trig);
+      const Error6 e_new =
+          PoseError(X_target, FramesAndEndPose(model, q_new, &trig, &trial_frames));
       if (cost(e_new) < cost(e)) {
         q = q_new;
         e = e_new;
+        std::swap(frames, trial_frames);
         lambda = std::max(lambda * 0.3, 1e-12);
         improved = true;
       } else {

@@ -152,6 +152,33 @@ TEST(ManipulatorJacobian, MatchesCentralFiniteDifferences) {
   }
 }
 
+TEST(ForwardKinematics, OnePassGivesTheFramesAndTheEndPoseBitForBit) {
+  // FramesAndEndPose replaces an EndPose and a ForwardKinematics call in every IK iteration;
+  // IK results (and so the planner's poses) stay identical only if both agree to the bit, with
+  // and without the cached cosines of a ChainTrig. A tool link and a non-identity end offset
+  // make the end pose's last product count.
+  std::mt19937_64 rng(15);
+  for (int trial = 0; trial < 50; ++trial) {
+    KinematicModel m = Perturbed(ReinovoLikeModel(), rng, 0.01, 0.05);
+    m.X_LtE = Transform(Eigen::AngleAxisd(0.3 + 0.01 * trial, Vector3(1, 2, 3).normalized()));
+    m.X_LtE.translation() = Vector3(0.01, -0.02, 0.05);
+    const JointVector q = RandomJoints(m, rng);
+    const ChainTrig trig(m);
+    for (const ChainTrig* t : {static_cast<const ChainTrig*>(nullptr), &trig}) {
+      FrameSet f;
+      const Transform X = FramesAndEndPose(m, q, t, &f);
+      const FrameSet g = ForwardKinematics(m, q, t);
+      EXPECT_TRUE(X.matrix() == EndPose(m, q, t).matrix()) << "trial " << trial;
+      EXPECT_TRUE(f.X_BE.matrix() == g.X_BE.matrix()) << "trial " << trial;
+      for (int i = 0; i <= m.num_links(); ++i) {
+        EXPECT_TRUE(f.X_BL[i].matrix() == g.X_BL[i].matrix()) << "trial " << trial << " frame " << i;
+      }
+      const JointJacobian J = ManipulatorJacobian(f);
+      EXPECT_TRUE(J == ManipulatorJacobian(m, q, t)) << "trial " << trial;
+    }
+  }
+}
+
 TEST(ManipulatorJacobian, JointColumnsEqualTheThetaColumnsOfTheIdentificationJacobian) {
   // Turning joint i and changing theta_offset_i move the chain identically.
   std::mt19937_64 rng(14);
