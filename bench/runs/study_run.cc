@@ -333,7 +333,9 @@ int RunStudy(const StudyOptions& o) {
   // One llvmpipe and one OpenCV thread per trial: the processes are the parallelism.
   // A fixed mmap threshold: glibc raises it whenever a thread frees a large block, so whether
   // a later large buffer comes from mmap or from the heap (and how it is aligned) would depend
-  // on the timing of the threads (with the address layout, SpawnTrial).
+  // on the timing of the threads (with the address layout, SpawnTrial). twinbench's main() now
+  // fixes it itself (mallopt, 64 MiB, which overrides this variable); the variable stays in the
+  // list because the list's size is part of every trial's stack layout (below).
   // The trial's whole environment is this fixed list, and its arguments are the same strings
   // wherever the study's folder lies (relative to the work folder, its working directory, with
   // the plan cache linked there): the environment and the arguments sit on the stack of the
