@@ -1029,6 +1029,7 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
       // accepted and the region folds cannot tell the two apart, the estimated one is taken.
       std::string shape_choice;  // why this rule changed the choice
       if (best >= 0 && !s.candidates[best].restarted && refusal(s.candidates[best]).empty() &&
+          s.candidates[best].heldout_loss.size() == region.size() &&
           HasDormantParameters(s.candidates[best].spec, start)) {
         const CandidateScore& held = s.candidates[best];
         int estimated = -1;
@@ -1037,8 +1038,7 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
           const CandidateScore& c = s.candidates[k];
           if (k == best || c.spec.type != held.spec.type || !c.restarted ||
               c.size_p_value >= o.alpha || !refusal(c).empty() ||
-              c.heldout_loss.size() != region.size() ||
-              held.heldout_loss.size() != region.size()) {
+              c.heldout_loss.size() != region.size()) {
             continue;
           }
           const double p_fold = FoldSignFlipP(c, held, region, folds);

@@ -42,17 +42,30 @@ ChainTrig::ChainTrig(const KinematicModel& model) {
   }
 }
 
-FrameSet ForwardKinematics(const KinematicModel& model, const JointVector& q,
-                           const ChainTrig* trig) {
+namespace {
+
+// ChainFramesT in double into `f` (ForwardKinematics' frames); returns the chain's last frame
+// as computed, before its conversion (EndPose's product continues from it).
+RigidT<double> ChainFrameSet(const KinematicModel& model, const JointVector& q,
+                             const ChainTrig* trig, FrameSet* f) {
   assert(q.size() == model.num_joints());
   const FlatParameters flat(model);
   std::array<RigidT<double>, kMaxJoints + 2> X;
   ChainFramesT<double>(model, flat.phi.data(), q.data(), 1.0, X.data(),
                        trig ? trig->link.data() : nullptr);
+  const int links = model.num_links();
+  f->num_joints = model.num_joints();
+  for (int i = 0; i <= links; ++i) f->X_BL[i] = ToTransform(X[i]);
+  f->X_BE = f->X_BL[links] * model.X_LtE;
+  return X[links];
+}
+
+}  // namespace
+
+FrameSet ForwardKinematics(const KinematicModel& model, const JointVector& q,
+                           const ChainTrig* trig) {
   FrameSet f;
-  f.num_joints = model.num_joints();
-  for (int i = 0; i <= model.num_links(); ++i) f.X_BL[i] = ToTransform(X[i]);
-  f.X_BE = f.X_BL[model.num_links()] * model.X_LtE;
+  ChainFrameSet(model, q, trig, &f);
   return f;
 }
 
@@ -65,17 +78,9 @@ Transform EndPose(const KinematicModel& model, const JointVector& q, const Chain
 
 Transform FramesAndEndPose(const KinematicModel& model, const JointVector& q,
                            const ChainTrig* trig, FrameSet* frames) {
-  assert(q.size() == model.num_joints());
-  const FlatParameters flat(model);
-  std::array<RigidT<double>, kMaxJoints + 2> X;
-  ChainFramesT<double>(model, flat.phi.data(), q.data(), 1.0, X.data(),
-                       trig ? trig->link.data() : nullptr);
-  const int links = model.num_links();
-  frames->num_joints = model.num_joints();
-  for (int i = 0; i <= links; ++i) frames->X_BL[i] = ToTransform(X[i]);
-  frames->X_BE = frames->X_BL[links] * model.X_LtE;
   // ChainEndPoseT's last step on the same chain product.
-  return ToTransform(X[links] * RigidT<double>::FromTransform(model.X_LtE));
+  return ToTransform(ChainFrameSet(model, q, trig, frames) *
+                     RigidT<double>::FromTransform(model.X_LtE));
 }
 
 JointJacobian ManipulatorJacobian(const KinematicModel& model, const JointVector& q,
