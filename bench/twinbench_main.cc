@@ -308,7 +308,8 @@ int main(int argc, char** argv) {
   study->add_option("scenario", study_options.scenario, "scenario file")->required();
   study->add_option("--trials", study_options.trials, "trials of the whole study")->required();
   study->add_option("--jobs", study_options.jobs,
-                    "trial processes at a time (default: the CPUs available)");
+                    "trial processes at a time, each on its share of the CPUs (default: the CPUs "
+                    "available)");
   study->add_option("--shard", shard, "run trials I, I+N, I+2N, ... (I/N, default 0/1)");
   study->add_option("--out", study_options.out_dir, "study folder (rerun to resume)")->required();
   study->add_option("--plan-cache", study_options.plan_cache,
@@ -365,7 +366,7 @@ int main(int argc, char** argv) {
                        "tracker file: the joint readings' noise, carried into the diagnosis's "
                        "noise floor (default 0: the tracker's sigma alone)");
   identify->add_option("--jobs", tracker_options.jobs,
-                       "tracker file: parallel candidate evaluations (default: all cores)");
+                       "tracker file: parallel candidate evaluations (default: the CPUs available)");
   identify->add_flag("--quiet", tracker_options.quiet, "no progress lines");
 
   SynthesizeOptions synth_options;

@@ -35,6 +35,7 @@
 #include "bench/runs/trial_record.h"
 #include "bench/runs/trials_file.h"
 #include "calib/common/clock.h"
+#include "calib/common/cpus.h"
 #include "calib/common/errors.h"
 
 namespace twin {
@@ -44,14 +45,6 @@ namespace {
 
 volatile sig_atomic_t g_interrupted = 0;
 void OnSignal(int) { g_interrupted = 1; }
-
-// The CPUs this process may run on (a Slurm allocation or taskset narrows them).
-int UsableCpus() {
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  if (sched_getaffinity(0, sizeof(set), &set) == 0) return std::max(1, CPU_COUNT(&set));
-  return static_cast<int>(std::clamp(sysconf(_SC_NPROCESSORS_ONLN), 1L, 4096L));
-}
 
 std::string SelfExecutable() {
   std::error_code ec;
@@ -91,10 +84,13 @@ std::string ReasonFromLog(const std::string& log_path) {
 }
 
 // A trial process: `executable run SCENARIO --trial t ...` with stdout and stderr to `log`,
-// killed (SIGKILL) when the study process dies.
+// killed (SIGKILL) when the study process dies, confined to `cpus` (none: the study's own).
 pid_t SpawnTrial(const std::string& executable, const std::vector<std::string>& args,
                  const std::string& cwd, const std::vector<std::string>& env,
-                 const std::string& log) {
+                 const std::string& log, const std::vector<int>& cpus) {
+  cpu_set_t cpu_set;  // built before fork: the child calls only async-signal-safe functions
+  CPU_ZERO(&cpu_set);
+  for (int c : cpus) CPU_SET(c, &cpu_set);
   std::vector<char*> argv;
   argv.push_back(const_cast<char*>(executable.c_str()));
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
@@ -118,6 +114,7 @@ pid_t SpawnTrial(const std::string& executable, const std::vector<std::string>& 
   if (persona != -1) personality(static_cast<unsigned long>(persona) | ADDR_NO_RANDOMIZE);
   signal(SIGINT, SIG_DFL);
   signal(SIGTERM, SIG_DFL);
+  if (!cpus.empty()) sched_setaffinity(0, sizeof(cpu_set), &cpu_set);  // best effort
   const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   if (fd >= 0) {
     dup2(fd, STDOUT_FILENO);
@@ -137,6 +134,7 @@ pid_t SpawnTrial(const std::string& executable, const std::vector<std::string>& 
 // The parts of a trial process in flight.
 struct Running {
   int trial = 0;
+  int slot = 0;  // of the study's J trial slots (its CPUs)
   Clock::time_point start;
   std::string out, log;
 };
@@ -264,7 +262,20 @@ int RunStudy(const StudyOptions& o) {
   }
   const std::string hash = ScenarioHash(sc);
   const std::string executable = o.executable.empty() ? SelfExecutable() : o.executable;
-  const int jobs = o.jobs > 0 ? o.jobs : UsableCpus();
+  const std::vector<int> cpus = UsableCpuList();
+  const int jobs = o.jobs > 0 ? o.jobs : static_cast<int>(cpus.size());
+  // Trial slots: while J trials run on C >= J CPUs, slot s has the CPUs of index s, s + J,
+  // ... to itself, and a trial started in it may use only those. Its "0: the CPUs this
+  // process may use" defaults (the diagnosis' candidates, the planner's runs: calib/common/
+  // cpus.h) then start as many threads as it has CPUs, instead of each trial starting one per
+  // CPU of the machine on top of the others. More jobs than CPUs: no confinement.
+  const auto slot_cpus = [&](int slot) {
+    std::vector<int> mine;
+    if (jobs > static_cast<int>(cpus.size())) return mine;
+    for (std::size_t i = slot; i < cpus.size(); i += jobs) mine.push_back(cpus[i]);
+    return mine;
+  };
+  std::vector<bool> slot_busy(jobs, false);
   const std::string scenario_path = fs::absolute(o.scenario).lexically_normal().string();
 
   const fs::path out(o.out_dir);
@@ -361,6 +372,9 @@ int RunStudy(const StudyOptions& o) {
       const int t = todo[next++];
       Running r;
       r.trial = t;
+      r.slot = static_cast<int>(std::find(slot_busy.begin(), slot_busy.end(), false) -
+                                slot_busy.begin());
+      slot_busy[r.slot] = true;
       r.start = Clock::now();
       r.out = (work / ("trial_" + std::to_string(t))).string();
       r.log = r.out + ".log";
@@ -368,7 +382,7 @@ int RunStudy(const StudyOptions& o) {
                                    {"run", scenario_path, "--trial", std::to_string(t), "--out",
                                     "trial_" + std::to_string(t), "--quiet", "--no-images",
                                     "--plan-cache", "plans"},
-                                   work.string(), env, r.log);
+                                   work.string(), env, r.log, slot_cpus(r.slot));
       running[pid] = r;
       progress.Started(static_cast<int>(running.size()));
     }
@@ -382,6 +396,7 @@ int RunStudy(const StudyOptions& o) {
     if (it == running.end()) continue;
     const Running r = it->second;
     running.erase(it);
+    slot_busy[r.slot] = false;
     TrialOutcome outcome;
     outcome.wall_s = SecondsSince(r.start);
     outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status)

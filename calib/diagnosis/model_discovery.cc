@@ -12,6 +12,7 @@
 #include <sstream>
 #include <thread>
 
+#include "calib/common/cpus.h"
 #include "calib/common/errors.h"
 #include "calib/diagnosis/statistics.h"
 
@@ -890,8 +891,7 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
   RobotModel current = start;
   const std::vector<TermSpec> all_specs =
       o.candidates.empty() ? CandidateTermSpecs(start.chain) : o.candidates;
-  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-  const int jobs = o.jobs > 0 ? o.jobs : static_cast<int>(cores);
+  const int jobs = o.jobs > 0 ? o.jobs : UsableCpuCount();
   say("diagnosis: residual test of the starting model (" + std::to_string(random_folds) +
       " folds)");
   r.test_before =

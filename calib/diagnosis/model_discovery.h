@@ -117,7 +117,9 @@ struct DiscoveryOptions {
   /// Noise of each joint reading (encoder), per joint [rad]; 0: not stated, the floor is the
   /// tracker's alone.
   double joint_sigma_rad = 0.0;
-  int jobs = 0;                    ///< parallel candidate evaluations; 0: the machine's cores
+  /// Parallel candidate evaluations; 0: the CPUs this process may use (UsableCpuCount). The
+  /// result does not depend on it.
+  int jobs = 0;
   /// When the residual is consistent with the noise nothing is searched; still fit every
   /// candidate on all the data (no cross-validation, nothing added) and report it
   /// (DiscoveryResult::screened): whether the data could see it at all, and its size with

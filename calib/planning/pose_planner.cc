@@ -11,6 +11,7 @@
 #include <tuple>
 #include <utility>
 
+#include "calib/common/cpus.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/identification/linearized_identification.h"
@@ -511,9 +512,8 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
   };
 
   std::vector<RunOutput> runs(o.runs);
-  const int threads = std::max(1, std::min(o.threads > 0 ? o.threads
-                                                         : static_cast<int>(std::thread::hardware_concurrency()),
-                                           o.runs));
+  const int threads =
+      std::max(1, std::min(o.threads > 0 ? o.threads : UsableCpuCount(), o.runs));
   std::atomic<int> next{0};
   auto worker = [&] {
     for (int r = next++; r < o.runs; r = next++) runs[r] = run_swarm(r);

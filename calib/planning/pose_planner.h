@@ -71,8 +71,8 @@ struct PosePlannerOptions {
     return o;
   }();                                 ///< IK options for both robots
   std::uint64_t seed = 1;              ///< seed of all random numbers (reproducible)
-  /// Threads running the independent PSO runs (0: one per hardware thread). The result does
-  /// not depend on it: every run has its own seed.
+  /// Threads running the independent PSO runs (0: one per CPU this process may use,
+  /// UsableCpuCount). The result does not depend on it: every run has its own seed.
   int threads = 0;
   /// Optional: when it becomes true the runs stop and the result is kNoFeasiblePoses with
   /// reason "cancelled" (a procedure that failed elsewhere). Not an input of the plan.
