@@ -26,6 +26,7 @@ declare -A INJECTED=(
   [tracker_thermal_drift]="thermal_"   # thermal_drift or thermal_warmup (any time constant)
   [tracker_thermal_drift_sensed]="thermal_"   # the same with the arm's temperature sensor
   [optical_clean]=""
+  [optical_clean_reseeded]=""   # the clean truths, other images: the pair scatter of the rows
   [optical_compliance_j2]="joint_compliance (joint 2)"
   [optical_compliance_j2_declared]=""
   [optical_transmission_j3]="transmission_error (joint 3, order 1)"
@@ -40,7 +41,8 @@ case "$PROCEDURE" in
            tracker_thermal_drift tracker_thermal_drift_sensed tracker_compliance_j2_declared)
     PREFIX="" ;;
   optical)
-    ORDER=(optical_clean optical_compliance_j2 optical_transmission_j3 optical_backlash_j3
+    ORDER=(optical_clean optical_clean_reseeded optical_compliance_j2 optical_transmission_j3
+           optical_backlash_j3
            optical_thermal_drift optical_thermal_drift_sensed optical_mount_deflection
            optical_compliance_j2_declared)
     PREFIX="robots.r2." ;;
