@@ -308,8 +308,7 @@ int main(int argc, char** argv) {
   study->add_option("scenario", study_options.scenario, "scenario file")->required();
   study->add_option("--trials", study_options.trials, "trials of the whole study")->required();
   study->add_option("--jobs", study_options.jobs,
-                    "trial processes at a time, each on its share of the CPUs (default: the CPUs "
-                    "available)");
+                    "trial processes at a time (default: the CPUs available)");
   study->add_option("--shard", shard, "run trials I, I+N, I+2N, ... (I/N, default 0/1)");
   study->add_option("--out", study_options.out_dir, "study folder (rerun to resume)")->required();
   study->add_option("--plan-cache", study_options.plan_cache,

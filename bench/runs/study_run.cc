@@ -1,7 +1,6 @@
 #include "bench/runs/study_run.h"
 
 #include <fcntl.h>
-#include <sched.h>
 #include <signal.h>
 #include <sys/file.h>
 #include <sys/personality.h>
@@ -84,13 +83,10 @@ std::string ReasonFromLog(const std::string& log_path) {
 }
 
 // A trial process: `executable run SCENARIO --trial t ...` with stdout and stderr to `log`,
-// killed (SIGKILL) when the study process dies, confined to `cpus` (none: the study's own).
+// killed (SIGKILL) when the study process dies.
 pid_t SpawnTrial(const std::string& executable, const std::vector<std::string>& args,
                  const std::string& cwd, const std::vector<std::string>& env,
-                 const std::string& log, const std::vector<int>& cpus) {
-  cpu_set_t cpu_set;  // built before fork: the child calls only async-signal-safe functions
-  CPU_ZERO(&cpu_set);
-  for (int c : cpus) CPU_SET(c, &cpu_set);
+                 const std::string& log) {
   std::vector<char*> argv;
   argv.push_back(const_cast<char*>(executable.c_str()));
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
@@ -114,7 +110,6 @@ pid_t SpawnTrial(const std::string& executable, const std::vector<std::string>& 
   if (persona != -1) personality(static_cast<unsigned long>(persona) | ADDR_NO_RANDOMIZE);
   signal(SIGINT, SIG_DFL);
   signal(SIGTERM, SIG_DFL);
-  if (!cpus.empty()) sched_setaffinity(0, sizeof(cpu_set), &cpu_set);  // best effort
   const int fd = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   if (fd >= 0) {
     dup2(fd, STDOUT_FILENO);
@@ -134,7 +129,6 @@ pid_t SpawnTrial(const std::string& executable, const std::vector<std::string>& 
 // The parts of a trial process in flight.
 struct Running {
   int trial = 0;
-  int slot = 0;  // of the study's J trial slots (its CPUs)
   Clock::time_point start;
   std::string out, log;
 };
@@ -262,20 +256,9 @@ int RunStudy(const StudyOptions& o) {
   }
   const std::string hash = ScenarioHash(sc);
   const std::string executable = o.executable.empty() ? SelfExecutable() : o.executable;
-  const std::vector<int> cpus = UsableCpuList();
-  const int jobs = o.jobs > 0 ? o.jobs : static_cast<int>(cpus.size());
-  // Trial slots: while J trials run on C >= J CPUs, slot s has the CPUs of index s, s + J,
-  // ... to itself, and a trial started in it may use only those. Its "0: the CPUs this
-  // process may use" defaults (the diagnosis' candidates, the planner's runs: calib/common/
-  // cpus.h) then start as many threads as it has CPUs, instead of each trial starting one per
-  // CPU of the machine on top of the others. More jobs than CPUs: no confinement.
-  const auto slot_cpus = [&](int slot) {
-    std::vector<int> mine;
-    if (jobs > static_cast<int>(cpus.size())) return mine;
-    for (std::size_t i = slot; i < cpus.size(); i += jobs) mine.push_back(cpus[i]);
-    return mine;
-  };
-  std::vector<bool> slot_busy(jobs, false);
+  // Trials are not confined to CPUs of their own: two trials each held to one of 2 CPUs ran
+  // no faster than two free ones (README, "Speed of trials").
+  const int jobs = o.jobs > 0 ? o.jobs : UsableCpuCount();
   const std::string scenario_path = fs::absolute(o.scenario).lexically_normal().string();
 
   const fs::path out(o.out_dir);
@@ -372,9 +355,6 @@ int RunStudy(const StudyOptions& o) {
       const int t = todo[next++];
       Running r;
       r.trial = t;
-      r.slot = static_cast<int>(std::find(slot_busy.begin(), slot_busy.end(), false) -
-                                slot_busy.begin());
-      slot_busy[r.slot] = true;
       r.start = Clock::now();
       r.out = (work / ("trial_" + std::to_string(t))).string();
       r.log = r.out + ".log";
@@ -382,7 +362,7 @@ int RunStudy(const StudyOptions& o) {
                                    {"run", scenario_path, "--trial", std::to_string(t), "--out",
                                     "trial_" + std::to_string(t), "--quiet", "--no-images",
                                     "--plan-cache", "plans"},
-                                   work.string(), env, r.log, slot_cpus(r.slot));
+                                   work.string(), env, r.log);
       running[pid] = r;
       progress.Started(static_cast<int>(running.size()));
     }
@@ -396,7 +376,6 @@ int RunStudy(const StudyOptions& o) {
     if (it == running.end()) continue;
     const Running r = it->second;
     running.erase(it);
-    slot_busy[r.slot] = false;
     TrialOutcome outcome;
     outcome.wall_s = SecondsSince(r.start);
     outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status)

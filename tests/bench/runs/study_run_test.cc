@@ -23,7 +23,6 @@
 
 #include "bench/runs/trial_record.h"
 #include "bench/runs/trials_file.h"
-#include "calib/common/cpus.h"
 #include "calib/common/errors.h"
 #include "tests/bench/text_edit.h"
 
@@ -164,67 +163,6 @@ TEST(StudyCli, StudyResumesAndShardsMergeToTheSameRecords) {
     EXPECT_EQ(ComparablePart(rec), ComparablePart(w.at(t))) << "trial " << t;
   }
   EXPECT_EQ(testing::ReadFile(merged + "/summary.json"), testing::ReadFile(whole + "/summary.json"));
-}
-
-// This process's CPUs as the kernel lists them (/proc/self/status, Cpus_allowed_list).
-std::string AllowedCpus() {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind("Cpus_allowed_list:", 0) == 0) {
-      const std::size_t v = line.find_first_not_of(" \t", 18);
-      return v == std::string::npos ? "" : line.substr(v);
-    }
-  }
-  return "";
-}
-
-// Trials run in CPU slots: with --jobs 2 on 2 or more CPUs each trial process may use only its
-// slot's CPUs (so its own "all the CPUs" defaults start one thread per CPU it has), and the two
-// slots hold different CPUs; with --jobs 1 a trial has all of the study's. The trial
-// "executable" here is a script that reports the CPUs it may use as its failure reason.
-TEST(StudyRun, EachTrialRunsOnItsSlotsCpus) {
-  if (UsableCpuCount() < 2) GTEST_SKIP() << "needs 2 CPUs";
-  const std::string dir = Folder("slots");
-  fs::create_directories(dir);
-  const std::string script = dir + "/fake_twinbench.sh";
-  {
-    std::ofstream f(script);
-    f << "#!/bin/sh\n"
-         "echo \"error: cpus $(grep Cpus_allowed_list /proc/self/status | cut -f2)\"\n"
-         "sleep 0.5\nexit 3\n";
-  }
-  fs::permissions(script, fs::perms::owner_all);
-  const auto reasons = [&](int jobs) {
-    StudyOptions o;
-    o.scenario = kSmall;
-    o.trials = 4;
-    o.jobs = jobs;
-    o.out_dir = dir + "/jobs" + std::to_string(jobs);
-    o.progress = false;
-    o.executable = script;
-    EXPECT_EQ(RunStudy(o), 0);
-    std::vector<std::string> out;
-    for (const json& r : Records(o.out_dir)) {
-      EXPECT_EQ(r["status"], "failed");
-      out.push_back(r.value("reason", ""));
-    }
-    EXPECT_EQ(out.size(), 4u);
-    return out;
-  };
-  const std::vector<int> cpus = UsableCpuList();
-  std::set<std::string> seen;
-  for (const std::string& r : reasons(2)) {
-    ASSERT_EQ(r.rfind("cpus ", 0), 0u) << r;
-    const std::string list = r.substr(5);
-    // On 2 CPUs a slot is one of them (on more, every second CPU of the study's list).
-    if (cpus.size() == 2) {
-      EXPECT_TRUE(list == std::to_string(cpus[0]) || list == std::to_string(cpus[1])) << list;
-    }
-    seen.insert(list);
-  }
-  EXPECT_EQ(seen.size(), 2u) << "both slots, each with its own CPUs";
-  for (const std::string& r : reasons(1)) EXPECT_EQ(r, "cpus " + AllowedCpus());
 }
 
 // Every process whose command line names `dir` (the trials of a study in `dir`).
