@@ -25,6 +25,7 @@ declare -A INJECTED=(
   [tracker_backlash_j3]="backlash (joint 3)"
   [tracker_thermal_drift]="thermal_"   # thermal_drift or thermal_warmup (any time constant)
   [tracker_thermal_drift_sensed]="thermal_"   # the same with the arm's temperature sensor
+  [tracker_thermal_drift_declared]=""   # the same warm-up declared (the estimator's warm-up)
   [optical_clean]=""
   [optical_clean_reseeded]=""   # the clean truths, other images: the pair scatter of the rows
   [optical_compliance_j2]="joint_compliance (joint 2)"
@@ -38,7 +39,8 @@ declare -A INJECTED=(
 case "$PROCEDURE" in
   tracker)
     ORDER=(tracker_clean tracker_compliance_j2 tracker_transmission_j1 tracker_backlash_j3
-           tracker_thermal_drift tracker_thermal_drift_sensed tracker_compliance_j2_declared)
+           tracker_thermal_drift tracker_thermal_drift_sensed tracker_thermal_drift_declared
+           tracker_compliance_j2_declared)
     PREFIX="" ;;
   optical)
     ORDER=(optical_clean optical_clean_reseeded optical_compliance_j2 optical_transmission_j3

@@ -23,8 +23,13 @@ RobotModel DeclaredModel(const Scenario& sc, int robot, const KinematicModel& no
     } else if (e.type == "transmission_error") {
       const auto h = e.params.find("harmonic");
       per_joint(e.type, {h != e.params.end() ? static_cast<int>(std::lround(h->second)) : 1});
-    } else if (e.type == "mount_deflection" || e.type == "thermal_drift") {
+    } else if (e.type == "mount_deflection") {
       specs.push_back({e.type, -1, {}});
+    } else if (e.type == "thermal_drift") {
+      // The twin's thermal_drift is a warm-up from a cold start (a first-order lag): the
+      // estimator's thermal_warmup, its time constant estimated from a start of
+      // kDeclaredWarmupStartMin (not the twin's: declared is the type, never a value).
+      specs.push_back({"thermal_warmup", -1, {kDeclaredWarmupStartMin}});
     } else if (e.type == "thermal_growth") {
       notes->push_back("declared thermal_growth is not modelled: the procedure records no "
                        "temperature");

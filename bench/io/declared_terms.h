@@ -12,6 +12,11 @@
 
 namespace twin {
 
+/// Where a declared warm-up's time constant starts [min] (the twin's thermal_drift declared:
+/// the estimator's thermal_warmup, its time constant then estimated; one of model discovery's
+/// warm-up starts, 10 / 20 / 40 / 80 min).
+inline constexpr int kDeclaredWarmupStartMin = 20;
+
 /// The estimator's starting model for robot `robot` (0-based): `nominal` plus a term, at zero,
 /// for every declared effect of the scenario on that robot that the estimator's library has,
 /// by type and joint only. Declared effects without a term (geometry errors, noise) need none;

@@ -355,6 +355,16 @@ int RunTrackerScenario(const RunOptions& o) {
                                {"true", ReportValue(phi_true(i) - phi0(i), p.unit)},
                                {"sigma", ReportValue(p.sigma, p.unit)}});
   }
+  // The declared terms' parameters as identified (no truth beside them: a term's parameters
+  // are the estimator's, the twin's effect need not have the same ones).
+  j["declared_term_parameters"] = json::array();
+  for (std::size_t i = phi0.size(); i < id.parameters.size(); ++i) {
+    const IdentifiedParameter& p = id.parameters[i];
+    j["declared_term_parameters"].push_back({{"name", p.name},
+                                             {"unit", ReportUnit(p.unit)},
+                                             {"estimated", ReportValue(p.estimated, p.unit)},
+                                             {"sigma", ReportValue(p.sigma, p.unit)}});
+  }
   j["identifiable_combinations"] = {{"count", id.z.size()}, {"within_3_sigma", within3},
                                     {"items", items}};
   j["unidentifiable"] = id.observability.unidentifiable;

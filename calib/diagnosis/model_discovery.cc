@@ -889,6 +889,19 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
     if (o.progress) o.progress(line);
   };
   RobotModel current = start;
+  if (HasDormantTermsAtZero(start)) {
+    // A declared term whose dormant parameters sleep at zero (a warm-up's time constant):
+    // every fit starts where a first fit on all the data put it, if that identifies more and
+    // fits no worse (as ScoreCandidate restarts such a candidate).
+    const Fit first = data.FitOn(start, {}, "declared terms, all data");
+    RobotModel woken = WithDormantTermsFrom(start, first.result.model);
+    const Fit again = data.FitOn(woken, {}, "declared terms, all data, restarted");
+    if (again.result.observability.rank > first.result.observability.rank &&
+        ResidualRms(again.result) <= (1.0 + 1e-6) * ResidualRms(first.result)) {
+      current = std::move(woken);
+      say("diagnosis: the declared terms' dormant parameters start from a first fit");
+    }
+  }
   const std::vector<TermSpec> all_specs =
       o.candidates.empty() ? CandidateTermSpecs(start.chain) : o.candidates;
   const int jobs = o.jobs > 0 ? o.jobs : UsableCpuCount();

@@ -29,6 +29,49 @@ RobotModel WithTerm(const RobotModel& model, std::shared_ptr<const ErrorTerm> te
   return out;
 }
 
+namespace {
+
+// Calls f(term, offset into term_values) for each term whose dormant parameters are asleep.
+template <typename F>
+void ForEachDormantTermAtZero(const RobotModel& model, F f) {
+  int offset = 0;
+  for (const auto& t : model.terms) {
+    const int n = static_cast<int>(t->parameters().size());
+    if (t->has_dormant_parameters() &&
+        model.term_values.segment(offset, t->amplitude_parameters()).isZero(0.0)) {
+      f(*t, offset);
+    }
+    offset += n;
+  }
+}
+
+}  // namespace
+
+bool HasDormantTermsAtZero(const RobotModel& model) {
+  bool any = false;
+  ForEachDormantTermAtZero(model, [&](const ErrorTerm&, int) { any = true; });
+  return any;
+}
+
+RobotModel WithDormantTermsFrom(const RobotModel& model, const RobotModel& solved) {
+  bool same = solved.terms.size() == model.terms.size() &&
+              solved.term_values.size() == model.term_values.size();
+  for (std::size_t i = 0; same && i < model.terms.size(); ++i) {
+    const TermSpec& a = model.terms[i]->spec();
+    const TermSpec& b = solved.terms[i]->spec();
+    same = a.type == b.type && a.joint == b.joint && a.orders == b.orders;
+  }
+  if (!same) {
+    throw InputError(model.name(), "WithDormantTermsFrom: the solved model has other terms");
+  }
+  RobotModel out = model;
+  ForEachDormantTermAtZero(model, [&](const ErrorTerm& t, int offset) {
+    const int n = static_cast<int>(t.parameters().size());
+    out.term_values.segment(offset, n) = solved.term_values.segment(offset, n);
+  });
+  return out;
+}
+
 Eigen::VectorXd GetParameters(const RobotModel& model) {
   Eigen::VectorXd p(model.num_parameters());
   p << GetParameters(model.chain), model.term_values;

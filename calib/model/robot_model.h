@@ -72,6 +72,16 @@ RobotModel MakeRobotModel(const KinematicModel& chain, const Vector3& gravity_B 
 /// InputError when the same term (type, joint, orders) is already in the model.
 RobotModel WithTerm(const RobotModel& model, std::shared_ptr<const ErrorTerm> term);
 
+/// Whether some term of `model` has dormant parameters (ErrorTerm::has_dormant_parameters)
+/// while all its amplitudes are zero: there its other parameters (a warm-up's time constant)
+/// have no gradient, and a fit from that start leaves them where they are.
+bool HasDormantTermsAtZero(const RobotModel& model);
+
+/// `model` with the values of each term HasDormantTermsAtZero names taken from `solved` (the
+/// same terms, fitted): a start where their dormant parameters have a gradient. Throws
+/// InputError when `solved` has other terms.
+RobotModel WithDormantTermsFrom(const RobotModel& model, const RobotModel& solved);
+
 /// The model's flat parameter vector (geometry, then the terms) [SI].
 Eigen::VectorXd GetParameters(const RobotModel& model);
 

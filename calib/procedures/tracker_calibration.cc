@@ -32,6 +32,21 @@ Solved Solve(const RobotModel& start, const std::vector<TrackerPoint>& points,
   return s;
 }
 
+// A term whose dormant parameters sleep at the start (a declared warm-up: its time constant
+// has no gradient while its growth is zero) is fitted once on `points`, and the calibration's
+// fits start from that solution's values of it if that identifies more and fits no worse, as
+// model discovery restarts such a candidate (model_discovery.cc, ScoreCandidate).
+RobotModel WokenStart(const RobotModel& start, const std::vector<TrackerPoint>& points,
+                      const TrackerSetOptions& set_options, const IdentificationOptions& options) {
+  if (!HasDormantTermsAtZero(start)) return start;
+  const Solved first = Solve(start, points, set_options, options);
+  RobotModel woken = WithDormantTermsFrom(start, first.result.model);
+  const Solved again = Solve(woken, points, set_options, options);
+  const bool better = again.result.observability.rank > first.result.observability.rank &&
+                      again.result.cost_after <= (1.0 + 1e-6) * first.result.cost_after;
+  return better ? woken : start;
+}
+
 // Everything held but the reflector offset: the "before" of held-out scoring.
 IdentificationOptions BaselineOptions(const RobotModel& model, IdentificationOptions options) {
   const std::vector<std::string> keep = ReflectorParameterNames(model);
@@ -108,10 +123,12 @@ TrackerCalibrationResult CalibrateFromTracker(const RobotModel& nominal,
   RequireEnoughPoints(nominal, static_cast<int>(points.size()), "all points", source);
   TrackerCalibrationResult out;
   const IdentificationOptions baseline = BaselineOptions(nominal, options.engine);
+  // The start of the calibrated ("after") fits; the "before" ones hold the terms as given.
+  const RobotModel start = WokenStart(nominal, points, options.set, options.engine);
 
   // The delivered model: every point.
   {
-    const Solved all = Solve(nominal, points, options.set, options.engine);
+    const Solved all = Solve(start, points, options.set, options.engine);
     const Solved before = Solve(nominal, points, options.set, baseline);
     out.identified = all.result;
     out.X_TB = all.X_TB;
@@ -134,7 +151,7 @@ TrackerCalibrationResult CalibrateFromTracker(const RobotModel& nominal,
     RequireEnoughPoints(nominal, s.training, "the " + name + " split's training part", source);
     TrackerSetOptions so = options.set;
     so.source = source + " (" + name + " split, training part)";
-    const Solved after = Solve(nominal, train, so, options.engine);
+    const Solved after = Solve(start, train, so, options.engine);
     const Solved before = Solve(nominal, train, so, baseline);
     const auto pose_for_test = [&](const Solved& m) {
       if (!refit_pose) return m.X_TB;

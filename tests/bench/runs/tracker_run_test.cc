@@ -162,7 +162,8 @@ TEST(TrackerRun, ADeclaredEffectIsInTheModelFromTheStartAndNotDiscoveredAgain) {
 // session's own held-out regions it comes within 0.03 mm (the effect-free figure is about
 // 0.021 mm: tracker noise of 3 coordinates); on the physical truth, measured after the
 // session, it must still beat the geometric model (a linear drift extrapolates the
-// exponential badly: README, Model discovery). Declared, the term is there from the start.
+// exponential badly: README, Model discovery). Declared, the term is there from the start:
+// the estimator's warm-up, whose time constant is estimated.
 TEST(TrackerRun, AnArmWarmingUpIsDiscoveredAsThermalDriftOrDeclared) {
   const fs::path dir = Folder("discovery_thermal");
   const std::string text = DiscoveryScenario(
@@ -203,9 +204,18 @@ TEST(TrackerRun, AnArmWarmingUpIsDiscoveredAsThermalDriftOrDeclared) {
       {"run", (dir / "s.yaml").string(), "--out", (dir / "out").string(), "--quiet"}, 600);
   ASSERT_EQ(declared.code, 0) << declared.output;
   j = nlohmann::json::parse(std::ifstream(dir / "out" / "report.json"));
-  EXPECT_EQ(j["declared_terms"], nlohmann::json::array({"thermal_drift"}));
+  // Declared, the twin's warm-up is the estimator's warm-up (by type), its time constant
+  // estimated from the declared start (a sigma: not held there), and nothing is added.
+  EXPECT_EQ(j["declared_terms"],
+            nlohmann::json::array({"thermal_warmup (time constant 20 min)"}));
+  ASSERT_EQ(j["declared_term_parameters"].size(), 2u) << j["declared_term_parameters"].dump();
+  EXPECT_EQ(j["declared_term_parameters"][1]["name"], "r2.thermal.warmup_log_tau_ratio");
+  EXPECT_GT(j["declared_term_parameters"][1]["sigma"].get<double>(), 0.0);
   EXPECT_TRUE(j["diagnosis"]["effects_added"].empty()) << j["diagnosis"].dump(1);
   EXPECT_LT(j["diagnosis"]["heldout_rms_mm"]["start"].get<double>(), 0.03);
+  // And it helps after the session, as the discovered term does.
+  EXPECT_LT(j["truth_position_error_mm_physical"]["calibrated_model"]["rigid"]["rms"].get<double>(),
+            calibrated);
 }
 
 // The same warming arm with a temperature sensor on it (robots[1].temperature_sensor): the

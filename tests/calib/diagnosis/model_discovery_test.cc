@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "calib/common/errors.h"
+#include "calib/procedures/tracker_calibration.h"
 #include "test_models.h"
 #include "tracker_synthetic.h"
 
@@ -357,6 +358,33 @@ TEST(ModelDiscovery, AWarmUpWithItsTimeConstantEstimatedIsPreferredToOneHeldAtIt
     EXPECT_NEAR(l.estimated, std::log(3.0), 3.0 * l.sigma);
   }
   EXPECT_GE(acted, 1);
+}
+
+// A declared warm-up (its term in the starting model, at zero, started at 20 min against the
+// truth's 60): its time constant has no gradient there, so the calibration and the diagnosis
+// each fit it once and start again from that solution. Its log-ratio is then estimated, the
+// truth's ln 3 within 3 of its sigmas, instead of staying at 0 with a zero sigma (as it did
+// before the restart: the engine holds a column without gradient).
+TEST(ModelDiscovery, ADeclaredWarmUpHasItsTimeConstantEstimated) {
+  const Case c = MakeCase(19, {{TermSpec{"thermal_warmup", -1, {60}}, {1.2e-4, 0.0}}});
+  const RobotModel start =
+      WithTerm(c.nominal, MakeErrorTerm(TermSpec{"thermal_warmup", -1, {20}}, c.nominal.chain,
+                                        c.nominal.name()));
+  ASSERT_TRUE(HasDormantTermsAtZero(start));
+  const auto points = SyntheticTrackerPoints(c.truth, 100, 11, kSigma);
+  TrackerCalibrationOptions co;
+  co.set.default_sigma = kSigma;
+  const TrackerCalibrationResult cal = CalibrateFromTracker(start, points, {}, co);
+  const IdentifiedParameter& l = cal.identified.parameters.back();
+  ASSERT_NE(l.name.find("warmup_log_tau_ratio"), std::string::npos) << l.name;
+  EXPECT_GT(l.sigma, 0.0);
+  EXPECT_NEAR(l.estimated, std::log(3.0), 3.0 * l.sigma);
+  EXPECT_FALSE(HasDormantTermsAtZero(cal.identified.model));
+
+  const DiscoveryResult r = DiscoverTrackerModel(start, points, Options({kCompliance2}));
+  ASSERT_EQ(r.model.term_values.size(), 2);
+  EXPECT_NEAR(r.model.term_values(1), std::log(3.0), 3.0 * l.sigma);
+  EXPECT_TRUE(r.effects_added.empty()) << "the declared term is the truth's type";
 }
 
 // The same drift with the default synthetic temperatures (random, not following the clock):
