@@ -1,5 +1,5 @@
-// The CPUs this process may run on: its affinity mask (what taskset, a Slurm allocation or
-// a study's trial slot leave it), not the machine's count. Every "0: use the cores" default
+// The CPUs this process may run on: its affinity mask (what taskset or a Slurm allocation
+// leave it), not the machine's count. Every "0: use the cores" default
 // (the planner's swarm runs, the diagnosis' candidates) takes it, so a process confined to one
 // CPU does not start a thread per core of the machine.
 #pragma once

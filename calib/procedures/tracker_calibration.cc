@@ -124,6 +124,8 @@ TrackerCalibrationResult CalibrateFromTracker(const RobotModel& nominal,
   TrackerCalibrationResult out;
   const IdentificationOptions baseline = BaselineOptions(nominal, options.engine);
   // The start of the calibrated ("after") fits; the "before" ones hold the terms as given.
+  // Each held-out split wakes its own from its training part: no start of a fit scored on
+  // held-out points comes from a fit that saw them.
   const RobotModel start = WokenStart(nominal, points, options.set, options.engine);
 
   // The delivered model: every point.
@@ -151,7 +153,8 @@ TrackerCalibrationResult CalibrateFromTracker(const RobotModel& nominal,
     RequireEnoughPoints(nominal, s.training, "the " + name + " split's training part", source);
     TrackerSetOptions so = options.set;
     so.source = source + " (" + name + " split, training part)";
-    const Solved after = Solve(start, train, so, options.engine);
+    const Solved after = Solve(WokenStart(nominal, train, so, options.engine), train, so,
+                               options.engine);
     const Solved before = Solve(nominal, train, so, baseline);
     const auto pose_for_test = [&](const Solved& m) {
       if (!refit_pose) return m.X_TB;
