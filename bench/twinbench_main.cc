@@ -11,11 +11,13 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
+#include "bench/report/acceptance.h"
 #include "bench/runs/calibration_run.h"
 #include "bench/runs/kinematics_benchmark.h"
 #include "bench/runs/planning_benchmark.h"
@@ -168,7 +170,7 @@ int RunIk(const std::string& path, const ModelLinks& links, const std::string& x
 }
 
 int RunExportUrdf(const std::string& path, const ModelLinks& links, const std::string& out) {
-  ValidateOutputFile(out, "--out");
+  ValidateOutputFile(out, "--out", {kWrittenByComment});
   WriteFileAtomically(out, ModelToUrdf(LoadRobotModelAndWarn(path, links)));
   std::printf("wrote %s\n", out.c_str());
   return 0;
@@ -393,12 +395,37 @@ int main(int argc, char** argv) {
     return kExitUserError;
   }
   try {
-    // Output folders are checked before anything runs ("--out ''", a file, "/").
+    // The output-safety rule (bench/io/output_files.h): the verb marks the folders it writes
+    // and accepts only its own marks; the inputs named here are never written over, and every
+    // output path is checked before anything runs.
+    for (CLI::App* sub : app.get_subcommands()) SetOutputVerb(sub->get_name());
+    for (const std::string* input :
+         {&model, &render_options.scenario, &bench_options.scenario, &run_options.scenario,
+          &planning_options.scenario, &study_options.scenario, &check_scenario,
+          &identify_options.model, &identify_options.measurements, &tracker_options.validate,
+          &synth_options.model, &kb_options.model}) {
+      NoteInput(*input);
+    }
+    for (const std::string& dir : merge_options.dirs) NoteInput(dir, true);
     const std::vector<std::pair<CLI::App*, const std::string*>> outputs = {
         {render, &render_options.out_dir}, {run, &run_options.out_dir},
-        {identify, &identify_options.out_dir}};
+        {identify, &identify_options.out_dir}, {merge, &merge_options.out_dir}};
     for (const auto& [sub, folder] : outputs) {
       if (*sub) ValidateOutputFolder(*folder, "--out");
+    }
+    if (*run && !run_options.junit.empty()) {
+      ValidateJunitFile(run_options.junit, run_options.out_dir);
+    }
+    for (const auto& [sub, cache, out_dir] :
+         {std::tuple{run, &run_options.plan_cache, &run_options.out_dir},
+          std::tuple{study, &study_options.plan_cache, &study_options.out_dir}}) {
+      if (!*sub || cache->empty()) continue;
+      ValidateOutputFolder(*cache, "--plan-cache", "plan-cache", false);
+      if (PathIsWithin(*cache, *out_dir) || PathIsWithin(*out_dir, *cache)) {
+        throw InputError("--plan-cache", "'" + *cache + "' and --out '" + *out_dir +
+                                             "' overlap; name a plan cache folder beside the "
+                                             "output folder");
+      }
     }
     if (*check) return CheckScenario(check_scenario);
     if (*info) return RunInfo(model, links);

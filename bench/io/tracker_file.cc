@@ -6,10 +6,13 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <sstream>
 
 #include "bench/io/csv.h"
 #include "bench/io/yaml_util.h"
+#include "bench/io/output_files.h"
 #include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
 
 namespace twin {
 namespace {
@@ -29,9 +32,104 @@ std::optional<double> UnitScale(const std::string& name, const std::string& base
   return std::nullopt;
 }
 
+// Most a row's stated sigma may differ from the file's median, either way: a tracker's stated
+// uncertainty grows with distance and angle (a few times across a cell; 62 times between the
+// extremes and under 10 times from the median in the real Leica session), so 100 only catches
+// typos and units, like one row at 1e-300 m that would outweigh all the others together.
+constexpr double kSigmaFactor = 100.0;
+// Most the reflector's spread may differ from the spread of the nominal model's end frame over
+// the same joint readings: a tool offset and the real geometry change it by tens of percent,
+// a unit error (metres labelled mm) by 1000 times. Spreads under kMinSpread are not compared.
+constexpr double kSpreadFactor = 10.0;
+constexpr double kMinSpread = 0.02;  // [m]
+// Largest range of an ignored joint column (one held constant and merged into the base):
+// a braked axis reads within a few encoder counts (2.7e-4 rad in the real session's torso),
+// so 2e-3 rad (0.11 deg) is a constant axis and more is a moving one.
+constexpr double kMaxConstantRange = 2e-3;  // [rad]
+
+// RMS distance of the points from their centroid [m].
+double Spread(const std::vector<Vector3>& p) {
+  Vector3 c = Vector3::Zero();
+  for (const Vector3& v : p) c += v;
+  c /= static_cast<double>(p.size());
+  double ss = 0.0;
+  for (const Vector3& v : p) ss += (v - c).squaredNorm();
+  return std::sqrt(ss / static_cast<double>(p.size()));
+}
+
+// The whole-file checks, with the reason in the message: sigmas within kSigmaFactor of their
+// median, a position unit that agrees with the motion, ignored joint columns constant, and
+// repeated poses counted as such (TrackerFile::pose_group).
+void CheckPlausibility(const std::string& path, const KinematicModel& model,
+                       const std::vector<std::string>& header, int x_col, double xyz_scale,
+                       int sigma_col, TrackerFile* out) {
+  const std::vector<TrackerPoint>& pts = out->points;
+  if (sigma_col >= 0) {
+    std::vector<double> s;
+    for (const TrackerPoint& p : pts) s.push_back(p.sigma);
+    std::nth_element(s.begin(), s.begin() + s.size() / 2, s.end());
+    const double median = s[s.size() / 2];
+    for (const TrackerPoint& p : pts) {
+      if (p.sigma < median / kSigmaFactor || p.sigma > median * kSigmaFactor) {
+        std::ostringstream os;
+        os << "sigma " << p.sigma << " m is more than " << kSigmaFactor << " times "
+           << (p.sigma < median ? "below" : "above") << " the file's median sigma " << median
+           << " m; such a row would " << (p.sigma < median ? "outweigh all the others together "
+                                                             "and drop the identification's rank"
+                                                           : "count for nothing")
+           << " (fix the row or its unit)";
+        throw InputError(path + ":" + std::to_string(p.row) + " column " +
+                             std::to_string(sigma_col + 1) + " (" + header[sigma_col] + ")",
+                         os.str());
+      }
+    }
+  }
+  if (pts.size() >= 3) {
+    std::vector<Vector3> measured, predicted;
+    for (const TrackerPoint& p : pts) {
+      measured.push_back(p.p_T);
+      predicted.push_back(EndPose(model, p.context.q).translation());
+    }
+    const double m = Spread(measured), e = Spread(predicted);
+    if (e > kMinSpread && (m > kSpreadFactor * e || m * kSpreadFactor < e)) {
+      const bool mm = xyz_scale < 1.0;
+      std::ostringstream os;
+      os << "the reflector positions spread " << (mm ? m * 1e3 : m) << (mm ? " mm" : " m")
+         << " about their centre, but the nominal model's end frame spreads " << e * 1e3
+         << " mm over the same joint readings (" << m / e << " times): the values look like "
+         << (m < e ? (mm ? "metres; name the columns x_m, y_m, z_m"
+                         : "millimetres divided by 1000 twice; check the unit")
+                   : (mm ? "micrometres; check the unit" : "millimetres; name the columns x_mm, "
+                                                           "y_mm, z_mm"));
+      throw InputError(path + ":1 column " + std::to_string(x_col + 1) + " (" + header[x_col] + ")",
+                       os.str());
+    }
+  }
+  for (const TrackerFileColumn& c : out->ignored) {
+    const bool rad = c.name.size() > 4 && c.name.compare(c.name.size() - 4, 4, "_rad") == 0;
+    const bool deg = c.name.size() > 4 && c.name.compare(c.name.size() - 4, 4, "_deg") == 0;
+    if (c.name.rfind("q", 0) != 0 || !(rad || deg)) continue;
+    const double range = (c.max - c.min) * (deg ? 3.14159265358979323846 / 180.0 : 1.0);
+    if (range > kMaxConstantRange) {
+      std::ostringstream os;
+      os << "an ignored joint column must be constant (the axis held still and merged into the "
+            "model's base), but it ranges over " << c.max - c.min << (deg ? " deg" : " rad")
+         << " (" << c.min << " to " << c.max << "; at most " << kMaxConstantRange
+         << " rad is a braked axis); model that joint instead of ignoring it";
+      throw InputError("--ignore-column " + c.name, os.str());
+    }
+  }
+  // Repeated poses: counted as repeats, not as independent points.
+  out->pose_group = PoseGroups(pts);
+  out->distinct_poses = pts.empty() ? 0 : *std::max_element(out->pose_group.begin(),
+                                                             out->pose_group.end()) + 1;
+}
+
 }  // namespace
 
 bool IsTrackerFile(const std::string& path) {
+  // Checked before it is opened: a FIFO would block the open, /dev/zero would never end a line.
+  RequireRegularFile(path, kMaxTrackerBytes);
   std::ifstream in(path);
   std::string line;
   if (!std::getline(in, line)) return false;
@@ -45,6 +143,7 @@ bool IsTrackerFile(const std::string& path) {
 TrackerFile ReadTrackerFile(const std::string& path, const KinematicModel& model,
                             const std::vector<std::string>& ignore) {
   RequireRegularFile(path, kMaxTrackerBytes);
+  NoteInput(path);
   std::ifstream in(path);
   if (!in) throw InputError(path, "cannot read the tracker file");
   TrackerFile out;
@@ -213,6 +312,7 @@ TrackerFile ReadTrackerFile(const std::string& path, const KinematicModel& model
     out.points.push_back(std::move(p));
   }
   if (out.points.empty()) throw InputError(path, "no data rows after the header");
+  CheckPlausibility(path, model, header, xyz_col[0], xyz_scale, sigma_col, &out);
   return out;
 }
 

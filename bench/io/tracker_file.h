@@ -35,6 +35,9 @@ struct TrackerFile {
   std::vector<std::string> joint_columns;  ///< the columns read as joints, in joint order
   std::vector<TrackerFileColumn> ignored;  ///< columns dropped by request, with their ranges
   bool has_sigma = false, has_time = false, has_temperature = false;
+  /// Per point, the index of its pose (PoseGroups: repeats of one pose share it).
+  std::vector<int> pose_group;
+  int distinct_poses = 0;  ///< number of different poses (<= points.size())
 };
 
 /// True when the file's first line names tracker columns (x_m or x_mm), i.e. when `twinbench
@@ -45,7 +48,10 @@ bool IsTrackerFile(const std::string& path);
 /// missing, unknown or duplicated column, a joint column the model lacks (or a model joint the
 /// file lacks), a field count that differs from the header, a non-numeric, NaN or infinite
 /// cell, an implausible value (a reflector beyond 100 m, a sigma outside (0, 10 mm], a joint
-/// reading beyond two turns), more than kMaxTrackerRows rows, or no rows.
+/// reading beyond two turns), more than kMaxTrackerRows rows, or no rows; and, with the reason,
+/// for a file that contradicts itself: a row's sigma over 100 times off the file's median, a
+/// position unit whose spread is 10 times off the nominal model's motion (metres labelled mm),
+/// an ignored joint column that is not constant (over 2e-3 rad).
 TrackerFile ReadTrackerFile(const std::string& path, const KinematicModel& model,
                             const std::vector<std::string>& ignore = {});
 

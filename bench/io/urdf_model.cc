@@ -19,6 +19,7 @@
 #include "bench/io/plausibility.h"
 #include "bench/io/yaml_util.h"
 #include "calib/common/text_format.h"
+#include "bench/io/output_files.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
 #include "sim/world/mjcf_writer.h"
@@ -712,7 +713,9 @@ KinematicModel LoadUrdf(const std::string& path, const UrdfImportOptions& option
 
 std::string ModelToUrdf(const KinematicModel& model) {
   std::ostringstream os;
-  os << "<?xml version=\"1.0\"?>\n<robot name=\"" << XmlEscape(model.name) << "\">\n";
+  // The comment marks the file as twinbench's: `export-urdf --out` replaces only such files.
+  os << "<?xml version=\"1.0\"?>\n" << kWrittenByComment << "\n<robot name=\""
+     << XmlEscape(model.name) << "\">\n";
   os << "  <link name=\"base_link\"/>\n";
   // URDF link i is U_i = L(i-1) RotZ(theta_i + q_i); L_i = U_i M_i.
   std::string parent = "base_link";

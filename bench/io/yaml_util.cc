@@ -1,6 +1,12 @@
 #include "bench/io/yaml_util.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -12,6 +18,7 @@
 #include <vector>
 
 #include "calib/identification/base_calibration.h"
+#include "bench/io/output_files.h"
 #include "calib/common/errors.h"
 
 namespace twin {
@@ -198,15 +205,35 @@ void RequireRegularFile(const std::string& path, std::uintmax_t max_bytes) {
 
 std::string ReadTextFile(const std::string& path, std::uintmax_t max_bytes) {
   RequireRegularFile(path, max_bytes);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path, "cannot open file");
-  std::string text;
-  try {  // reading a directory throws from the stream buffer
-    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  } catch (const std::ios_base::failure& e) {
-    throw InputError(path, std::string("cannot read file: ") + e.what());
+  NoteInput(path);
+  // Opened without blocking (a FIFO swapped in after the check cannot hang the open), checked
+  // again on the open descriptor, and read to at most max_bytes whatever the file grows to.
+  const int fd = open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+  if (fd < 0) throw InputError(path, std::string("cannot open file: ") + std::strerror(errno));
+  struct stat st {};
+  if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    close(fd);
+    throw InputError(path, "cannot read file: not a regular file");
   }
-  if (in.bad()) throw InputError(path, "cannot read file");
+  std::string text;
+  char buf[65536];
+  for (;;) {
+    const ssize_t n = read(fd, buf, sizeof(buf));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      const std::string why = std::strerror(errno);
+      close(fd);
+      throw InputError(path, "cannot read file: " + why);
+    }
+    if (n == 0) break;
+    text.append(buf, static_cast<std::size_t>(n));
+    if (text.size() > max_bytes) {
+      close(fd);
+      throw InputError(path, "file grew past the limit of " + std::to_string(max_bytes) +
+                                 " bytes for this kind of input while it was read");
+    }
+  }
+  close(fd);
   return text;
 }
 

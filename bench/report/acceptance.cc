@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "bench/io/model_loader.h"
+#include "bench/io/output_files.h"
 #include "bench/io/yaml_util.h"
 #include "calib/common/errors.h"
 
@@ -260,7 +261,7 @@ std::string JunitXml(const std::string& suite, const AcceptanceVerdict& verdict,
   const std::size_t tests = verdict.results.empty() ? 1 : verdict.results.size();
   const std::string cls = "twinbench." + XmlEscape(suite);
   std::ostringstream x;
-  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n" << kWrittenByComment << "\n"
     << "<testsuites name=\"twinbench\" tests=\"" << tests << "\" failures=\"" << failures
     << "\" errors=\"0\" time=\"" << Num(time_s) << "\">\n"
     << "  <testsuite name=\"" << XmlEscape(suite) << "\" tests=\"" << tests << "\" failures=\""
@@ -280,6 +281,15 @@ std::string JunitXml(const std::string& suite, const AcceptanceVerdict& verdict,
   }
   x << "  </testsuite>\n</testsuites>\n";
   return x.str();
+}
+
+void ValidateJunitFile(const std::string& path, const std::string& out_dir) {
+  // Files of earlier versions carry no comment but their root element.
+  ValidateOutputFile(path, "--junit", {kWrittenByComment, "<testsuites name=\"twinbench\""});
+  if (!out_dir.empty() && PathIsWithin(path, out_dir)) {
+    throw InputError("--junit", "'" + path + "' lies inside the output folder '" + out_dir +
+                                    "', which the run replaces; write it beside the folder");
+  }
 }
 
 void WriteJunit(const std::string& path, const std::string& suite,

@@ -75,6 +75,11 @@ AcceptanceVerdict EvaluateAcceptance(const Acceptance& acceptance, nlohmann::jso
 /// (a failure element for each missed one), `time_s` the run's wall time.
 std::string JunitXml(const std::string& suite, const AcceptanceVerdict& verdict, double time_s);
 
+/// Refuses a --junit path before anything runs (InputError naming "--junit"): what
+/// ValidateOutputFile refuses, an existing file that is not a JUnit file twinbench wrote, or a
+/// path inside the output folder `out_dir` (which the run replaces whole).
+void ValidateJunitFile(const std::string& path, const std::string& out_dir);
+
 /// Writes JunitXml to `path` atomically (InputError naming the path on failure).
 void WriteJunit(const std::string& path, const std::string& suite,
                 const AcceptanceVerdict& verdict, double time_s);

@@ -777,7 +777,7 @@ int RunCalibrationScenario(const RunOptions& o) {
   ApplyRunOptions(o, &config);
   const Acceptance acceptance = ParseAcceptance(sc);
   ValidateOutputFolder(o.out_dir, "--out");
-  if (!o.junit.empty()) ValidateOutputFile(o.junit, "--junit");
+  if (!o.junit.empty()) ValidateJunitFile(o.junit, o.out_dir);
   InstallMujocoErrorHandlers();
   TwinCell cell(sc.twin, sc.path);
   const fs::path out(o.out_dir);
@@ -951,6 +951,7 @@ int RunIdentify(const IdentifyOptions& o) {
     X_FT.linear() = RpyToRotation(Vector3(DegToRad(v[3]), DegToRad(v[4]), DegToRad(v[5])));
   }
   RequireRegularFile(o.measurements, kMaxMeasurementBytes);
+  NoteInput(o.measurements);
   std::ifstream in(o.measurements);
   if (!in) throw InputError(o.measurements, "cannot read the measurements file");
   std::string line;

@@ -463,7 +463,7 @@ int RunHandclaspScenario(const std::string& scenario_path, const std::string& ou
   const HandclaspConfig config = ParseHandclaspConfig(scenario);
   const Acceptance acceptance = ParseAcceptance(scenario);
   ValidateOutputFolder(out_dir, "--out");
-  if (!junit.empty()) ValidateOutputFile(junit, "--junit");
+  if (!junit.empty()) ValidateJunitFile(junit, out_dir);
   const std::array<KinematicModel, 2> nominal = {scenario.twin.robots[0].model,
                                                  scenario.twin.robots[1].model};
   nlohmann::json trials = nlohmann::json::array();

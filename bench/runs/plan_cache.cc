@@ -14,6 +14,7 @@
 
 #include "bench/io/content_hash.h"
 #include "bench/io/model_loader.h"
+#include "bench/io/output_files.h"
 #include "calib/common/errors.h"
 
 namespace twin {
@@ -162,9 +163,8 @@ PosePlanResult PlanFromJson(const json& j, const std::string& where) {
 }
 
 FilePlanStore::FilePlanStore(std::string dir) : dir_(std::move(dir)) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir_, ec);
-  if (ec) throw InputError(dir_, "cannot create the plan cache folder: " + ec.message());
+  // A new, empty or earlier plan cache (its mark), never a folder of the user's.
+  ClaimOutputFolder(dir_, "--plan-cache", "plan-cache");
 }
 
 FilePlanStore::~FilePlanStore() {

@@ -26,7 +26,13 @@ int RunStudyMerge(const StudyMergeOptions& o) {
   int duplicates = 0, conflicts = 0, read = 0;
   for (const std::string& dir : o.dirs) {
     const std::string path = (fs::path(dir) / "trials.jsonl").string();
-    if (!fs::is_regular_file(path)) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (fs::exists(st) && !fs::is_regular_file(st)) {
+      throw InputError(path, "not a regular file (a FIFO, socket or device could block or never "
+                             "end); a study writes trials.jsonl as a file");
+    }
+    if (!fs::exists(st)) {
       if (fs::is_regular_file(fs::path(dir) / "study.json")) continue;  // nothing recorded yet
       throw InputError(dir, "not a study folder (no trials.jsonl or study.json)");
     }

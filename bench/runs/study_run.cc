@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <climits>
 #include <cstdio>
@@ -16,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <mutex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -26,6 +28,7 @@
 #include "bench/io/calibration_config.h"
 #include "bench/io/content_hash.h"
 #include "bench/io/model_loader.h"
+#include "bench/io/output_files.h"
 #include "bench/io/scenario.h"
 #include "bench/report/study_summary.h"
 #include "bench/report/study_summary_html.h"
@@ -42,8 +45,8 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 namespace {
 
-volatile sig_atomic_t g_interrupted = 0;
-void OnSignal(int) { g_interrupted = 1; }
+// The signal that interrupted the study (0: none); set by the interrupt handler of RunStudy.
+std::atomic<int> g_interrupted{0};
 
 std::string SelfExecutable() {
   std::error_code ec;
@@ -227,11 +230,20 @@ void ParseShard(const std::string& text, int* index, int* count) {
   if (*count < 1 || *index >= *count) {
     throw InputError("--shard", "expected I/N with whole numbers 0 <= I < N, got '" + text + "'");
   }
+  if (*count > kMaxStudyShards) {
+    throw InputError("--shard", "expected at most " + std::to_string(kMaxStudyShards) +
+                                    " shards, got '" + text + "'");
+  }
 }
 
 void ValidateStudyOptions(const StudyOptions& o) {
-  if (o.trials < 1) {
-    throw InputError("--trials", std::to_string(o.trials) + ": expected at least 1 trial");
+  if (o.trials < 1 || o.trials > kMaxStudyTrials) {
+    throw InputError("--trials", std::to_string(o.trials) + ": expected 1 to " +
+                                     std::to_string(kMaxStudyTrials) + " trials");
+  }
+  if (o.shard_count > kMaxStudyShards) {
+    throw InputError("--shard", std::to_string(o.shard_count) + " shards: expected at most " +
+                                    std::to_string(kMaxStudyShards));
   }
   if (o.jobs < 0) throw InputError("--jobs", std::to_string(o.jobs) + ": expected >= 1");
   if (o.shard_count < 1 || o.shard_index < 0 || o.shard_index >= o.shard_count) {
@@ -263,8 +275,8 @@ int RunStudy(const StudyOptions& o) {
 
   const fs::path out(o.out_dir);
   std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) throw InputError(o.out_dir, "cannot create the study folder: " + ec.message());
+  // A new, empty or earlier study folder of ours (its mark), never a folder of the user's.
+  ClaimOutputFolder(o.out_dir, "--out", "study");
   // One study process per folder at a time.
   const std::string lock_path = (out / ".study.lock").string();
   const int lock_fd = open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
@@ -306,10 +318,19 @@ int RunStudy(const StudyOptions& o) {
     }
   }
   const fs::path work = out / "work";
-  fs::remove_all(work, ec);  // trials in flight when a study was killed: run again
-  fs::create_directories(work, ec);
-  if (ec) throw InputError((out / "work").string(), "cannot create: " + ec.message());
+  // Trials in flight when a study was killed: run again. The folder is removed only when it
+  // carries the mark the study gave it.
+  if (fs::exists(fs::symlink_status(work, ec))) {
+    if (!IsMarkedFolder(work.string(), "study-work")) {
+      throw InputError(work.string(), "the study's work folder holds something twinbench did "
+                                      "not make (no " + std::string(kOutputMarker) +
+                                      " mark); move it away and rerun");
+    }
+    fs::remove_all(work, ec);
+  }
+  ClaimOutputFolder(work.string(), work.string(), "study-work");
   const std::string plans = o.plan_cache.empty() ? (out / "plans").string() : o.plan_cache;
+  ClaimOutputFolder(plans, o.plan_cache.empty() ? plans : "--plan-cache", "plan-cache");
 
   std::printf("twinbench study: %s (hash %s), trials %d of shard %s: %d recorded, %d to run, "
               "%d at a time\n",
@@ -317,13 +338,16 @@ int RunStudy(const StudyOptions& o) {
               static_cast<int>(todo.size()), jobs);
   std::fflush(stdout);
 
-  struct sigaction sa {};
-  sa.sa_handler = OnSignal;
-  sigemptyset(&sa.sa_mask);
-  sa.sa_flags = 0;  // no SA_RESTART: waitpid returns EINTR
-  struct sigaction old_int {}, old_term {};
-  sigaction(SIGINT, &sa, &old_int);
-  sigaction(SIGTERM, &sa, &old_term);
+  // SIGINT, SIGTERM and SIGHUP wait on their own thread (InstallInterruptCleanup): here they
+  // stop the trial processes, whose ends wake the loop below; the study then cleans up and
+  // ends by the signal.
+  std::mutex children_mutex;
+  std::set<pid_t> children;
+  SetInterruptHandler([&](int sig) {
+    std::lock_guard<std::mutex> lock(children_mutex);
+    g_interrupted = sig;
+    for (const pid_t pid : children) kill(pid, SIGTERM);
+  });
   // One llvmpipe and one OpenCV thread per trial: the processes are the parallelism.
   // A fixed mmap threshold: glibc raises it whenever a thread frees a large block, so whether
   // a later large buffer comes from mmap or from the heap (and how it is aligned) would depend
@@ -348,7 +372,7 @@ int RunStudy(const StudyOptions& o) {
   std::map<pid_t, Running> running;
   std::size_t next = 0;
   double wall_sum = 0;
-  int finished = 0;
+  int finished = 0, stopped = 0;
   const auto t_study = Clock::now();
   while ((next < todo.size() || !running.empty()) && !g_interrupted) {
     while (next < todo.size() && static_cast<int>(running.size()) < jobs) {
@@ -363,6 +387,11 @@ int RunStudy(const StudyOptions& o) {
                                     "trial_" + std::to_string(t), "--quiet", "--no-images",
                                     "--plan-cache", "plans"},
                                    work.string(), env, r.log);
+      {
+        std::lock_guard<std::mutex> lock(children_mutex);
+        children.insert(pid);
+        if (g_interrupted) kill(pid, SIGTERM);
+      }
       running[pid] = r;
       progress.Started(static_cast<int>(running.size()));
     }
@@ -372,8 +401,17 @@ int RunStudy(const StudyOptions& o) {
       if (errno == EINTR) continue;
       throw std::runtime_error(std::string("waitpid failed: ") + std::strerror(errno));
     }
+    {
+      std::lock_guard<std::mutex> lock(children_mutex);
+      children.erase(pid);
+    }
     const auto it = running.find(pid);
     if (it == running.end()) continue;
+    if (g_interrupted) {  // stopped by the interrupt: not a failed trial
+      running.erase(it);
+      ++stopped;
+      continue;
+    }
     const Running r = it->second;
     running.erase(it);
     TrialOutcome outcome;
@@ -423,17 +461,17 @@ int RunStudy(const StudyOptions& o) {
     ++finished;
   }
   progress.End();
-  sigaction(SIGINT, &old_int, nullptr);
-  sigaction(SIGTERM, &old_term, nullptr);
   if (g_interrupted) {
+    const int sig = g_interrupted;
     for (const auto& [pid, r] : running) kill(pid, SIGTERM);
     for (const auto& [pid, r] : running) waitpid(pid, nullptr, 0);
     fs::remove_all(work, ec);
     std::fprintf(stderr, "study: interrupted; %d trial(s) in flight were not recorded; run the "
-                 "same command again to resume\n", static_cast<int>(running.size()));
+                 "same command again to resume\n", stopped + static_cast<int>(running.size()));
     close(lock_fd);
-    return 130;
+    EndBySignal(sig);
   }
+  SetInterruptHandler({});
   fs::remove_all(work, ec);
 
   const std::vector<json> records = ReadTrialsFile(trials_path).records;

@@ -33,6 +33,14 @@ struct StudyOptions {
   std::string executable;   ///< the twinbench binary trials run; empty: this process' own
 };
 
+/// Largest study: 100000 trials are weeks of compute at a trial a minute on 2 cores, and each
+/// trial holds a line of trials.jsonl; more is a typo (--trials 1e9), refused before anything
+/// runs.
+constexpr int kMaxStudyTrials = 100000;
+/// Most shards of one study (--shard I/N): a Slurm array of 10000 tasks is already beyond
+/// most clusters' MaxArraySize.
+constexpr int kMaxStudyShards = 10000;
+
 /// Parses "I/N" (0 <= I < N) into `index` and `count`; InputError ("--shard") otherwise.
 void ParseShard(const std::string& text, int* index, int* count);
 

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "bench/io/model_loader.h"
+#include "bench/io/output_files.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/inverse_kinematics.h"
@@ -14,6 +15,7 @@
 namespace twin {
 
 int RunSynthesizeMeasurements(const SynthesizeOptions& o) {
+  ValidateOutputFile(o.out, "--out");  // a new file only: a CSV carries no mark of ours
   constexpr int kAxes = 5;
   if (o.rows < 3 * kAxes || o.rows > 1000000) {
     throw InputError("--rows", "expected 15 to 1000000 rows, got " + std::to_string(o.rows));

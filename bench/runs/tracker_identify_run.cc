@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <sstream>
 #include <fstream>
 #include <iostream>
 
@@ -28,6 +29,11 @@ using nlohmann::json;
 namespace {
 
 void WriteFile(const fs::path& path, const std::string& text) { WriteTextFile(path.string(), text); }
+
+// Smallest range of a joint over a tracker file below which its axis is named as a cause of
+// a lower rank: a calibration moves every joint tens of degrees, and under 1 deg the
+// parameters its motion separates are at the noise of a few micrometres.
+constexpr double kMinJointSpan = 3.14159265358979323846 / 180.0;  // [rad]
 
 }  // namespace
 
@@ -91,11 +97,36 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
   }
 
   const IdentificationResult& id = r.identified;
+  // What lowers the rank, named: joints the file hardly moves, and poses measured again.
+  std::vector<std::string> rank_causes;
+  for (int k = 0; k < chain.num_joints(); ++k) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (const TrackerPoint& p : file.points) {
+      lo = std::min(lo, p.context.q(k));
+      hi = std::max(hi, p.context.q(k));
+    }
+    if (hi - lo < kMinJointSpan) {
+      std::ostringstream os;
+      os.precision(3);
+      os << "joint " << k + 1 << " (column " << file.joint_columns[k] << ") spans only "
+         << RadToDeg(hi - lo) << " deg over the file's poses: the parameters that only its "
+         << "motion tells apart are not identifiable (" << id.observability.unidentifiable.size()
+         << " unidentifiable combinations, rank " << id.observability.rank << ")";
+      rank_causes.push_back(os.str());
+    }
+  }
+  if (file.distinct_poses < static_cast<int>(file.points.size())) {
+    rank_causes.push_back(std::to_string(file.points.size()) + " rows measure " +
+                          std::to_string(file.distinct_poses) +
+                          " different poses: a repeat adds no direction to the identification");
+  }
   json j;
   j["file"] = o.measurements;
   j["model"] = o.model;
   j["robot"] = chain.name;
   j["points"] = file.points.size();
+  j["distinct_poses"] = file.distinct_poses;
+  j["rank_causes"] = rank_causes;
   j["columns"] = {{"joints", file.joint_columns},
                   {"sigma", file.has_sigma},
                   {"time", file.has_time},
@@ -177,6 +208,7 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
               1e3 * r.all_after.rms, 1e3 * r.all_after.max);
   if (o.diagnosis) std::printf("%s", DiagnosisSummary(diagnosis).c_str());
   for (const std::string& w : r.warnings) std::fprintf(stderr, "WARNING: %s\n", w.c_str());
+  for (const std::string& c : rank_causes) std::fprintf(stderr, "note: %s\n", c.c_str());
   std::printf("wrote %s/report.json, report.html and identified_%s.yaml\n", out.string().c_str(),
               chain.name.c_str());
   return 0;

@@ -196,7 +196,7 @@ int RunTrackerScenario(const RunOptions& o) {
   const TrackerRunConfig config = ParseTrackerRunConfig(sc);
   const Acceptance acceptance = ParseAcceptance(sc);
   ValidateOutputFolder(o.out_dir, "--out");
-  if (!o.junit.empty()) ValidateOutputFile(o.junit, "--junit");
+  if (!o.junit.empty()) ValidateJunitFile(o.junit, o.out_dir);
   InstallMujocoErrorHandlers();
   TwinCell cell(sc.twin, sc.path);
   const int robot = config.robot;

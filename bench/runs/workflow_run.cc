@@ -83,7 +83,7 @@ int RunWorkflowScenario(const RunOptions& o) {
   ApplyRunOptions(o, &config);  // --no-diagnosis, --plan-cache, images
   const Acceptance acceptance = ParseAcceptance(sc);
   ValidateOutputFolder(o.out_dir, "--out");
-  if (!o.junit.empty()) ValidateOutputFile(o.junit, "--junit");
+  if (!o.junit.empty()) ValidateJunitFile(o.junit, o.out_dir);
   InstallMujocoErrorHandlers();
   TwinCell cell(sc.twin, sc.path);  // a cell that does not settle at its start is bad input
 

@@ -127,4 +127,22 @@ std::vector<double> TrackerSet::ResidualNorms(const RobotModel& model) const {
   return out;
 }
 
+std::vector<int> PoseGroups(const std::vector<TrackerPoint>& points) {
+  std::vector<int> group(points.size(), -1);
+  int groups = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (group[i] >= 0) continue;
+    group[i] = groups;
+    for (std::size_t k = i + 1; k < points.size(); ++k) {
+      if (group[k] < 0 && points[k].context.q.size() == points[i].context.q.size() &&
+          (points[k].context.q - points[i].context.q).cwiseAbs().maxCoeff() <=
+              kSamePoseTolerance) {
+        group[k] = groups;
+      }
+    }
+    ++groups;
+  }
+  return group;
+}
+
 }  // namespace twin

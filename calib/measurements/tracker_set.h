@@ -68,4 +68,13 @@ class TrackerSet : public MeasurementSet {
 /// false when the points are fewer than 3 or collinear.
 bool FitRigid(const std::vector<Vector3>& a, const std::vector<Vector3>& b, Transform* X);
 
+/// Rows whose joint readings all agree to this are one pose measured again: far below any
+/// commanded move, at the level of a few encoder counts behind the gear [rad].
+constexpr double kSamePoseTolerance = 1e-6;
+
+/// Per point, the index of its pose (numbered in order of first appearance): points whose joint
+/// readings agree to kSamePoseTolerance on every joint are repeats of one pose. Repeats are no
+/// independent points: held-out splits keep them together, point counts count poses.
+std::vector<int> PoseGroups(const std::vector<TrackerPoint>& points);
+
 }  // namespace twin

@@ -120,7 +120,9 @@ TrackerCalibrationResult CalibrateFromTracker(const RobotModel& nominal,
   }
   ValidateIdentificationOptions(options.engine);
   const std::string& source = options.set.source;
-  RequireEnoughPoints(nominal, static_cast<int>(points.size()), "all points", source);
+  const std::vector<int> pose_of = PoseGroups(points);
+  const int poses = points.empty() ? 0 : *std::max_element(pose_of.begin(), pose_of.end()) + 1;
+  RequireEnoughPoints(nominal, poses, "all points", source);
   TrackerCalibrationResult out;
   const IdentificationOptions baseline = BaselineOptions(nominal, options.engine);
   // The start of the calibrated ("after") fits; the "before" ones hold the terms as given.
@@ -184,15 +186,25 @@ TrackerCalibrationResult CalibrateFromTracker(const RobotModel& nominal,
 
   // (a) Random: a seeded shuffle.
   {
-    std::vector<int> index(n);
-    std::iota(index.begin(), index.end(), 0);
+    // Whole poses are held out: a repeat of a training pose is no held-out point. Without
+    // repeats this is a shuffle of the points.
+    std::vector<int> pose_order(poses);
+    std::iota(pose_order.begin(), pose_order.end(), 0);
     std::mt19937_64 rng(options.seed);
-    std::shuffle(index.begin(), index.end(), rng);
-    const std::vector<int> test(index.begin(), index.begin() + held);
-    const std::vector<int> train(index.begin() + held, index.end());
+    std::shuffle(pose_order.begin(), pose_order.end(), rng);
+    std::vector<std::vector<int>> members(poses);
+    for (int i = 0; i < n; ++i) members[pose_of[i]].push_back(i);
+    std::vector<int> test, train;
+    for (const int g : pose_order) {
+      std::vector<int>& part = static_cast<int>(test.size()) < held ? test : train;
+      part.insert(part.end(), members[g].begin(), members[g].end());
+    }
     run_split("random",
-              std::to_string(held) + " of " + std::to_string(n) + " points held out at random "
-              "(seed " + std::to_string(options.seed) + ")",
+              std::to_string(test.size()) + " of " + std::to_string(n) + " points held out at " +
+              "random" + (poses < n ? " as whole poses (" + std::to_string(n - poses) +
+                                          " rows repeat a pose)"
+                                    : std::string()) +
+              " (seed " + std::to_string(options.seed) + ")",
               Pick(points, train), Pick(points, test), false);
   }
   // (b) Region: a separate file, or the far end along the principal axis of the cloud.

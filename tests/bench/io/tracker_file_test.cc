@@ -1,12 +1,17 @@
 #include "bench/io/tracker_file.h"
 
 #include <filesystem>
+#include <cmath>
 #include <fstream>
+#include <functional>
+#include <sstream>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "bench/io/model_loader.h"
 #include "calib/common/errors.h"
+#include "calib/kinematics/forward_kinematics.h"
 
 namespace twin {
 namespace {
@@ -103,6 +108,83 @@ TEST(TrackerFile, BadFilesAreRefusedNamingFileLineAndColumn) {
   EXPECT_NE(e.find("no data rows"), std::string::npos) << e;
   e = Refusal(kHeader + kRow, {"q_X_rad"});
   EXPECT_NE(e.find("--ignore-column"), std::string::npos) << e;
+}
+
+// A file of `n` poses spread over the joint ranges, the reflector at the nominal model's end
+// frame (the tracker at the base), written with positions in metres under `xyz_unit`'s labels
+// and a torso column (q_E_rad) whose value at row k is torso(k).
+std::string PlausibleFile(int n, const std::string& xyz_unit, double scale_to_file,
+                          const std::function<double(int)>& torso,
+                          const std::function<double(int)>& sigma) {
+  const KinematicModel model = LoadRobotModel(kModel);
+  std::ostringstream os;
+  os.precision(12);
+  os << "pose,q_E_rad,q_S_rad,q_L_rad,q_U_rad,q_R_rad,q_B_rad,q_T_rad,x_" << xyz_unit << ",y_"
+     << xyz_unit << ",z_" << xyz_unit << ",sigma_m\n";
+  for (int k = 0; k < n; ++k) {
+    JointVector q(6);
+    for (int j = 0; j < 6; ++j) q(j) = 0.6 * std::sin(1.3 * k + 0.7 * j);
+    const Vector3 p = EndPose(model, q).translation() * scale_to_file;
+    os << k + 1 << "," << torso(k);
+    for (int j = 0; j < 6; ++j) os << "," << q(j);
+    os << "," << p.x() << "," << p.y() << "," << p.z() << "," << sigma(k) << "\n";
+  }
+  return os.str();
+}
+
+TEST(TrackerFile, FilesThatContradictThemselvesAreRefusedWithTheReason) {
+  const auto still = [](int) { return 3.1e-5; };
+  const auto even = [](int) { return 1e-5; };
+  // The plausible file reads (the checks do not fire on a consistent file).
+  EXPECT_EQ(Refusal(PlausibleFile(30, "m", 1.0, still, even)), "");
+  // Metres under _mm labels: the positions spread 1000 times less than the motion.
+  std::string e = Refusal(PlausibleFile(30, "mm", 1.0, still, even));
+  EXPECT_NE(e.find(":1 column 9 (x_mm)"), std::string::npos) << e;
+  EXPECT_NE(e.find("the values look like metres"), std::string::npos) << e;
+  // Millimetres under _m labels (within 100 m of the tracker, so only the spread tells).
+  e = Refusal(PlausibleFile(30, "m", 30.0, still, even));
+  EXPECT_NE(e.find("look like millimetres"), std::string::npos) << e;
+  // One row's sigma of 1e-300 m would outweigh every other row: refused, naming the row.
+  e = Refusal(PlausibleFile(30, "m", 1.0, still, [](int k) { return k == 7 ? 1e-300 : 1e-5; }));
+  EXPECT_NE(e.find(":9 column 12 (sigma_m)"), std::string::npos) << e;
+  EXPECT_NE(e.find("more than 100 times below the file's median"), std::string::npos) << e;
+  // A 62-fold spread of sigmas, as in the real Leica session, is accepted.
+  EXPECT_EQ(Refusal(PlausibleFile(30, "m", 1.0, still,
+                                  [](int k) { return k == 3 ? 6.2e-5 : k == 4 ? 1e-6 : 7e-6; })),
+            "");
+  // An ignored torso column that moves by 1 rad is no constant axis.
+  e = Refusal(PlausibleFile(30, "m", 1.0, [](int k) { return k == 5 ? 1.0 : 0.0; }, even));
+  EXPECT_NE(e.find("--ignore-column q_E_rad"), std::string::npos) << e;
+  EXPECT_NE(e.find("must be constant"), std::string::npos) << e;
+  // The real session's torso jitter (2.7e-4 rad) is constant.
+  EXPECT_EQ(Refusal(PlausibleFile(30, "m", 1.0, [](int k) { return k % 2 ? 1.66e-4 : -1.04e-4; },
+                                  even)),
+            "");
+}
+
+TEST(TrackerFile, RepeatedPosesAreCountedAsRepeats) {
+  // 8 poses measured 4 times each (the rows copied), then 2 new ones.
+  const std::string one = PlausibleFile(10, "m", 1.0, [](int) { return 0.0; },
+                                        [](int) { return 1e-5; });
+  std::istringstream in(one);
+  std::string header, line;
+  std::getline(in, header);
+  std::vector<std::string> rows;
+  while (std::getline(in, line)) rows.push_back(line);
+  std::string text = header + "\n";
+  for (int copy = 0; copy < 4; ++copy) {
+    for (int k = 0; k < 8; ++k) text += rows[k] + "\n";
+  }
+  text += rows[8] + "\n" + rows[9] + "\n";
+  const std::string path = Write("repeats", text);
+  const TrackerFile f = ReadTrackerFile(path, LoadRobotModel(kModel), {"q_E_rad"});
+  ASSERT_EQ(f.points.size(), 34u);
+  EXPECT_EQ(f.distinct_poses, 10);
+  ASSERT_EQ(f.pose_group.size(), 34u);
+  EXPECT_EQ(f.pose_group[0], f.pose_group[8]);
+  EXPECT_EQ(f.pose_group[7], f.pose_group[31]);
+  EXPECT_NE(f.pose_group[0], f.pose_group[1]);
+  EXPECT_EQ(f.pose_group[33], 9);
 }
 
 }  // namespace

@@ -80,11 +80,37 @@ TEST(StudyCli, BadInputExitsTwoAndRunsNothing) {
 TEST(StudyCli, RefusesAFolderOfAnotherScenario) {
   const std::string out = Folder("other");
   fs::create_directories(out);
+  std::ofstream(out + "/.twinbench-output") << R"({"written_by": "twinbench", "verb": "study"})";
   std::ofstream(out + "/study.json") << R"({"scenario_hash": "0000000000000000", "shard": "0/1"})";
   const CliRun r = Twinbench("study " + kSmall + " --trials 1 --out " + out);
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("another scenario"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(out + "/trials.jsonl"));
+}
+
+// The output-safety rule (issue 38): a study writes only into a new, empty or marked study
+// folder, and removes its work/ only when the study marked it; counts are bounded.
+TEST(StudyCli, NeverTouchesAFolderOrAWorkFolderItDidNotMake) {
+  const std::string out = Folder("users");
+  fs::create_directories(out + "/work");
+  std::ofstream(out + "/work/precious.txt") << "the user's";
+  CliRun r = Twinbench("study " + kSmall + " --trials 1 --out " + out);
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("error: --out: '" + out + "' is a folder twinbench did not write"),
+            std::string::npos) << r.output;
+  // Even inside a folder marked as a study's, a work/ without the study's mark is kept.
+  std::ofstream(out + "/.twinbench-output") << R"({"written_by": "twinbench", "verb": "study"})";
+  r = Twinbench("study " + kSmall + " --trials 1 --out " + out);
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("work folder holds something twinbench did not make"),
+            std::string::npos) << r.output;
+  EXPECT_EQ(testing::ReadFile(out + "/work/precious.txt"), "the user's");
+  EXPECT_FALSE(fs::exists(out + "/trials.jsonl"));
+  for (const char* counts : {"--trials 1e9", "--trials 100001", "--trials 4 --shard 0/10001"}) {
+    r = Twinbench("study " + kSmall + " " + counts + " --out " + Folder("counts"));
+    EXPECT_EQ(r.code, 2) << counts << "\n" << r.output;
+    EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
+  }
 }
 
 TEST(StudyCli, MergeRefusesDifferentScenariosAndDropsDuplicates) {
@@ -232,6 +258,33 @@ TEST(StudyCli, KilledWithSigkillLosesOnlyTheTrialsInFlight) {
   for (int t = 0; t < trials; ++t) EXPECT_EQ(m.count(t), 1u) << "trial " << t << " lost";
   // What was recorded before the kill is untouched, at the start of the file.
   EXPECT_EQ(testing::ReadFile(out + "/trials.jsonl").compare(0, kept.size(), kept), 0);
+}
+
+// SIGTERM, SIGINT and SIGHUP stop the trial processes; the study removes its work folder and
+// ends by the signal, as `run` does.
+TEST(StudyCli, InterruptedStudiesStopTheirTrialsAndLeaveNoWorkFolder) {
+  for (const int sig : {SIGTERM, SIGHUP}) {
+    const std::string out = Folder("interrupted" + std::to_string(sig));
+    const testing::ProcessRun r = testing::RunProcess(
+        {TWINBENCH_BIN, "study", kSmall, "--trials", "6", "--jobs", "2", "--quiet", "--out", out},
+        240, "", [&](pid_t pid) {
+          const auto t0 = std::chrono::steady_clock::now();
+          while (ProcessesNaming(out + "/work").empty() &&
+                 std::chrono::steady_clock::now() - t0 < std::chrono::seconds(120)) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(50));
+          }
+          kill(pid, sig);
+        });
+    EXPECT_FALSE(r.timed_out) << r.output;
+    EXPECT_EQ(r.signal, sig) << "exited " << r.exited << " code " << r.code << ": " << r.output;
+    EXPECT_NE(r.output.find("study: interrupted;"), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(out + "/work")) << "signal " << sig;
+    EXPECT_TRUE(fs::exists(out + "/.twinbench-output"));  // a rerun resumes it
+    for (int i = 0; i < 50 && !ProcessesNaming(out + "/work").empty(); ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    EXPECT_TRUE(ProcessesNaming(out).empty()) << "trial processes outlived the study";
+  }
 }
 
 }  // namespace

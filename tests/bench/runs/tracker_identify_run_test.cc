@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <string>
 #include <random>
 
@@ -23,7 +24,9 @@ namespace fs = std::filesystem;
 
 const std::string kModel = std::string(TWIN_SOURCE_DIR) + "/models/reinovo_r2.yaml";
 
-fs::path WriteTrackerFile(const std::string& name, bool compliant, int points = 150) {
+// `held_joint` (0-based, -1 none) is held at mid-range in every row.
+fs::path WriteTrackerFile(const std::string& name, bool compliant, int points = 150,
+                          int held_joint = -1) {
   const KinematicModel nominal = LoadRobotModel(kModel);
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -52,6 +55,7 @@ fs::path WriteTrackerFile(const std::string& name, bool compliant, int points = 
     for (int i = 0; i < chain.num_joints(); ++i) {
       const JointLimits& l = chain.links[i].limits;
       c.q(i) = 0.5 * (l.lower + l.upper) + 0.4 * (l.upper - l.lower) * u(rng);
+      if (i == held_joint) c.q(i) = 0.5 * (l.lower + l.upper);
     }
     const Vector3 p = EndPose(truth, c).translation();
     out << k + 1;
@@ -143,6 +147,36 @@ TEST(TrackerIdentifyRun, NoDiagnosisSkipsItAndBadDeclarationsAreRefusedBeforeAny
   f.diagnosis_folds = 1;
   EXPECT_THROW(RunTrackerIdentify(f), InputError);
   EXPECT_FALSE(fs::exists(f.out_dir));
+}
+
+// A rank drop is explained by naming its cause (issue 38): a joint the file does not move, and
+// rows that measure one pose again.
+TEST(TrackerIdentifyRun, ARankDropNamesTheJointThatDidNotMoveAndTheRepeats) {
+  const fs::path held = WriteTrackerFile("held_joint6.csv", false, 80, 5);
+  std::ifstream in(held);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::istringstream lines(text);
+  std::string header, line, copies;
+  std::getline(lines, header);
+  for (int k = 0; k < 10 && std::getline(lines, line); ++k) copies += line + "\n";
+  std::ofstream(held, std::ios::app) << copies;  // rows 2-11 measured again
+  TrackerIdentifyOptions o = Options(held, "held_joint6_out");
+  o.diagnosis = false;
+  ASSERT_EQ(RunTrackerIdentify(o), 0);
+  const nlohmann::json r = Report(o.out_dir);
+  EXPECT_EQ(r["points"], 90);
+  EXPECT_EQ(r["distinct_poses"], 80);
+  ASSERT_EQ(r["rank_causes"].size(), 2u) << r["rank_causes"].dump();
+  EXPECT_NE(r["rank_causes"][0].get<std::string>().find("joint 6 (column q6_rad) spans only 0 "
+                                                        "deg"),
+            std::string::npos) << r["rank_causes"][0];
+  EXPECT_NE(r["rank_causes"][1].get<std::string>().find("90 rows measure 80 different poses"),
+            std::string::npos) << r["rank_causes"][1];
+  // The file where every joint moves and no pose repeats names no cause.
+  TrackerIdentifyOptions plain = Options(WriteTrackerFile("moving.csv", false, 80), "moving_out");
+  plain.diagnosis = false;
+  ASSERT_EQ(RunTrackerIdentify(plain), 0);
+  EXPECT_TRUE(Report(plain.out_dir)["rank_causes"].empty());
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "calib/common/errors.h"
+#include "calib/measurements/tracker_set.h"
 #include "calib/model/robot_model.h"
 #include "test_models.h"
 #include "tracker_synthetic.h"
@@ -112,6 +113,41 @@ TEST(TrackerCalibration, TooFewPointsAndBadOptionsAreRefused) {
   o.holdout_fraction = 0.9;
   EXPECT_THROW(CalibrateFromTracker(c.nominal, SyntheticTrackerPoints(c.truth, 60, 11), {}, o),
                InputError);
+}
+
+// Repeats are no independent points (issue 38): 8 poses measured 26 times each pass no
+// too-few-points check, and the random split holds out whole poses, never a copy of a
+// training pose.
+TEST(TrackerCalibration, RepeatedPosesCountAsPosesAndAreHeldOutWhole) {
+  const Cell c = MakeCell(8);
+  const std::vector<TrackerPoint> eight = SyntheticTrackerPoints(c.truth, 8, 12);
+  std::vector<TrackerPoint> repeated;
+  for (int copy = 0; copy < 26; ++copy) repeated.insert(repeated.end(), eight.begin(), eight.end());
+  ASSERT_EQ(repeated.size(), 208u);  // 624 coordinates: enough, were they independent
+  try {
+    CalibrateFromTracker(c.nominal, repeated, {});
+    FAIL() << "8 poses cannot identify 35 parameters and a tracker pose, however often measured";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("8 points give 24 coordinates"), std::string::npos)
+        << e.what();
+  }
+  // 40 poses, each measured 3 times: the held-out part is whole poses.
+  const std::vector<TrackerPoint> forty = SyntheticTrackerPoints(c.truth, 40, 13);
+  std::vector<TrackerPoint> thrice;
+  for (const TrackerPoint& p : forty) {
+    for (int k = 0; k < 3; ++k) thrice.push_back(p);
+  }
+  const std::vector<int> group = PoseGroups(thrice);
+  EXPECT_EQ(group[0], group[2]);
+  EXPECT_NE(group[2], group[3]);
+  EXPECT_EQ(group.back(), 39);
+  const TrackerCalibrationResult r = CalibrateFromTracker(c.nominal, thrice, {});
+  const HeldOutSplit& random = r.splits.at(0);
+  ASSERT_EQ(random.name, "random");
+  EXPECT_EQ((random.after.poses) % 3, 0) << "a pose split between training and held-out parts";
+  EXPECT_EQ(random.after.poses, 24);  // 20 % of 120 rows: 8 whole poses
+  EXPECT_NE(random.rule.find("as whole poses (80 rows repeat a pose)"), std::string::npos)
+      << random.rule;
 }
 
 }  // namespace
