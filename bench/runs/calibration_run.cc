@@ -19,6 +19,7 @@
 
 #include "bench/io/calibration_config.h"
 #include "bench/io/csv.h"
+#include "bench/io/measurements_csv.h"
 #include "bench/io/declared_terms.h"
 #include "bench/scoring/calibration_scoring.h"
 #include "bench/runs/handclasp_run.h"
@@ -84,35 +85,7 @@ json IntrinsicsJson(const PinholeIntrinsics& k, const DistortionCoefficients& d)
               {"k2", d.k2}, {"p1", d.p1}, {"p2", d.p2}, {"k3", d.k3}};
 }
 
-std::string Deg(double rad) {
-  std::ostringstream os;
-  os.precision(10);
-  os << RadToDeg(rad);
-  return os.str();
-}
-
-std::string Csv(double v, int precision = 10) {
-  std::ostringstream os;
-  os.precision(precision);
-  os << v;
-  return os.str();
-}
-
-// A figure, or an empty field where it is NaN (no clock, no temperature sensor).
-std::string CsvOrEmpty(double v, int precision) {
-  return std::isfinite(v) ? Csv(v, precision) : std::string();
-}
-
-// Header of measurements.csv for robots of up to `joints` joints (q1_deg..qN_deg; a robot with
-// fewer joints leaves the last ones empty).
-std::string CsvHeader(int joints) {
-  std::string h = "robot,camera_robot,axis,index,set";
-  for (int i = 1; i <= joints; ++i) h += ",q" + std::to_string(i) + "_deg";
-  return h + ",du_px,dv_px,depth_mm,offset_x_mm,offset_y_mm,offset_z_mm,frames,moves,du0_px,dv0_px,"
-             "pose_rms_px,time_s,temperature_delta_K";
-}
-
-// One CSV row per aligned pose (what a hardware cell records).
+// One measurements.csv row per aligned pose (what a hardware cell records).
 void AppendRows(const RobotCalibration& rc, const std::string& robot, const std::string& camera,
                 int joints, std::ostringstream* csv) {
   for (const AlignedPose& p : rc.aligned) {
@@ -120,18 +93,25 @@ void AppendRows(const RobotCalibration& rc, const std::string& robot, const std:
                      rc.calibration_axes.end();
     const bool val = std::find(rc.validation_axes.begin(), rc.validation_axes.end(), p.axis) !=
                      rc.validation_axes.end();
-    *csv << robot << ',' << camera << ',' << p.axis << ',' << p.index << ','
-         << (cal ? "calibration" : val ? "validation" : "unused");
-    for (int i = 0; i < joints; ++i) {
-      *csv << ',';
-      if (i < p.q_passive.size()) *csv << Deg(p.q_passive(i));
-    }
-    *csv << ',' << Csv(p.pixel_error.x, 6) << ',' << Csv(p.pixel_error.y, 6) << ','
-         << Csv(1000 * p.p_C.z()) << ',' << Csv(1000 * p.offset.x()) << ','
-         << Csv(1000 * p.offset.y()) << ',' << Csv(1000 * p.offset.z()) << ',' << p.frames << ','
-         << p.moves << ',' << Csv(p.first_pixel_error.x, 6) << ',' << Csv(p.first_pixel_error.y, 6)
-         << ',' << Csv(p.pose_rms_px, 4) << ',' << CsvOrEmpty(p.time_s, 10) << ','
-         << CsvOrEmpty(p.temperature_delta_K, 6) << '\n';
+    MeasurementRow r;
+    r.robot = robot;
+    r.camera_robot = camera;
+    r.axis = p.axis;
+    r.index = p.index;
+    r.set = cal ? "calibration" : val ? "validation" : "unused";
+    r.q = p.q_passive;
+    r.du_px = p.pixel_error.x;
+    r.dv_px = p.pixel_error.y;
+    r.depth_m = p.p_C.z();
+    r.offset = p.offset;
+    r.frames = p.frames;
+    r.moves = p.moves;
+    r.du0_px = p.first_pixel_error.x;
+    r.dv0_px = p.first_pixel_error.y;
+    r.pose_rms_px = p.pose_rms_px;
+    r.time_s = p.time_s;
+    r.temperature_delta_K = p.temperature_delta_K;
+    *csv << MeasurementsCsvRow(r, joints) << '\n';
   }
 }
 
@@ -336,7 +316,7 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
     csv_joints = std::max(csv_joints, rc.nominal.num_joints());
   }
   std::ostringstream csv;
-  csv << CsvHeader(csv_joints) << '\n';
+  csv << MeasurementsCsvHeader(csv_joints) << '\n';
   double planning = 0, planning_compute = 0, servoing = 0, identification = 0;
   json robots = json::object();
   for (const RobotCalibration& rc : result.robots) {
@@ -950,125 +930,20 @@ int RunIdentify(const IdentifyOptions& o) {
     X_FT.translation() = Vector3(v[0], v[1], v[2]) / 1000.0;
     X_FT.linear() = RpyToRotation(Vector3(DegToRad(v[3]), DegToRad(v[4]), DegToRad(v[5])));
   }
-  RequireRegularFile(o.measurements, kMaxMeasurementBytes);
-  NoteInput(o.measurements);
-  std::ifstream in(o.measurements);
-  if (!in) throw InputError(o.measurements, "cannot read the measurements file");
-  std::string line;
-  if (!std::getline(in, line)) throw InputError(o.measurements, "empty file");
-  if (!line.empty() && line.back() == '\r') line.pop_back();  // CRLF files
-  if (line.size() > kMaxMeasurementLine) {
-    throw InputError(o.measurements + ":1", "header line longer than " +
-                                                std::to_string(kMaxMeasurementLine) +
-                                                " characters");
-  }
-  const std::vector<std::string> header = SplitCsv(line);
-  std::map<std::string, size_t> col;
-  for (size_t i = 0; i < header.size(); ++i) {
-    if (!col.emplace(header[i], i).second) {
-      throw InputError(o.measurements + ":1", "column '" + header[i] + "' appears twice");
-    }
-  }
-  std::vector<std::string> needed = {"robot", "axis", "index", "set"};
-  for (int i = 1; i <= model.num_joints(); ++i) needed.push_back("q" + std::to_string(i) + "_deg");
-  for (const std::string& need : needed) {
-    if (!col.count(need)) {
-      throw InputError(o.measurements + ":1", "missing column '" + std::string(need) + "' (expected the "
-                                              "header of `twinbench run`'s measurements.csv)");
-    }
-  }
-  const bool has_depth = col.count("depth_mm") != 0;
-  const bool has_offset =
-      col.count("offset_x_mm") && col.count("offset_y_mm") && col.count("offset_z_mm");
+  const MeasurementsFile file = ReadMeasurementsCsv(o.measurements, model.num_joints(), o.robot);
+  const std::string& robot = file.robot;
   RobotCalibration rc;
   rc.nominal = BoardRobotModel(model, X_FT);
-  std::string robot = o.robot;
   std::set<int> cal_axes, val_axes;
-  int line_number = 1;
-  int rows = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (line.size() > kMaxMeasurementLine) {
-      throw InputError(o.measurements + ":" + std::to_string(line_number),
-                       "line longer than " + std::to_string(kMaxMeasurementLine) + " characters");
-    }
-    if (!line.empty() && line.back() == '\r') line.pop_back();  // CRLF files
-    if (line.empty()) continue;
-    const std::string where = o.measurements + ":" + std::to_string(line_number);
-    if (++rows > kMaxMeasurementRows) {
-      throw InputError(where, "more than " + std::to_string(kMaxMeasurementRows) +
-                                  " measurement rows (a session records 50 to a few hundred "
-                                  "aligned poses; the identification's memory grows with them)");
-    }
-    const std::vector<std::string> f = SplitCsv(line);
-    if (f.size() != header.size()) {
-      throw InputError(where, "expected " + std::to_string(header.size()) + " fields, got " +
-                                  std::to_string(f.size()));
-    }
-    if (robot.empty()) {
-      robot = f[col["robot"]];
-      RequireSafeName(robot, where + " robot", "robot name");
-    }
-    if (f[col["robot"]] != robot) continue;
+  for (const MeasurementRow& row : file.rows) {
     AxisSample s;
-    s.axis = CsvInteger(f[col["axis"]], where + " axis");
-    if (s.axis >= kMaxMeasurementAxes) {
-      throw InputError(where + " axis", "expected an axis index below " +
-                                            std::to_string(kMaxMeasurementAxes) +
-                                            " (each axis adds unknowns to the identification), "
-                                            "got " + f[col["axis"]]);
-    }
-    CsvInteger(f[col["index"]], where + " index");
-    s.q = ZeroJoints(model);
-    for (int i = 0; i < model.num_joints(); ++i) {
-      const std::string key = "q" + std::to_string(i + 1) + "_deg";
-      const double deg = CsvNumber(f[col[key]], where + " " + key);
-      if (std::abs(deg) > 720.0) {
-        throw InputError(where + " " + key, "expected a joint angle within +-720 deg (two turns), "
-                                            "got '" + f[col[key]] + "'");
-      }
-      s.q(i) = DegToRad(deg);
-    }
-    if (has_depth && !f[col["depth_mm"]].empty()) {
-      const double depth_mm = CsvNumber(f[col["depth_mm"]], where + " depth_mm");  // empty: none
-      if (!(depth_mm > 0.0 && depth_mm <= 10000.0)) {
-        throw InputError(where + " depth_mm", "expected a camera depth in (0, 10000] mm, got '" +
-                                                  f[col["depth_mm"]] + "'");
-      }
-      s.depth = depth_mm / 1000.0;
-    }
-    if (has_offset) {
-      s.offset = Vector3(CsvNumber(f[col["offset_x_mm"]], where + " offset_x_mm"),
-                         CsvNumber(f[col["offset_y_mm"]], where + " offset_y_mm"),
-                         CsvNumber(f[col["offset_z_mm"]], where + " offset_z_mm")) /
-                 1000.0;
-      if (s.offset.norm() > 1.0) {
-        throw InputError(where + " offset_x_mm", "the residual offset from the axis must be "
-                                                 "below 1000 mm (the servo aligns to a pixel), "
-                                                 "got " + std::to_string(1e3 * s.offset.norm()) +
-                                                 " mm");
-      }
-    }
-    const std::string set = f[col["set"]];
-    if (set == "calibration") {
-      cal_axes.insert(s.axis);
-    } else if (set == "validation") {
-      val_axes.insert(s.axis);
-    } else if (set != "unused") {
-      throw InputError(where + " set", "expected calibration, validation or unused, got '" +
-                                           set + "'");
-    }
+    s.axis = row.axis;
+    s.q = row.q;
+    s.depth = row.depth_m;
+    s.offset = row.offset;
+    if (row.set == "calibration") cal_axes.insert(row.axis);
+    if (row.set == "validation") val_axes.insert(row.axis);
     rc.samples.push_back(s);
-  }
-  if (rc.samples.empty()) {
-    throw InputError(o.measurements, "no rows for robot '" + robot + "'");
-  }
-  for (int k : cal_axes) {
-    if (val_axes.count(k)) {
-      throw InputError(o.measurements, "axis " + std::to_string(k) +
-                                           " has rows in both the calibration and the "
-                                           "validation set; split by whole axes");
-    }
   }
   rc.nominal.name = robot;
   model.name = robot;

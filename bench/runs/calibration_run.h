@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench/io/measurements_csv.h"  // the limits of a measurements file
 #include "bench/io/calibration_config.h"
 #include "bench/io/model_loader.h"
 #include "bench/io/scenario.h"
@@ -72,15 +73,6 @@ struct IdentifyOptions {
   std::string out_dir;        ///< output folder (identification.json, identified model)
 };
 
-/// Limits of a measurements file (plausibility, issue 14): a hardware session records 50 to a
-/// few hundred aligned poses, a Monte Carlo or accumulated data set tens of thousands; 100,000
-/// rows, 1,000 axes and 64 MiB keep the identification's memory and time bounded (linear in
-/// the rows, measured: README "Speed"; its dense Jacobian has a column per unknown, so it grows
-/// with rows times axes), 4096 characters a line.
-constexpr int kMaxMeasurementRows = 100000;
-constexpr int kMaxMeasurementAxes = 1000;
-constexpr std::uintmax_t kMaxMeasurementBytes = std::uintmax_t{64} << 20;
-constexpr std::size_t kMaxMeasurementLine = 4096;
 
 /// Validates a scenario as `twinbench run` would before running (the scenario, its procedure
 /// sections, acceptance, and the twin cell built at its initial pose), runs nothing and

@@ -5,6 +5,7 @@
 #include <random>
 #include <sstream>
 
+#include "bench/io/measurements_csv.h"
 #include "bench/io/model_loader.h"
 #include "bench/io/output_files.h"
 #include "calib/common/errors.h"
@@ -32,10 +33,7 @@ int RunSynthesizeMeasurements(const SynthesizeOptions& o) {
   const Vector3 offsets[kAxes] = {{0, 0, 0}, {0.12, 0.10, 0}, {-0.12, 0.10, 0.05},
                                   {0.10, -0.08, -0.10}, {-0.10, -0.05, 0.10}};
   std::ostringstream csv;
-  csv << "robot,camera_robot,axis,index,set";
-  for (int i = 1; i <= nominal.num_joints(); ++i) csv << ",q" << i << "_deg";
-  csv << ",du_px,dv_px,depth_mm,offset_x_mm,offset_y_mm,offset_z_mm,frames,moves\n";
-  csv.precision(12);
+  csv << MeasurementsCsvHeader(nominal.num_joints()) << '\n';
   IkOptions ik;
   ik.random_restarts = 20;
   JointVector seed_q = MidRange(truth);
@@ -59,11 +57,19 @@ int RunSynthesizeMeasurements(const SynthesizeOptions& o) {
                                       " (the synthetic cell suits arms of about 1 m reach)");
       }
       seed_q = r.q;
-      csv << "r2,r1," << k << ',' << i << ',' << (k < 3 ? "calibration" : "validation");
-      for (int j = 0; j < r.q.size(); ++j) {
-        csv << ',' << RadToDeg(r.q(j)) + 0.001 * noise(rng);
-      }
-      csv << ",0,0," << 1000.0 * depth << ",0,0,0,1,0\n";
+      MeasurementRow row;
+      row.robot = "r2";
+      row.camera_robot = "r1";
+      row.axis = k;
+      row.index = i;
+      row.set = k < 3 ? "calibration" : "validation";
+      row.q = r.q;
+      for (int j = 0; j < r.q.size(); ++j) row.q(j) += DegToRad(0.001) * noise(rng);
+      row.du_px = row.dv_px = 0.0;
+      row.depth_m = depth;
+      row.frames = 1;
+      row.moves = 0;
+      csv << MeasurementsCsvRow(row, nominal.num_joints()) << '\n';
     }
   }
   WriteFileAtomically(o.out, csv.str());

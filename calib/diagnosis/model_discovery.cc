@@ -276,20 +276,16 @@ NoiseFloor TrackerNoise(const TrackerData& data, const DiscoveryOptions& o) {
                   : (stated == 0 ? "the set's default sigma (no point states one)"
                                  : "the stated sigmas, the set's default where a point has none");
   if (o.joint_sigma_rad > 0.0) nf.source += ", with the stated joint reading noise through the model";
-  // Repeated poses: the same joint readings to 1e-6 rad.
-  std::vector<bool> used(points.size(), false);
+  // Repeats of one pose (PoseGroups): their spread is the tracker's repeatability.
+  const std::vector<int> pose_of = PoseGroups(points);
+  std::vector<std::vector<int>> groups;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (pose_of[i] >= static_cast<int>(groups.size())) groups.resize(pose_of[i] + 1);
+    groups[pose_of[i]].push_back(static_cast<int>(i));
+  }
   double ss = 0;
   int dof = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (used[i]) continue;
-    std::vector<int> group{static_cast<int>(i)};
-    for (std::size_t j = i + 1; j < points.size(); ++j) {
-      if (!used[j] && points[j].context.q.size() == points[i].context.q.size() &&
-          (points[j].context.q - points[i].context.q).cwiseAbs().maxCoeff() < 1e-6) {
-        group.push_back(static_cast<int>(j));
-        used[j] = true;
-      }
-    }
+  for (const std::vector<int>& group : groups) {
     if (group.size() < 2) continue;
     ++nf.repeated_groups;
     Vector3 m = Vector3::Zero();
