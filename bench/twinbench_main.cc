@@ -210,129 +210,170 @@ int RunDemo(const std::string& model_dir, int samples, unsigned seed) {
   return 0;
 }
 
-}  // namespace
-}  // namespace twin
-
-int main(int argc, char** argv) {
-  using namespace twin;
-  // Before any thread exists: interrupts remove staging folders (bench/io/output_files.h), and
-  // MuJoCo never writes MUJOCO_LOG.TXT into the current folder (its warnings and errors become
-  // exceptions, reported on stderr).
-  InstallInterruptCleanup();
-  InstallMujocoErrorHandlers();
-  // glibc's allocator keeps what is freed for reuse instead of handing it back to the system at
-  // once (trimmed only above 256 MiB; mmap only for blocks of 64 MiB and more). The planner's
-  // threads allocate and free their Jacobians and SVD work thousands of times a second; with
-  // the defaults each round trip to the system cost page faults (benchmark-planning of
-  // paper_reinovo.yaml: 13.0 s of system time in 54.5 s before, 0.2 s after; README "Speed of
-  // trials"). What a process holds at its peak stays with it until it exits.
-  mallopt(M_MMAP_THRESHOLD, 64 << 20);
-  mallopt(M_TRIM_THRESHOLD, 256 << 20);
-  CLI::App app{"twinbench: digital-twin test bench for dual-robot kinematic calibration"};
-  app.require_subcommand(1);
-
+// The values of every verb's options, bound to the command line by the Add*Verb(s) functions.
+struct CliValues {
   std::string model, q, xyz, rpy = "0,0,0", seed, out, model_dir = "models";
   bool position_only = false;
   int samples = 200;
-  // The chain of a URDF model: one pair for every verb that takes a model file.
-  ModelLinks links;
-  const auto add_links = [&links](CLI::App* sub) {
-    sub->add_option("--base-link", links.base_link,
-                    "URDF: link the arm starts at (default: the URDF's root link)");
-    sub->add_option("--tip-link", links.tip_link,
-                    "URDF: link the arm ends at, the end frame (default: the leaf link with the "
-                    "most moving joints above it)");
-  };
+  ModelLinks links;  // the chain of a URDF model: one pair for every verb that takes a model file
   unsigned rng_seed = 1;
-
-  auto* info = app.add_subcommand("info", "print a robot model's parameters (mm, deg)");
-  info->add_option("model", model, "model file (.yaml or .urdf)")->required();
-  add_links(info);
-  auto* fk = app.add_subcommand("fk", "forward kinematics of a model at joint angles");
-  fk->add_option("model", model, "model file (.yaml or .urdf)")->required();
-  add_links(fk);
-  fk->add_option("--q", q, "joint angles in degrees, one per joint, comma-separated")->required();
-  auto* ik = app.add_subcommand("ik", "inverse kinematics of a model for an end-frame pose");
-  ik->add_option("model", model, "model file (.yaml or .urdf)")->required();
-  add_links(ik);
-  ik->add_option("--xyz", xyz, "target position in mm, comma-separated")->required();
-  ik->add_option("--rpy", rpy, "target roll,pitch,yaw in degrees (fixed axes)");
-  ik->add_option("--seed", seed, "start joint angles in degrees (default: mid-range)");
-  ik->add_flag("--position-only", position_only, "ignore the target orientation");
-  auto* export_urdf = app.add_subcommand("export-urdf", "write a model as URDF");
-  export_urdf->add_option("model", model, "model file (.yaml or .urdf)")->required();
-  add_links(export_urdf);
-  export_urdf->add_option("--out", out, "output URDF path")->required();
-  auto* demo = app.add_subcommand("demo", "kinematic demo on the two Reinovo-like models");
-  demo->add_option("--model-dir", model_dir, "folder with reinovo_r{1,2}.{yaml,urdf}");
-  demo->add_option("--samples", samples, "random poses per robot")->check(CLI::Range(1, 100000));
-  demo->add_option("--seed", rng_seed, "random seed");
-
   RenderOptions render_options;
-  auto* render = app.add_subcommand("render", "write PNGs of the hand camera and of the cell");
-  render->add_option("scenario", render_options.scenario, "scenario file")->required();
-  render->add_option("--out", render_options.out_dir, "output folder")->required();
-  render->add_option("--poses", render_options.poses, "number of poses")->check(CLI::Range(1, 20));
   TwinBenchmarkOptions bench_options;
-  auto* bench = app.add_subcommand("benchmark-twin", "time rendering and settled moves");
-  bench->add_option("scenario", bench_options.scenario, "scenario file")->required();
-  bench->add_option("--frames", bench_options.frames, "frames per figure")->check(CLI::Range(1, 100000));
-  bench->add_option("--moves", bench_options.moves, "settled moves")->check(CLI::Range(2, 100000));
-
   RunOptions run_options;
-  auto* run = app.add_subcommand(
-      "run", "run a scenario's calibration on the twin, score it against truth, write a report");
-  run->add_option("scenario", run_options.scenario, "scenario file")->required();
-  run->add_option("--out", run_options.out_dir, "output folder (replaced when complete)")
-      ->required();
-  run->add_flag("--quiet", run_options.quiet, "no progress lines");
-  run->add_flag("--no-diagnosis", "skip model discovery after the calibration");
-  run->add_option("--trial", run_options.trial,
-                  "study trial t: the scenario's truth and estimator seeds + t (default 0)")
-      ->check(CLI::Range(0, 1000000000));
-  run->add_option("--plan-cache", run_options.plan_cache,
-                  "folder of cached pose plans (plans once per planner input)");
   bool no_images = false;
-  run->add_flag("--no-images", no_images, "write neither servo images nor report.html");
-
   PlanningBenchmarkOptions planning_options;
-  auto* bench_planning = app.add_subcommand(
-      "benchmark-planning", "time the pose planning of a scenario's calibration (no twin)");
-  bench_planning->add_option("scenario", planning_options.scenario, "scenario file")->required();
-  bench_planning->add_option("--threads", planning_options.threads,
-                             "planner threads (default: one per core)");
-
   StudyOptions study_options;
   std::string shard = "0/1";
   bool study_quiet = false;
-  auto* study = app.add_subcommand(
-      "study", "Monte Carlo study: trials of a scenario in parallel processes, resumable");
-  study->add_option("scenario", study_options.scenario, "scenario file")->required();
-  study->add_option("--trials", study_options.trials, "trials of the whole study")->required();
-  study->add_option("--jobs", study_options.jobs,
-                    "trial processes at a time (default: the CPUs available)");
-  study->add_option("--shard", shard, "run trials I, I+N, I+2N, ... (I/N, default 0/1)");
-  study->add_option("--out", study_options.out_dir, "study folder (rerun to resume)")->required();
-  study->add_option("--plan-cache", study_options.plan_cache,
-                    "plan cache folder (default OUT/plans)");
-  study->add_flag("--quiet", study_quiet, "no progress bar");
   StudyMergeOptions merge_options;
-  auto* merge = app.add_subcommand(
-      "study-merge", "merge study shards into trials.jsonl, summary.json and summary.html");
-  merge->add_option("dirs", merge_options.dirs, "study folders (shards)")->required();
-  merge->add_option("--out", merge_options.out_dir, "merged study folder")->required();
-  run->add_option("--junit", run_options.junit,
-                  "write the acceptance criteria's verdict as JUnit XML to this file");
   std::string check_scenario;
-  auto* check = app.add_subcommand(
-      "check", "validate a scenario as `run` would (sections, acceptance, the cell), run nothing");
-  check->add_option("scenario", check_scenario, "scenario file")->required();
   IdentifyOptions identify_options;
-  auto* identify = app.add_subcommand(
+  TrackerIdentifyOptions tracker_options;
+  SynthesizeOptions synth_options;
+  KinematicsBenchmarkOptions kb_options;
+};
+
+// The verbs (subcommands) of the command line, owned by the CLI::App.
+struct Verbs {
+  CLI::App* info = nullptr;
+  CLI::App* fk = nullptr;
+  CLI::App* ik = nullptr;
+  CLI::App* export_urdf = nullptr;
+  CLI::App* demo = nullptr;
+  CLI::App* render = nullptr;
+  CLI::App* bench = nullptr;
+  CLI::App* run = nullptr;
+  CLI::App* bench_planning = nullptr;
+  CLI::App* study = nullptr;
+  CLI::App* merge = nullptr;
+  CLI::App* check = nullptr;
+  CLI::App* identify = nullptr;
+  CLI::App* synth = nullptr;
+  CLI::App* kbench = nullptr;
+};
+
+// The chain of a URDF model: one pair for every verb that takes a model file.
+void AddLinkOptions(CLI::App* sub, ModelLinks* links) {
+  sub->add_option("--base-link", links->base_link,
+                  "URDF: link the arm starts at (default: the URDF's root link)");
+  sub->add_option("--tip-link", links->tip_link,
+                  "URDF: link the arm ends at, the end frame (default: the leaf link with the "
+                  "most moving joints above it)");
+}
+
+// info, fk, ik, export-urdf and demo: a robot model's kinematics.
+void AddKinematicsVerbs(CLI::App* app, CliValues* v, Verbs* verbs) {
+  auto* info = app->add_subcommand("info", "print a robot model's parameters (mm, deg)");
+  verbs->info = info;
+  info->add_option("model", v->model, "model file (.yaml or .urdf)")->required();
+  AddLinkOptions(info, &v->links);
+  auto* fk = app->add_subcommand("fk", "forward kinematics of a model at joint angles");
+  verbs->fk = fk;
+  fk->add_option("model", v->model, "model file (.yaml or .urdf)")->required();
+  AddLinkOptions(fk, &v->links);
+  fk->add_option("--q", v->q, "joint angles in degrees, one per joint, comma-separated")
+      ->required();
+  auto* ik = app->add_subcommand("ik", "inverse kinematics of a model for an end-frame pose");
+  verbs->ik = ik;
+  ik->add_option("model", v->model, "model file (.yaml or .urdf)")->required();
+  AddLinkOptions(ik, &v->links);
+  ik->add_option("--xyz", v->xyz, "target position in mm, comma-separated")->required();
+  ik->add_option("--rpy", v->rpy, "target roll,pitch,yaw in degrees (fixed axes)");
+  ik->add_option("--seed", v->seed, "start joint angles in degrees (default: mid-range)");
+  ik->add_flag("--position-only", v->position_only, "ignore the target orientation");
+  auto* export_urdf = app->add_subcommand("export-urdf", "write a model as URDF");
+  verbs->export_urdf = export_urdf;
+  export_urdf->add_option("model", v->model, "model file (.yaml or .urdf)")->required();
+  AddLinkOptions(export_urdf, &v->links);
+  export_urdf->add_option("--out", v->out, "output URDF path")->required();
+  auto* demo = app->add_subcommand("demo", "kinematic demo on the two Reinovo-like models");
+  verbs->demo = demo;
+  demo->add_option("--model-dir", v->model_dir, "folder with reinovo_r{1,2}.{yaml,urdf}");
+  demo->add_option("--samples", v->samples, "random poses per robot")->check(CLI::Range(1, 100000));
+  demo->add_option("--seed", v->rng_seed, "random seed");
+}
+
+// render, benchmark-twin, run and benchmark-planning: a scenario on the twin (or its planner).
+void AddTwinVerbs(CLI::App* app, CliValues* v, Verbs* verbs) {
+  auto* render = app->add_subcommand("render", "write PNGs of the hand camera and of the cell");
+  verbs->render = render;
+  render->add_option("scenario", v->render_options.scenario, "scenario file")->required();
+  render->add_option("--out", v->render_options.out_dir, "output folder")->required();
+  render->add_option("--poses", v->render_options.poses, "number of poses")
+      ->check(CLI::Range(1, 20));
+  auto* bench = app->add_subcommand("benchmark-twin", "time rendering and settled moves");
+  verbs->bench = bench;
+  bench->add_option("scenario", v->bench_options.scenario, "scenario file")->required();
+  bench->add_option("--frames", v->bench_options.frames, "frames per figure")
+      ->check(CLI::Range(1, 100000));
+  bench->add_option("--moves", v->bench_options.moves, "settled moves")
+      ->check(CLI::Range(2, 100000));
+
+  auto* run = app->add_subcommand(
+      "run", "run a scenario's calibration on the twin, score it against truth, write a report");
+  verbs->run = run;
+  run->add_option("scenario", v->run_options.scenario, "scenario file")->required();
+  run->add_option("--out", v->run_options.out_dir, "output folder (replaced when complete)")
+      ->required();
+  run->add_flag("--quiet", v->run_options.quiet, "no progress lines");
+  run->add_flag("--no-diagnosis", "skip model discovery after the calibration");
+  run->add_option("--trial", v->run_options.trial,
+                  "study trial t: the scenario's truth and estimator seeds + t (default 0)")
+      ->check(CLI::Range(0, 1000000000));
+  run->add_option("--plan-cache", v->run_options.plan_cache,
+                  "folder of cached pose plans (plans once per planner input)");
+  run->add_flag("--no-images", v->no_images, "write neither servo images nor report.html");
+  run->add_option("--junit", v->run_options.junit,
+                  "write the acceptance criteria's verdict as JUnit XML to this file");
+
+  auto* bench_planning = app->add_subcommand(
+      "benchmark-planning", "time the pose planning of a scenario's calibration (no twin)");
+  verbs->bench_planning = bench_planning;
+  bench_planning->add_option("scenario", v->planning_options.scenario, "scenario file")->required();
+  bench_planning->add_option("--threads", v->planning_options.threads,
+                             "planner threads (default: one per core)");
+}
+
+// study and study-merge: Monte Carlo studies and their shards.
+void AddStudyVerbs(CLI::App* app, CliValues* v, Verbs* verbs) {
+  auto* study = app->add_subcommand(
+      "study", "Monte Carlo study: trials of a scenario in parallel processes, resumable");
+  verbs->study = study;
+  study->add_option("scenario", v->study_options.scenario, "scenario file")->required();
+  study->add_option("--trials", v->study_options.trials, "trials of the whole study")->required();
+  study->add_option("--jobs", v->study_options.jobs,
+                    "trial processes at a time (default: the CPUs available)");
+  study->add_option("--shard", v->shard, "run trials I, I+N, I+2N, ... (I/N, default 0/1)");
+  study->add_option("--out", v->study_options.out_dir, "study folder (rerun to resume)")
+      ->required();
+  study->add_option("--plan-cache", v->study_options.plan_cache,
+                    "plan cache folder (default OUT/plans)");
+  study->add_flag("--quiet", v->study_quiet, "no progress bar");
+  auto* merge = app->add_subcommand(
+      "study-merge", "merge study shards into trials.jsonl, summary.json and summary.html");
+  verbs->merge = merge;
+  merge->add_option("dirs", v->merge_options.dirs, "study folders (shards)")->required();
+  merge->add_option("--out", v->merge_options.out_dir, "merged study folder")->required();
+}
+
+// check: a scenario validated as `run` would.
+void AddCheckVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
+  auto* check = app->add_subcommand(
+      "check", "validate a scenario as `run` would (sections, acceptance, the cell), run nothing");
+  verbs->check = check;
+  check->add_option("scenario", v->check_scenario, "scenario file")->required();
+}
+
+// identify: a robot's parameters from optical-axis measurements or a tracker file.
+void AddIdentifyVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
+  IdentifyOptions& identify_options = v->identify_options;
+  TrackerIdentifyOptions& tracker_options = v->tracker_options;
+  auto* identify = app->add_subcommand(
       "identify", "identify a robot's parameters from recorded measurements (no twin)");
+  verbs->identify = identify;
   identify->add_option("--model", identify_options.model, "nominal model (.yaml/.urdf)")
       ->required();
-  add_links(identify);
+  AddLinkOptions(identify, &v->links);
   identify->add_option("--measurements", identify_options.measurements, "measurements.csv")
       ->required();
   identify->add_option("--robot", identify_options.robot,
@@ -340,7 +381,6 @@ int main(int argc, char** argv) {
   identify->add_option("--board-mount", identify_options.board_mount,
                        "board frame in the flange: x,y,z,roll,pitch,yaw [mm, deg] (default 0)");
   identify->add_option("--out", identify_options.out_dir, "output folder")->required();
-  TrackerIdentifyOptions tracker_options;
   identify->add_option("--ignore-column", tracker_options.ignore_columns,
                        "tracker file: a column to drop (e.g. a constant torso axis merged into "
                        "the model's base); repeatable");
@@ -369,23 +409,164 @@ int main(int argc, char** argv) {
   identify->add_option("--jobs", tracker_options.jobs,
                        "tracker file: parallel candidate evaluations (default: the CPUs available)");
   identify->add_flag("--quiet", tracker_options.quiet, "no progress lines");
+}
 
-  SynthesizeOptions synth_options;
-  auto* synth = app.add_subcommand(
+// synthesize-measurements and benchmark-kinematics: benchmarks of a model file (no twin).
+void AddModelBenchmarkVerbs(CLI::App* app, CliValues* v, Verbs* verbs) {
+  SynthesizeOptions& synth_options = v->synth_options;
+  KinematicsBenchmarkOptions& kb_options = v->kb_options;
+  auto* synth = app->add_subcommand(
       "synthesize-measurements",
       "write a synthetic optical-axis measurements.csv (benchmarks of `identify`)");
+  verbs->synth = synth;
   synth->add_option("--model", synth_options.model, "nominal model (.yaml/.urdf)")->required();
-  add_links(synth);
+  AddLinkOptions(synth, &v->links);
   synth->add_option("--rows", synth_options.rows, "measurement rows (15 to 1000000)");
   synth->add_option("--seed", synth_options.seed, "seed of the true geometry and the noise");
   synth->add_option("--out", synth_options.out, "output CSV")->required();
 
-  KinematicsBenchmarkOptions kb_options;
-  auto* kbench = app.add_subcommand(
+  auto* kbench = app->add_subcommand(
       "benchmark-kinematics", "time the analytic end-point Jacobian against autodiff");
+  verbs->kbench = kbench;
   kbench->add_option("model", kb_options.model, "model file (.yaml or .urdf)")->required();
-  add_links(kbench);
+  AddLinkOptions(kbench, &v->links);
   kbench->add_option("--evaluations", kb_options.evaluations, "evaluations per figure");
+}
+
+// The output-safety rule (bench/io/output_files.h): the verb marks the folders it writes
+// and accepts only its own marks; the inputs named here are never written over, and every
+// output path is checked before anything runs.
+void CheckOutputsBeforeRun(const CLI::App& app, const Verbs& verbs, const CliValues& v) {
+  const RunOptions& run_options = v.run_options;
+  const StudyOptions& study_options = v.study_options;
+  for (CLI::App* sub : app.get_subcommands()) SetOutputVerb(sub->get_name());
+  for (const std::string* input :
+       {&v.model, &v.render_options.scenario, &v.bench_options.scenario, &run_options.scenario,
+        &v.planning_options.scenario, &study_options.scenario, &v.check_scenario,
+        &v.identify_options.model, &v.identify_options.measurements,
+        &v.tracker_options.validate, &v.synth_options.model, &v.kb_options.model}) {
+    NoteInput(*input);
+  }
+  for (const std::string& dir : v.merge_options.dirs) NoteInput(dir, true);
+  const std::vector<std::pair<CLI::App*, const std::string*>> outputs = {
+      {verbs.render, &v.render_options.out_dir}, {verbs.run, &run_options.out_dir},
+      {verbs.identify, &v.identify_options.out_dir}, {verbs.merge, &v.merge_options.out_dir}};
+  for (const auto& [sub, folder] : outputs) {
+    if (*sub) ValidateOutputFolder(*folder, "--out");
+  }
+  if (*verbs.run && !run_options.junit.empty()) {
+    ValidateJunitFile(run_options.junit, run_options.out_dir);
+  }
+  for (const auto& [sub, cache, out_dir] :
+       {std::tuple{verbs.run, &run_options.plan_cache, &run_options.out_dir},
+        std::tuple{verbs.study, &study_options.plan_cache, &study_options.out_dir}}) {
+    if (!*sub || cache->empty()) continue;
+    ValidateOutputFolder(*cache, "--plan-cache", "plan-cache", false);
+    if (PathIsWithin(*cache, *out_dir) || PathIsWithin(*out_dir, *cache)) {
+      throw InputError("--plan-cache", "'" + *cache + "' and --out '" + *out_dir +
+                                           "' overlap; name a plan cache folder beside the "
+                                           "output folder");
+    }
+  }
+}
+
+// identify: a tracker file (x_m / x_mm columns) goes to the tracker identification, anything
+// else to the optical-axis identification; each refuses the other's options.
+int RunIdentifyVerb(const CLI::App& identify, CliValues* v) {
+  IdentifyOptions& identify_options = v->identify_options;
+  TrackerIdentifyOptions& tracker_options = v->tracker_options;
+  // A tracker file (x_m / x_mm columns) goes to the tracker identification.
+  if (IsTrackerFile(identify_options.measurements)) {
+    tracker_options.model = identify_options.model;
+    tracker_options.links = v->links;
+    tracker_options.measurements = identify_options.measurements;
+    tracker_options.out_dir = identify_options.out_dir;
+    tracker_options.diagnosis = identify.count("--no-diagnosis") == 0;
+    if (!identify_options.board_mount.empty() || !identify_options.robot.empty()) {
+      throw InputError("--board-mount/--robot", "options of optical-axis measurements; " +
+                                                    identify_options.measurements +
+                                                    " is a tracker file");
+    }
+    return RunTrackerIdentify(tracker_options);
+  }
+  if (!tracker_options.ignore_columns.empty() || !tracker_options.validate.empty() ||
+      !tracker_options.declared_terms.empty() || identify.count("--no-diagnosis") > 0 ||
+      identify.count("--diagnosis-alpha") + identify.count("--diagnosis-min-gain") +
+              identify.count("--diagnosis-max-effects") +
+              identify.count("--diagnosis-folds") + identify.count("--jobs") +
+              identify.count("--encoder-sigma-deg") > 0) {
+    throw InputError("--ignore-column/--validate/--declare/--diagnosis-*/--jobs",
+                     "options of tracker files; " + identify_options.measurements +
+                         " has no x_m/x_mm column");
+  }
+  identify_options.links = v->links;
+  return RunIdentify(identify_options);
+}
+
+// Runs the verb given on the command line; kExitInternalError when none ran.
+int RunVerb(const Verbs& verbs, CliValues* v) {
+  if (*verbs.check) return CheckScenario(v->check_scenario);
+  if (*verbs.info) return RunInfo(v->model, v->links);
+  if (*verbs.fk) return RunFk(v->model, v->links, v->q);
+  if (*verbs.ik) return RunIk(v->model, v->links, v->xyz, v->rpy, v->seed, v->position_only);
+  if (*verbs.export_urdf) return RunExportUrdf(v->model, v->links, v->out);
+  if (*verbs.demo) return RunDemo(v->model_dir, v->samples, v->rng_seed);
+  if (*verbs.render) return RunRender(v->render_options);
+  if (*verbs.bench) return RunTwinBenchmark(v->bench_options);
+  if (*verbs.run) {
+    v->run_options.images = !v->no_images;
+    v->run_options.diagnosis = verbs.run->count("--no-diagnosis") == 0;
+    return RunCalibrationScenario(v->run_options);
+  }
+  if (*verbs.study) {
+    ParseShard(v->shard, &v->study_options.shard_index, &v->study_options.shard_count);
+    v->study_options.progress = !v->study_quiet;
+    return RunStudy(v->study_options);
+  }
+  if (*verbs.merge) return RunStudyMerge(v->merge_options);
+  if (*verbs.bench_planning) return RunPlanningBenchmark(v->planning_options);
+  if (*verbs.identify) return RunIdentifyVerb(*verbs.identify, v);
+  if (*verbs.synth) {
+    v->synth_options.links = v->links;
+    return RunSynthesizeMeasurements(v->synth_options);
+  }
+  if (*verbs.kbench) {
+    v->kb_options.links = v->links;
+    return RunKinematicsBenchmark(v->kb_options);
+  }
+  return kExitInternalError;
+}
+
+}  // namespace
+}  // namespace twin
+
+int main(int argc, char** argv) {
+  using namespace twin;
+  // Before any thread exists: interrupts remove staging folders (bench/io/output_files.h), and
+  // MuJoCo never writes MUJOCO_LOG.TXT into the current folder (its warnings and errors become
+  // exceptions, reported on stderr).
+  InstallInterruptCleanup();
+  InstallMujocoErrorHandlers();
+  // glibc's allocator keeps what is freed for reuse instead of handing it back to the system at
+  // once (trimmed only above 256 MiB; mmap only for blocks of 64 MiB and more). The planner's
+  // threads allocate and free their Jacobians and SVD work thousands of times a second; with
+  // the defaults each round trip to the system cost page faults (benchmark-planning of
+  // paper_reinovo.yaml: 13.0 s of system time in 54.5 s before, 0.2 s after; README "Speed of
+  // trials"). What a process holds at its peak stays with it until it exits.
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);
+  mallopt(M_TRIM_THRESHOLD, 256 << 20);
+  CLI::App app{"twinbench: digital-twin test bench for dual-robot kinematic calibration"};
+  app.require_subcommand(1);
+
+  // The verbs and their options, in the order of --help.
+  CliValues values;
+  Verbs verbs;
+  AddKinematicsVerbs(&app, &values, &verbs);
+  AddTwinVerbs(&app, &values, &verbs);
+  AddStudyVerbs(&app, &values, &verbs);
+  AddCheckVerb(&app, &values, &verbs);
+  AddIdentifyVerb(&app, &values, &verbs);
+  AddModelBenchmarkVerbs(&app, &values, &verbs);
 
   try {
     app.parse(argc, argv);
@@ -395,94 +576,10 @@ int main(int argc, char** argv) {
     return kExitUserError;
   }
   try {
-    // The output-safety rule (bench/io/output_files.h): the verb marks the folders it writes
-    // and accepts only its own marks; the inputs named here are never written over, and every
-    // output path is checked before anything runs.
-    for (CLI::App* sub : app.get_subcommands()) SetOutputVerb(sub->get_name());
-    for (const std::string* input :
-         {&model, &render_options.scenario, &bench_options.scenario, &run_options.scenario,
-          &planning_options.scenario, &study_options.scenario, &check_scenario,
-          &identify_options.model, &identify_options.measurements, &tracker_options.validate,
-          &synth_options.model, &kb_options.model}) {
-      NoteInput(*input);
-    }
-    for (const std::string& dir : merge_options.dirs) NoteInput(dir, true);
-    const std::vector<std::pair<CLI::App*, const std::string*>> outputs = {
-        {render, &render_options.out_dir}, {run, &run_options.out_dir},
-        {identify, &identify_options.out_dir}, {merge, &merge_options.out_dir}};
-    for (const auto& [sub, folder] : outputs) {
-      if (*sub) ValidateOutputFolder(*folder, "--out");
-    }
-    if (*run && !run_options.junit.empty()) {
-      ValidateJunitFile(run_options.junit, run_options.out_dir);
-    }
-    for (const auto& [sub, cache, out_dir] :
-         {std::tuple{run, &run_options.plan_cache, &run_options.out_dir},
-          std::tuple{study, &study_options.plan_cache, &study_options.out_dir}}) {
-      if (!*sub || cache->empty()) continue;
-      ValidateOutputFolder(*cache, "--plan-cache", "plan-cache", false);
-      if (PathIsWithin(*cache, *out_dir) || PathIsWithin(*out_dir, *cache)) {
-        throw InputError("--plan-cache", "'" + *cache + "' and --out '" + *out_dir +
-                                             "' overlap; name a plan cache folder beside the "
-                                             "output folder");
-      }
-    }
-    if (*check) return CheckScenario(check_scenario);
-    if (*info) return RunInfo(model, links);
-    if (*fk) return RunFk(model, links, q);
-    if (*ik) return RunIk(model, links, xyz, rpy, seed, position_only);
-    if (*export_urdf) return RunExportUrdf(model, links, out);
-    if (*demo) return RunDemo(model_dir, samples, rng_seed);
-    if (*render) return RunRender(render_options);
-    if (*bench) return RunTwinBenchmark(bench_options);
-    if (*run) {
-      run_options.images = !no_images;
-      run_options.diagnosis = run->count("--no-diagnosis") == 0;
-      return RunCalibrationScenario(run_options);
-    }
-    if (*study) {
-      ParseShard(shard, &study_options.shard_index, &study_options.shard_count);
-      study_options.progress = !study_quiet;
-      return RunStudy(study_options);
-    }
-    if (*merge) return RunStudyMerge(merge_options);
-    if (*bench_planning) return RunPlanningBenchmark(planning_options);
-    if (*identify) {
-      // A tracker file (x_m / x_mm columns) goes to the tracker identification.
-      if (IsTrackerFile(identify_options.measurements)) {
-        tracker_options.model = identify_options.model;
-        tracker_options.links = links;
-        tracker_options.measurements = identify_options.measurements;
-        tracker_options.out_dir = identify_options.out_dir;
-        tracker_options.diagnosis = identify->count("--no-diagnosis") == 0;
-        if (!identify_options.board_mount.empty() || !identify_options.robot.empty()) {
-          throw InputError("--board-mount/--robot", "options of optical-axis measurements; " +
-                                                        identify_options.measurements +
-                                                        " is a tracker file");
-        }
-        return RunTrackerIdentify(tracker_options);
-      }
-      if (!tracker_options.ignore_columns.empty() || !tracker_options.validate.empty() ||
-          !tracker_options.declared_terms.empty() || identify->count("--no-diagnosis") > 0 ||
-          identify->count("--diagnosis-alpha") + identify->count("--diagnosis-min-gain") +
-                  identify->count("--diagnosis-max-effects") +
-                  identify->count("--diagnosis-folds") + identify->count("--jobs") +
-                  identify->count("--encoder-sigma-deg") > 0) {
-        throw InputError("--ignore-column/--validate/--declare/--diagnosis-*/--jobs",
-                         "options of tracker files; " + identify_options.measurements +
-                             " has no x_m/x_mm column");
-      }
-      identify_options.links = links;
-      return RunIdentify(identify_options);
-    }
-    if (*synth) {
-      synth_options.links = links;
-      return RunSynthesizeMeasurements(synth_options);
-    }
-    if (*kbench) {
-      kb_options.links = links;
-      return RunKinematicsBenchmark(kb_options);
-    }
+    // Every output path checked, every input noted, before anything runs.
+    CheckOutputsBeforeRun(app, verbs, values);
+    // The verb.
+    return RunVerb(verbs, &values);
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return kExitUserError;

@@ -214,39 +214,44 @@ BaseConstraint ImpliedConstraint(const TwinSpec& twin) {
   return BaseConstraint::kGeneral;
 }
 
-HandclaspConfig ParseHandclaspConfig(const Scenario& scenario) {
-  HandclaspConfig c;
-  c.constraint = ImpliedConstraint(scenario.twin);
-  const YamlReader r(scenario.path);
+namespace {
+
+// Throws InputError when the scenario has no handclasp section.
+void RequireHandclaspSection(const Scenario& scenario) {
   if (!IsPresent(scenario.handclasp)) {
     throw InputError(scenario.path + " scenario.handclasp",
                      "missing: the handclasp needs a handclasp section with the told "
                      "rough_base_from_robot1 and tips (see scenarios/gan2014_floor_floor.yaml)");
   }
-  const YamlMap m(r, scenario.handclasp, kHandclaspKeys);
-  // Told values: from this section only, never from the twin's truth.
-  c.rough_X_B1B2 = ReadPoseWithin(r, m.Get("rough_base_from_robot1"), kMaxToldBaseDistanceM,
-                                  "two arms that touch each other stand within a few metres");
-  {
-    const YamlField tips = m.Get("tips");
-    const std::vector<std::string> names(scenario.robot_names.begin(),
-                                         scenario.robot_names.end());
-    const YamlMap t(r, tips, names);
-    for (int k = 0; k < 2; ++k) {
-      const std::optional<YamlField> tip = t.Find(scenario.robot_names[k], false);
-      if (!tip) {
-        r.Fail(tips, "missing the told tip of robot '" + scenario.robot_names[k] +
-                         "' ({xyz_mm: [..], rpy_deg: [..]}, its frame in the flange by drawing)");
-      }
-      c.told_X_FTip[k] = ReadPoseWithin(r, *tip, kMaxToldTipOffsetM,
-                                        "a measuring tip is shorter than a metre");
+}
+
+// Told values: from this section only, never from the twin's truth.
+void ReadToldLayoutAndTips(const YamlReader& r, const YamlMap& m, const Scenario& scenario,
+                           HandclaspConfig* c) {
+  c->rough_X_B1B2 = ReadPoseWithin(r, m.Get("rough_base_from_robot1"), kMaxToldBaseDistanceM,
+                                   "two arms that touch each other stand within a few metres");
+  const YamlField tips = m.Get("tips");
+  const std::vector<std::string> names(scenario.robot_names.begin(), scenario.robot_names.end());
+  const YamlMap t(r, tips, names);
+  for (int k = 0; k < 2; ++k) {
+    const std::optional<YamlField> tip = t.Find(scenario.robot_names[k], false);
+    if (!tip) {
+      r.Fail(tips, "missing the told tip of robot '" + scenario.robot_names[k] +
+                       "' ({xyz_mm: [..], rpy_deg: [..]}, its frame in the flange by drawing)");
     }
+    c->told_X_FTip[k] = ReadPoseWithin(r, *tip, kMaxToldTipOffsetM,
+                                       "a measuring tip is shorter than a metre");
   }
+}
+
+// points: 'auto' (the default) or 4..kMaxPoints contact points in mm, each within
+// kMaxPointDistanceM of robot 1's base.
+void ReadContactPoints(const YamlReader& r, const YamlMap& m, HandclaspConfig* c) {
   if (const auto f = m.Find("points", false)) {
     if (f->node.IsScalar()) {
       if (r.String(*f) != "auto") r.Fail(*f, "must be 'auto' or a list of [x, y, z] points in mm");
     } else if (f->node.IsSequence()) {
-      c.auto_points = false;
+      c->auto_points = false;
       if (f->node.size() < 4) {
         r.Fail(*f, "needs at least 4 contact points (paper section 3), got " +
                        std::to_string(f->node.size()));
@@ -261,126 +266,201 @@ HandclaspConfig ParseHandclaspConfig(const Scenario& scenario) {
           r.Fail(f->Item(i), "a contact point must lie within 5000 mm of robot 1's base (the arms "
                              "reach 1-4 m), got " + std::to_string(1e3 * p.norm()) + " mm");
         }
-        c.points_B1.push_back(p);
+        c->points_B1.push_back(p);
       }
     } else {
       r.Fail(*f, "must be 'auto' or a list of [x, y, z] points in mm, got " + DescribeNode(f->node));
     }
   }
-  if (const auto f = m.Find("operator_error_mm", false)) c.operator_error_m = OperatorError(r, *f);
+}
+
+// constraint: auto (keeps the implied one) or a named BaseConstraint.
+void ReadConstraint(const YamlReader& r, const YamlMap& m, HandclaspConfig* c) {
   if (const auto f = m.Find("constraint", false)) {
     const std::string v = r.String(*f);
     if (v == "auto") {
     } else if (v == "general") {
-      c.constraint = BaseConstraint::kGeneral;
+      c->constraint = BaseConstraint::kGeneral;
     } else if (v == "floor_floor") {
-      c.constraint = BaseConstraint::kFloorFloor;
+      c->constraint = BaseConstraint::kFloorFloor;
     } else if (v == "floor_wall") {
-      c.constraint = BaseConstraint::kFloorWall;
+      c->constraint = BaseConstraint::kFloorWall;
     } else if (v == "floor_ceiling") {
-      c.constraint = BaseConstraint::kFloorCeiling;
+      c->constraint = BaseConstraint::kFloorCeiling;
     } else {
       r.Fail(*f, "must be one of auto, general, floor_floor, floor_wall, floor_ceiling; got '" +
                      v + "'");
     }
   }
+}
+
+// trials, coupled_motion and the workflow's calibrated-stage keys.
+void ReadRunOptions(const YamlReader& r, const YamlMap& m, HandclaspConfig* c) {
   if (const auto f = m.Find("trials", false)) {
-    c.trials = r.Integer(*f);
-    if (c.trials < 1 || c.trials > 1000) r.Fail(*f, "must be in 1..1000");
+    c->trials = r.Integer(*f);
+    if (c->trials < 1 || c->trials > 1000) r.Fail(*f, "must be in 1..1000");
   }
-  if (const auto f = m.Find("coupled_motion", false)) c.coupled_motion = r.Bool(*f);
+  if (const auto f = m.Find("coupled_motion", false)) c->coupled_motion = r.Bool(*f);
   if (const auto f = m.Find("calibrated_tip_identification", false)) {
-    c.calibrated_tip_identification = r.Bool(*f);
+    c->calibrated_tip_identification = r.Bool(*f);
   }
   if (const auto f = m.Find("calibrated_operator_error_mm", false)) {
-    c.calibrated_operator_error_m = OperatorError(r, *f);
+    c->calibrated_operator_error_m = OperatorError(r, *f);
   }
+}
+
+}  // namespace
+
+HandclaspConfig ParseHandclaspConfig(const Scenario& scenario) {
+  HandclaspConfig c;
+  c.constraint = ImpliedConstraint(scenario.twin);
+  const YamlReader r(scenario.path);
+  // The section must be there: its told values have no defaults.
+  RequireHandclaspSection(scenario);
+  const YamlMap m(r, scenario.handclasp, kHandclaspKeys);
+  // The told layout and tips (required).
+  ReadToldLayoutAndTips(r, m, scenario, &c);
+  // The taught points, planned or listed.
+  ReadContactPoints(r, m, &c);
+  // The simulated operator's alignment error (truth side).
+  if (const auto f = m.Find("operator_error_mm", false)) c.operator_error_m = OperatorError(r, *f);
+  // The installation constraint, else the implied one.
+  ReadConstraint(r, m, &c);
+  // Batch size, coupled motion and the workflow's calibrated stage.
+  ReadRunOptions(r, m, &c);
   return c;
 }
 
-HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
-                                       const std::array<KinematicModel, 2>& pendant_models_flange,
-                                       std::ostream& progress,
-                                       const HandclaspStageOptions& stage_options) {
-  HandclaspConfig config = ParseHandclaspConfig(scenario);
+namespace {
+
+// What a stage's steps read: the caller's inputs, the section and the pendants' tip models.
+struct StageInputs {
+  const Scenario& scenario;
+  const std::array<KinematicModel, 2>& pendant_models_flange;  ///< the controllers' models
+  const HandclaspStageOptions& options;
+  HandclaspConfig config;                    ///< the section with the stage's overrides
+  std::array<KinematicModel, 2> tip_models;  ///< pendant models with the told tips as tools
+};
+
+// Parses the section, applies the stage's operator error to the cell and builds the pendants'
+// tip models.
+StageInputs PrepareStage(TwinCell& cell, const Scenario& scenario,
+                         const std::array<KinematicModel, 2>& pendant_models_flange,
+                         const HandclaspStageOptions& stage_options) {
+  StageInputs in{scenario, pendant_models_flange, stage_options, ParseHandclaspConfig(scenario),
+                 {}};
+  HandclaspConfig& config = in.config;
   if (stage_options.operator_error_m) config.operator_error_m = *stage_options.operator_error_m;
   cell.SetOperatorAlignmentError(config.operator_error_m);
   // The pendants' tips are the told ones (by drawing), never the twin's true tips.
-  std::array<KinematicModel, 2> tip_models;
   for (int k = 0; k < 2; ++k) {
-    tip_models[k] = WithTipTool(pendant_models_flange[k], config.told_X_FTip[k]);
+    in.tip_models[k] = WithTipTool(pendant_models_flange[k], config.told_X_FTip[k]);
   }
-  // The operator teaches from the cell layout as drawn (told), not from the truth.
-  const Transform X_B1B2_layout = config.rough_X_B1B2;
-  const std::array<JointVector, 2> seeds = {cell.ReadEncoders(0), cell.ReadEncoders(1)};
+  return in;
+}
+
+// The teaching options used and the points taught.
+struct Teaching {
   TeachOptions teach;
-  teach.seed = scenario.seeds.estimator;
-  if (stage_options.identify_tips) teach.orientations_per_point = 4;
-  const TaughtPoints taught =
-      config.auto_points ? PlanTaughtPoints(tip_models, X_B1B2_layout, seeds, teach)
-                         : TeachPoints(tip_models, X_B1B2_layout, config.points_B1, seeds, teach);
-  HandclaspStageResult out;
-  nlohmann::json& rep = out.report;
-  rep["installation"] = ToString(config.constraint);
-  rep["operator_error_mm"] = 1e3 * config.operator_error_m;
-  rep["taught_points"] = {{"planned", config.auto_points},
-                          {"cube_side_mm", 1e3 * taught.cube_side_m},
-                          {"count", taught.points},
-                          {"orientations_per_point", teach.orientations_per_point},
-                          {"poses", taught.q1.size()},
-                          {"rejected", taught.rejected}};
-  if (!taught.ok) {
-    rep["status"] = "failed";
-    rep["reason"] = "teaching: " + taught.reason;
-    progress << "handclasp: teaching failed: " << taught.reason << "\n";
-    return out;
-  }
+  TaughtPoints taught;
+};
+
+// Plans or teaches the contact points from the current encoders.
+Teaching TeachContactPoints(TwinCell& cell, const StageInputs& in) {
+  // The operator teaches from the cell layout as drawn (told), not from the truth.
+  const Transform X_B1B2_layout = in.config.rough_X_B1B2;
+  const std::array<JointVector, 2> seeds = {cell.ReadEncoders(0), cell.ReadEncoders(1)};
+  Teaching t;
+  t.teach.seed = in.scenario.seeds.estimator;
+  if (in.options.identify_tips) t.teach.orientations_per_point = 4;
+  t.taught = in.config.auto_points
+                 ? PlanTaughtPoints(in.tip_models, X_B1B2_layout, seeds, t.teach)
+                 : TeachPoints(in.tip_models, X_B1B2_layout, in.config.points_B1, seeds, t.teach);
+  return t;
+}
+
+// report: installation, operator error and taught_points.
+void ReportTeaching(const HandclaspConfig& config, const Teaching& t, nlohmann::json* rep) {
+  (*rep)["installation"] = ToString(config.constraint);
+  (*rep)["operator_error_mm"] = 1e3 * config.operator_error_m;
+  (*rep)["taught_points"] = {{"planned", config.auto_points},
+                             {"cube_side_mm", 1e3 * t.taught.cube_side_m},
+                             {"count", t.taught.points},
+                             {"orientations_per_point", t.teach.orientations_per_point},
+                             {"poses", t.taught.q1.size()},
+                             {"rejected", t.taught.rejected}};
+}
+
+// Runs calib's procedure on the taught joint angles with the section's constraint.
+HandclaspResult RunProcedure(TwinCell& cell, const StageInputs& in, const TaughtPoints& taught,
+                             std::ostream& progress) {
   HandclaspOptions options;
-  options.constraint = config.constraint;
-  options.identify_tips = stage_options.identify_tips;
-  const HandclaspResult result =
-      RunHandclaspProcedure(cell, tip_models, taught.q1, options, &progress);
-  // --- the procedure has ended: scoring against the truth from here on ---
-  // Scored against the frames the pendant models use (KinematicFrameTruth: link 1's theta and
-  // d errors are invisible to any kinematic calibration; BestFitBaseOffset for calibrated
-  // models); the physical transform is scored too, under physical_truth, so that nothing is
-  // hidden.
-  const TwinTruth twin_truth = cell.Truth();
-  const bool tips_ok = result.ok() && result.tips.ok;
-  const std::array<Vector3, 2> dt = {tips_ok ? result.tips.dt1_F1 : Vector3::Zero(),
-                                     tips_ok ? result.tips.dt2_F2 : Vector3::Zero()};
-  std::array<KinematicModel, 2> true_tips;
-  std::array<Transform, 2> X_BBp;
+  options.constraint = in.config.constraint;
+  options.identify_tips = in.options.identify_tips;
+  return RunHandclaspProcedure(cell, in.tip_models, taught.q1, options, &progress);
+}
+
+// The truth the estimates are scored against, and the tip corrections used.
+struct ScoringFrames {
+  TwinTruth twin_truth;                        ///< cell.Truth() after the procedure
+  bool tips_ok = false;                        ///< the procedure identified the tips
+  std::array<Vector3, 2> dt;                   ///< identified tip corrections, else zero [m]
+  std::array<KinematicModel, 2> true_tips;     ///< true models with the true tips
+  std::array<Transform, 2> X_BBp;              ///< scoring frames B' in B
+  Transform physical = Transform::Identity();  ///< true X_B1B2
+  Transform truth = Transform::Identity();     ///< X_B1'B2': what the estimates are scored against
+};
+
+// Scored against the frames the pendant models use (KinematicFrameTruth: link 1's theta and
+// d errors are invisible to any kinematic calibration; BestFitBaseOffset for calibrated
+// models); the physical transform is scored too, under physical_truth, so that nothing is
+// hidden.
+ScoringFrames ComputeScoringFrames(const TwinTruth& twin_truth, const StageInputs& in,
+                                   const HandclaspResult& result) {
+  ScoringFrames s;
+  s.twin_truth = twin_truth;
+  s.tips_ok = result.ok() && result.tips.ok;
+  s.dt = {s.tips_ok ? result.tips.dt1_F1 : Vector3::Zero(),
+          s.tips_ok ? result.tips.dt2_F2 : Vector3::Zero()};
   for (int k = 0; k < 2; ++k) {
-    true_tips[k] = WithTipTool(twin_truth.models[k], scenario.twin.tips[k].X_FTip);
-    X_BBp[k] = stage_options.best_fit_frames
-                   ? BestFitBaseOffset(true_tips[k], tip_models[k], dt[k])
-                   : KinematicBaseOffset(twin_truth.models[k], pendant_models_flange[k]);
+    s.true_tips[k] = WithTipTool(s.twin_truth.models[k], in.scenario.twin.tips[k].X_FTip);
+    s.X_BBp[k] = in.options.best_fit_frames
+                     ? BestFitBaseOffset(s.true_tips[k], in.tip_models[k], s.dt[k])
+                     : KinematicBaseOffset(s.twin_truth.models[k], in.pendant_models_flange[k]);
   }
-  const Transform physical = TrueX_B1B2(twin_truth);
-  const Transform truth = X_BBp[0].inverse() * physical * X_BBp[1];
-  rep["truth"] = PoseJson(truth);
-  if (stage_options.best_fit_frames) {
-    rep["scoring_frame"] = {
+  s.physical = TrueX_B1B2(s.twin_truth);
+  s.truth = s.X_BBp[0].inverse() * s.physical * s.X_BBp[1];
+  return s;
+}
+
+// report: truth, scoring_frame, physical_truth and pendant_tip_error.
+void ReportScoringFrames(const ScoringFrames& s, const StageInputs& in, nlohmann::json* rep) {
+  (*rep)["truth"] = PoseJson(s.truth);
+  if (in.options.best_fit_frames) {
+    (*rep)["scoring_frame"] = {
         {"frames", "best fit: X_B1'B2' = X_B1B1'^-1 X_B1B2 X_B2B2', X_BB' the rigid transform "
                    "taking the pendant model's tip positions (identified tip corrections "
                    "applied) onto the true ones over 200 random joint configurations"},
-        {"offsets", {PoseJson(X_BBp[0]), PoseJson(X_BBp[1])}}};
+        {"offsets", {PoseJson(s.X_BBp[0]), PoseJson(s.X_BBp[1])}}};
   } else {
-    rep["scoring_frame"] = {
+    (*rep)["scoring_frame"] = {
         {"frames", "kinematic: X_B1'B2' = X_B1B1'^-1 X_B1B2 X_B2B2', B' = B X_BL0 RotZ(dtheta1) "
                    "TransZ(dd1) X_BL0^-1 with dtheta1, dd1 = true minus pendant link-1 theta, d "
                    "(unidentifiable by any kinematic calibration)"},
-        {"link1_offsets", Link1Offsets(twin_truth, pendant_models_flange)}};
+        {"link1_offsets", Link1Offsets(s.twin_truth, in.pendant_models_flange)}};
   }
-  rep["physical_truth"] = PoseJson(physical);
-  rep["pendant_tip_error"] = nlohmann::json::array();
+  (*rep)["physical_truth"] = PoseJson(s.physical);
+  (*rep)["pendant_tip_error"] = nlohmann::json::array();
   for (int k = 0; k < 2; ++k) {
-    rep["pendant_tip_error"].push_back(
-        PendantTipError(true_tips[k], WithTipCorrection(tip_models[k], dt[k]), X_BBp[k]));
+    (*rep)["pendant_tip_error"].push_back(
+        PendantTipError(s.true_tips[k], WithTipCorrection(in.tip_models[k], s.dt[k]), s.X_BBp[k]));
   }
-  rep["skipped"] = result.skipped;
-  rep["warnings"] = result.calibration.warnings;
+}
+
+// report: skipped, warnings and contacts (with residuals when the procedure succeeded).
+void ReportContacts(const HandclaspResult& result, nlohmann::json* rep) {
+  (*rep)["skipped"] = result.skipped;
+  (*rep)["warnings"] = result.calibration.warnings;
   nlohmann::json contacts = nlohmann::json::array();
   const BaseCalibrationResult& cal = result.calibration;
   for (const HandclaspContact& c : result.contacts) {
@@ -391,85 +471,171 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
     }
     contacts.push_back(j);
   }
-  rep["contacts"] = contacts;
-  if (!result.ok()) {
-    rep["status"] = "failed";
-    rep["reason"] = result.reason;
-    out.reason = result.reason;
-    progress << "handclasp: " << result.reason << "\n";
-    return out;
-  }
-  out.ok = true;
-  out.X_B1B2_general = cal.X_B1B2_general;
-  out.X_B1B2_constrained = cal.X_B1B2_constrained;
+  (*rep)["contacts"] = contacts;
+}
+
+// An estimate scored against the kinematic-frame truth and the physical X_B1B2.
+ScoredBaseFrame ScoreEstimate(const Transform& X, const ScoringFrames& s) {
+  ScoredBaseFrame f;
+  f.present = true;
+  f.kinematic = CompareBaseFrames(X, s.truth);  // eq. 33-34
+  f.physical = CompareBaseFrames(X, s.physical);
+  return f;
+}
+
+// The errors of one comparison as report JSON.
+nlohmann::json ErrorsJson(const BaseFrameError& e) {
+  return nlohmann::json{{"e_tran_mm", e.e_tran_mm}, {"e_rot_deg", e.e_rot_deg}};
+}
+
+// Marks the stage ok and scores the general and constrained estimates into out and its report.
+void ScoreEstimates(const BaseCalibrationResult& cal, const ScoringFrames& s,
+                    HandclaspStageResult* out) {
+  nlohmann::json& rep = out->report;
+  out->ok = true;
+  out->X_B1B2_general = cal.X_B1B2_general;
+  out->X_B1B2_constrained = cal.X_B1B2_constrained;
   rep["status"] = "ok";
-  rep["general"] = Scored(cal.X_B1B2_general, truth, cal.rms_residual_general_m);
-  rep["constrained"] = Scored(cal.X_B1B2_constrained, truth, cal.rms_residual_constrained_m);
-  const auto score = [&](const Transform& X) {
-    ScoredBaseFrame f;
-    f.present = true;
-    f.kinematic = CompareBaseFrames(X, truth);  // eq. 33-34
-    f.physical = CompareBaseFrames(X, physical);
-    return f;
-  };
-  const auto errors = [](const BaseFrameError& e) {
-    return nlohmann::json{{"e_tran_mm", e.e_tran_mm}, {"e_rot_deg", e.e_rot_deg}};
-  };
-  out.general = score(cal.X_B1B2_general);
-  out.constrained = score(cal.X_B1B2_constrained);
-  rep["physical_truth"]["general"] = errors(out.general.physical);
-  rep["physical_truth"]["constrained"] = errors(out.constrained.physical);
-  if (stage_options.identify_tips) {
-    nlohmann::json& t = rep["tips_identified"];
-    t["status"] = result.tips.ok ? "ok" : "failed";
-    t["relative_singular_value"] = result.tips.relative_singular_value;
-    if (result.tips.ok) {
-      t.update(Scored(result.tips.X_B1B2, truth, result.tips.rms_residual_m));
-      t["rms_residual_before_mm"] = 1e3 * result.tips.rms_residual_before_m;
-      t["dt_flange_mm"] = {Xyz(result.tips.dt1_F1), Xyz(result.tips.dt2_F2)};
-      t["sigma_dt_flange_mm"] = {Xyz(result.tips.sigma_dt1_F1), Xyz(result.tips.sigma_dt2_F2)};
-      out.tips = score(result.tips.X_B1B2);
-      rep["physical_truth"]["tips_identified"] = errors(out.tips.physical);
-      out.X_B1B2_tips = result.tips.X_B1B2;
-    } else {
-      t["reason"] = result.tips.reason;
-    }
+  rep["general"] = Scored(cal.X_B1B2_general, s.truth, cal.rms_residual_general_m);
+  rep["constrained"] = Scored(cal.X_B1B2_constrained, s.truth, cal.rms_residual_constrained_m);
+  out->general = ScoreEstimate(cal.X_B1B2_general, s);
+  out->constrained = ScoreEstimate(cal.X_B1B2_constrained, s);
+  rep["physical_truth"]["general"] = ErrorsJson(out->general.physical);
+  rep["physical_truth"]["constrained"] = ErrorsJson(out->constrained.physical);
+}
+
+// report.tips_identified, and when identified the estimate with the tips scored into out.
+void ReportIdentifiedTips(const TipRefinementResult& tips, const ScoringFrames& s,
+                          HandclaspStageResult* out) {
+  nlohmann::json& rep = out->report;
+  nlohmann::json& t = rep["tips_identified"];
+  t["status"] = tips.ok ? "ok" : "failed";
+  t["relative_singular_value"] = tips.relative_singular_value;
+  if (tips.ok) {
+    t.update(Scored(tips.X_B1B2, s.truth, tips.rms_residual_m));
+    t["rms_residual_before_mm"] = 1e3 * tips.rms_residual_before_m;
+    t["dt_flange_mm"] = {Xyz(tips.dt1_F1), Xyz(tips.dt2_F2)};
+    t["sigma_dt_flange_mm"] = {Xyz(tips.sigma_dt1_F1), Xyz(tips.sigma_dt2_F2)};
+    out->tips = ScoreEstimate(tips.X_B1B2, s);
+    rep["physical_truth"]["tips_identified"] = ErrorsJson(out->tips.physical);
+    out->X_B1B2_tips = tips.X_B1B2;
+  } else {
+    t["reason"] = tips.reason;
   }
-  if (config.coupled_motion) {
-    // With identified tips the controllers use them (the TCP a pendant would store).
-    std::array<KinematicModel, 2> used = tip_models;
-    for (int k = 0; k < 2; ++k) used[k] = WithTipCorrection(tip_models[k], dt[k]);
-    rep["coupled_motion"] =
-        CoupledMotion(cell, used, result.contacts.front(),
-                      tips_ok ? result.tips.X_B1B2 : cal.X_B1B2_constrained);
-    rep["coupled_motion"]["estimate"] = tips_ok ? "tips_identified" : "constrained";
-    if (rep["coupled_motion"].value("status", "") == "ok") {
-      out.coupled_motion_max_deviation_mm = rep["coupled_motion"]["max_deviation_mm"];
-    }
+}
+
+// The coupled-motion check with the delivered estimate, into report.coupled_motion.
+void RunCoupledMotionCheck(TwinCell& cell, const StageInputs& in, const HandclaspResult& result,
+                           const ScoringFrames& s, HandclaspStageResult* out) {
+  nlohmann::json& rep = out->report;
+  // With identified tips the controllers use them (the TCP a pendant would store).
+  std::array<KinematicModel, 2> used = in.tip_models;
+  for (int k = 0; k < 2; ++k) used[k] = WithTipCorrection(in.tip_models[k], s.dt[k]);
+  rep["coupled_motion"] =
+      CoupledMotion(cell, used, result.contacts.front(),
+                    s.tips_ok ? result.tips.X_B1B2 : result.calibration.X_B1B2_constrained);
+  rep["coupled_motion"]["estimate"] = s.tips_ok ? "tips_identified" : "constrained";
+  if (rep["coupled_motion"].value("status", "") == "ok") {
+    out->coupled_motion_max_deviation_mm = rep["coupled_motion"]["max_deviation_mm"];
   }
-  progress << "handclasp: " << ToString(config.constraint) << " general e_tran "
+}
+
+// Marks the report failed because no points could be taught, and prints why.
+void ReportTeachingFailure(const TaughtPoints& taught, std::ostream& progress,
+                           nlohmann::json* rep) {
+  (*rep)["status"] = "failed";
+  (*rep)["reason"] = "teaching: " + taught.reason;
+  progress << "handclasp: teaching failed: " << taught.reason << "\n";
+}
+
+// Marks the stage failed with the procedure's reason, and prints it.
+void ReportProcedureFailure(const HandclaspResult& result, std::ostream& progress,
+                            HandclaspStageResult* out) {
+  out->report["status"] = "failed";
+  out->report["reason"] = result.reason;
+  out->reason = result.reason;
+  progress << "handclasp: " << result.reason << "\n";
+}
+
+// The closing progress line: both estimates' errors in the kinematic frames.
+void PrintStageSummary(BaseConstraint constraint, const HandclaspStageResult& out,
+                       std::ostream& progress) {
+  progress << "handclasp: " << ToString(constraint) << " general e_tran "
            << out.general.kinematic.e_tran_mm << " mm, e_rot " << out.general.kinematic.e_rot_deg
            << " deg; constrained e_tran " << out.constrained.kinematic.e_tran_mm << " mm, e_rot "
            << out.constrained.kinematic.e_rot_deg << " deg\n";
+}
+
+}  // namespace
+
+HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
+                                       const std::array<KinematicModel, 2>& pendant_models_flange,
+                                       std::ostream& progress,
+                                       const HandclaspStageOptions& stage_options) {
+  // The section, the operator's error on the cell and the pendants' told tip models.
+  const StageInputs in = PrepareStage(cell, scenario, pendant_models_flange, stage_options);
+  // The operator's taught points, planned from the told layout.
+  const Teaching teaching = TeachContactPoints(cell, in);
+  HandclaspStageResult out;
+  ReportTeaching(in.config, teaching, &out.report);
+  if (!teaching.taught.ok) {
+    ReportTeachingFailure(teaching.taught, progress, &out.report);
+    return out;
+  }
+  // The contacts and the calibration, through the Cell interface only.
+  const HandclaspResult result = RunProcedure(cell, in, teaching.taught, progress);
+  // --- the procedure has ended: scoring against the truth from here on ---
+  const ScoringFrames frames = ComputeScoringFrames(cell.Truth(), in, result);
+  ReportScoringFrames(frames, in, &out.report);
+  ReportContacts(result, &out.report);
+  if (!result.ok()) {
+    ReportProcedureFailure(result, progress, &out);
+    return out;
+  }
+  // The general and constrained estimates (eq. 33-34).
+  ScoreEstimates(result.calibration, frames, &out);
+  if (stage_options.identify_tips) ReportIdentifiedTips(result.tips, frames, &out);
+  if (in.config.coupled_motion) RunCoupledMotionCheck(cell, in, result, frames, &out);
+  PrintStageSummary(in.config.constraint, out, progress);
   return out;
 }
 
-int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir,
-                         std::ostream& progress, int trial, const std::string& junit) {
-  const auto t_start = std::chrono::steady_clock::now();
-  // Everything is validated before anything runs or is written (exit-code contract, README).
+namespace {
+
+// A loaded scenario with its trial applied and its sections parsed.
+struct HandclaspRunInputs {
+  Scenario scenario;
+  HandclaspConfig config;
+  Acceptance acceptance;
+};
+
+// Everything is validated before anything runs or is written (exit-code contract, README).
+HandclaspRunInputs LoadAndValidate(const std::string& scenario_path, const std::string& out_dir,
+                                   int trial, const std::string& junit) {
   Scenario scenario = LoadScenario(scenario_path);
   ApplyTrial(trial, &scenario);
-  const HandclaspConfig config = ParseHandclaspConfig(scenario);
-  const Acceptance acceptance = ParseAcceptance(scenario);
+  HandclaspConfig config = ParseHandclaspConfig(scenario);
+  Acceptance acceptance = ParseAcceptance(scenario);
   ValidateOutputFolder(out_dir, "--out");
   if (!junit.empty()) ValidateJunitFile(junit, out_dir);
+  return {std::move(scenario), std::move(config), std::move(acceptance)};
+}
+
+// The batch's outcomes: each trial's report and typed result.
+struct TrialBatch {
+  nlohmann::json trials = nlohmann::json::array();  ///< each trial's report, in order
+  nlohmann::json first;                              ///< trial 0's report
+  int failures = 0;
+  std::vector<HandclaspStageResult> done;  ///< the trials' typed results, for the batch means
+};
+
+// Runs every trial of the batch on a fresh twin with seed twin.seed + t and the nominal
+// models; throws InputError when a trial's procedure refused.
+TrialBatch RunTrials(const Scenario& scenario, const HandclaspConfig& config,
+                     std::ostream& progress) {
   const std::array<KinematicModel, 2> nominal = {scenario.twin.robots[0].model,
                                                  scenario.twin.robots[1].model};
-  nlohmann::json trials = nlohmann::json::array();
-  nlohmann::json first;
-  int failures = 0;
-  std::vector<HandclaspStageResult> done;  // the trials' typed results, for the batch means
+  TrialBatch b;
   for (int t = 0; t < config.trials; ++t) {
     TwinSpec spec = scenario.twin;
     spec.seed = scenario.twin.seed + static_cast<std::uint64_t>(t);
@@ -480,51 +646,67 @@ int RunHandclaspScenario(const std::string& scenario_path, const std::string& ou
     stage.report["seed"] = spec.seed;
     if (!stage.ok) {
       // A refused procedure is exit 2 with its reason (README, exit codes); nothing is written.
-      ++failures;
+      ++b.failures;
       throw InputError(scenario.path + " scenario.handclasp",
                        "the handclasp procedure refused in trial " + std::to_string(t + 1) + "/" +
                            std::to_string(config.trials) + " (seed " + std::to_string(spec.seed) +
                            "): " + stage.report.value("reason", std::string("no reason given")));
     }
-    if (t == 0) first = stage.report;
-    trials.push_back(std::move(stage.report));
-    done.push_back(std::move(stage));
+    if (t == 0) b.first = stage.report;
+    b.trials.push_back(std::move(stage.report));
+    b.done.push_back(std::move(stage));
   }
+  return b;
+}
+
+// Means over the n trials of one estimate's errors, kinematic or physical.
+nlohmann::json MeanErrors(const std::vector<HandclaspStageResult>& done, int n,
+                          ScoredBaseFrame HandclaspStageResult::*which, bool physical) {
+  double tran = 0, rot = 0;
+  for (const HandclaspStageResult& r : done) {
+    const BaseFrameError& e = physical ? (r.*which).physical : (r.*which).kinematic;
+    tran += e.e_tran_mm;
+    rot += e.e_rot_deg;
+  }
+  return nlohmann::json{{"mean_e_tran_mm", tran / n}, {"mean_e_rot_deg", rot / n}};
+}
+
+// base_frame.batch: counts, the mean errors and each trial's report.
+nlohmann::json BatchSummary(const HandclaspConfig& config, const TrialBatch& b) {
+  const int n = config.trials - b.failures;
+  nlohmann::json batch = {{"trials", config.trials}, {"failed", b.failures}};
+  if (n > 0) {
+    int worse_tran = 0, worse_rot = 0;  // trials where the constrained one was worse
+    for (const HandclaspStageResult& r : b.done) {
+      worse_tran += r.constrained.kinematic.e_tran_mm > r.general.kinematic.e_tran_mm;
+      worse_rot += r.constrained.kinematic.e_rot_deg > r.general.kinematic.e_rot_deg;
+    }
+    batch["general"] = MeanErrors(b.done, n, &HandclaspStageResult::general, false);
+    batch["constrained"] = MeanErrors(b.done, n, &HandclaspStageResult::constrained, false);
+    batch["physical_truth"] = {
+        {"general", MeanErrors(b.done, n, &HandclaspStageResult::general, true)},
+        {"constrained", MeanErrors(b.done, n, &HandclaspStageResult::constrained, true)}};
+    batch["constrained_worse_e_tran_trials"] = worse_tran;
+    batch["constrained_worse_e_rot_trials"] = worse_rot;
+  }
+  batch["trials_detail"] = b.trials;
+  return batch;
+}
+
+// report.json's content before the acceptance verdict: trial 0's base frame and the batch.
+nlohmann::json BuildReport(const Scenario& scenario, const HandclaspConfig& config,
+                           const TrialBatch& b) {
   nlohmann::json report;
   report["scenario"] = scenario.name;
   report["procedure"] = "handclasp base-frame calibration (Gan et al. 2014)";
-  report["status"] = failures == 0 ? "ok" : "failed";
-  report["base_frame"] = first;  // trial 0: the scenario's own seed
-  if (config.trials > 1) {
-    const int n = config.trials - failures;
-    nlohmann::json batch = {{"trials", config.trials}, {"failed", failures}};
-    if (n > 0) {
-      // Means over the trials of one estimate's errors, kinematic or physical.
-      const auto mean = [&](ScoredBaseFrame HandclaspStageResult::*which, bool physical) {
-        double tran = 0, rot = 0;
-        for (const HandclaspStageResult& r : done) {
-          const BaseFrameError& e = physical ? (r.*which).physical : (r.*which).kinematic;
-          tran += e.e_tran_mm;
-          rot += e.e_rot_deg;
-        }
-        return nlohmann::json{{"mean_e_tran_mm", tran / n}, {"mean_e_rot_deg", rot / n}};
-      };
-      int worse_tran = 0, worse_rot = 0;  // trials where the constrained one was worse
-      for (const HandclaspStageResult& r : done) {
-        worse_tran += r.constrained.kinematic.e_tran_mm > r.general.kinematic.e_tran_mm;
-        worse_rot += r.constrained.kinematic.e_rot_deg > r.general.kinematic.e_rot_deg;
-      }
-      batch["general"] = mean(&HandclaspStageResult::general, false);
-      batch["constrained"] = mean(&HandclaspStageResult::constrained, false);
-      batch["physical_truth"] = {{"general", mean(&HandclaspStageResult::general, true)},
-                                 {"constrained", mean(&HandclaspStageResult::constrained, true)}};
-      batch["constrained_worse_e_tran_trials"] = worse_tran;
-      batch["constrained_worse_e_rot_trials"] = worse_rot;
-    }
-    batch["trials_detail"] = trials;
-    report["base_frame"]["batch"] = batch;
-  }
-  const AcceptanceVerdict verdict = EvaluateAcceptance(acceptance, &report);
+  report["status"] = b.failures == 0 ? "ok" : "failed";
+  report["base_frame"] = b.first;  // trial 0: the scenario's own seed
+  if (config.trials > 1) report["base_frame"]["batch"] = BatchSummary(config, b);
+  return report;
+}
+
+// Writes out_dir/report.json through a staging folder renamed onto out_dir when complete.
+void PublishReport(const nlohmann::json& report, const std::string& out_dir) {
   const std::string staging = CreateStagingDirectory(out_dir);
   try {
     {
@@ -537,9 +719,23 @@ int RunHandclaspScenario(const std::string& scenario_path, const std::string& ou
     DiscardStaging(staging);
     throw;
   }
+}
+
+}  // namespace
+
+int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir,
+                         std::ostream& progress, int trial, const std::string& junit) {
+  const auto t_start = std::chrono::steady_clock::now();
+  // The scenario, its handclasp and acceptance sections and the output paths, all checked.
+  const HandclaspRunInputs in = LoadAndValidate(scenario_path, out_dir, trial, junit);
+  // Each trial's handclasp stage on its own twin.
+  const TrialBatch batch = RunTrials(in.scenario, in.config, progress);
+  nlohmann::json report = BuildReport(in.scenario, in.config, batch);
+  const AcceptanceVerdict verdict = EvaluateAcceptance(in.acceptance, &report);
+  PublishReport(report, out_dir);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  if (!junit.empty()) WriteJunit(junit, scenario.name, verdict, seconds);
+  if (!junit.empty()) WriteJunit(junit, in.scenario.name, verdict, seconds);
   PrintVerdict(verdict, progress);
   return VerdictExitCode(verdict);
 }

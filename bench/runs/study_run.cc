@@ -253,10 +253,63 @@ void ValidateStudyOptions(const StudyOptions& o) {
   if (o.out_dir.empty()) throw InputError("--out", "expected a folder");
 }
 
-int RunStudy(const StudyOptions& o) {
-  ValidateStudyOptions(o);
-  // Everything a trial would refuse is refused here, before anything runs.
-  const Scenario sc = LoadScenario(o.scenario);
+namespace {
+
+// What a study runs: its scenario (validated as a trial would), its hash and the trial command.
+struct StudyInputs {
+  Scenario sc;
+  std::string hash;           // ScenarioHash(sc)
+  std::string executable;     // the twinbench binary the trials run
+  int jobs = 0;               // trial processes at a time
+  std::string scenario_path;  // the scenario file, absolute
+};
+
+// The study folder, claimed and locked by this process.
+struct StudyFolder {
+  fs::path out;
+  int lock_fd = -1;   // the lock on .study.lock, held until the study ends
+  std::string shard;  // "I/N"
+};
+
+// The trials of this shard and which of them are still to run.
+struct ShardTrials {
+  std::string trials_path;  // OUT/trials.jsonl
+  std::vector<int> todo;    // the trials not recorded yet, in order
+  int in_shard = 0, recorded_in_shard = 0;
+};
+
+// The folders the trial processes work in.
+struct WorkFolders {
+  fs::path work;      // OUT/work, the trials' working directory
+  std::string plans;  // the plan cache, linked into work/ as plans
+};
+
+// The processes of the trials in flight, as the interrupt handler sees them.
+struct TrialChildren {
+  std::mutex mutex;
+  std::set<pid_t> pids;
+};
+
+// The fixed parts of a study that its trial loop reads.
+struct StudyParts {
+  const StudyInputs& in;
+  const StudyFolder& folder;
+  const ShardTrials& trials;
+  const WorkFolders& folders;
+  const std::vector<std::string>& env;  // the trial processes' whole environment
+};
+
+// The state of the trial loop, and what it leaves.
+struct TrialLoop {
+  std::map<pid_t, Running> running;  // the trial processes in flight
+  std::size_t next = 0;              // the next entry of todo to start
+  double wall_sum = 0;               // wall time of the finished trials [s]
+  int finished = 0, stopped = 0;     // trials recorded / stopped by an interrupt
+  Clock::time_point start;           // when the loop began
+};
+
+// Refuses a scenario without a section that `twinbench run` runs, or one a trial would refuse.
+void CheckStudyScenario(const Scenario& sc) {
   if (IsPresent(sc.calibration)) ParseCalibrationConfig(sc);
   if (IsPresent(sc.handclasp)) ParseHandclaspConfig(sc);
   if (IsPresent(sc.tracker_calibration)) ValidateTrackerScenario(sc);
@@ -266,15 +319,27 @@ int RunStudy(const StudyOptions& o) {
                      "a study needs a calibration:, handclasp: or tracker_calibration: section "
                      "(what `twinbench run` runs)");
   }
-  const std::string hash = ScenarioHash(sc);
-  const std::string executable = o.executable.empty() ? SelfExecutable() : o.executable;
+}
+
+// Loads and checks the scenario and settles the trial command and the jobs at a time.
+StudyInputs LoadStudyInputs(const StudyOptions& o) {
+  StudyInputs in;
+  in.sc = LoadScenario(o.scenario);
+  CheckStudyScenario(in.sc);
+  in.hash = ScenarioHash(in.sc);
+  in.executable = o.executable.empty() ? SelfExecutable() : o.executable;
   // Trials are not confined to CPUs of their own: two trials each held to one of 2 CPUs ran
   // no faster than two free ones (README, "Speed of trials").
-  const int jobs = o.jobs > 0 ? o.jobs : UsableCpuCount();
-  const std::string scenario_path = fs::absolute(o.scenario).lexically_normal().string();
+  in.jobs = o.jobs > 0 ? o.jobs : UsableCpuCount();
+  in.scenario_path = fs::absolute(o.scenario).lexically_normal().string();
+  return in;
+}
 
-  const fs::path out(o.out_dir);
-  std::error_code ec;
+// Claims OUT, locks it against a second study process and writes (or checks) study.json.
+StudyFolder ClaimStudyFolder(const StudyOptions& o, const StudyInputs& in) {
+  StudyFolder folder;
+  folder.out = fs::path(o.out_dir);
+  const fs::path& out = folder.out;
   // A new, empty or earlier study folder of ours (its mark), never a folder of the user's.
   ClaimOutputFolder(o.out_dir, "--out", "study");
   // One study process per folder at a time.
@@ -283,14 +348,18 @@ int RunStudy(const StudyOptions& o) {
   if (lock_fd < 0 || flock(lock_fd, LOCK_EX | LOCK_NB) != 0) {
     throw InputError(o.out_dir, "another study runs in this folder (" + lock_path + " is locked)");
   }
-  const std::string shard = std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count);
-  CheckStudyFile(out / "study.json", json{{"scenario_file", scenario_path},
-                                          {"scenario", sc.name},
-                                          {"scenario_hash", hash},
+  folder.lock_fd = lock_fd;
+  folder.shard = std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count);
+  CheckStudyFile(out / "study.json", json{{"scenario_file", in.scenario_path},
+                                          {"scenario", in.sc.name},
+                                          {"scenario_hash", in.hash},
                                           {"trials", o.trials},
-                                          {"shard", shard}});
+                                          {"shard", folder.shard}});
+  return folder;
+}
 
-  const std::string trials_path = (out / "trials.jsonl").string();
+// The trials recorded in trials.jsonl (its torn last line dropped); refuses another scenario's.
+std::set<int> ReadRecordedTrials(const std::string& trials_path, const std::string& hash) {
   TrialsFileContent content = ReadTrialsFile(trials_path);
   if (content.torn_tail) {
     std::fprintf(stderr, "study: dropping the torn last line of %s (a killed study)\n",
@@ -307,17 +376,31 @@ int RunStudy(const StudyOptions& o) {
     }
     recorded.insert(r["trial"].get<int>());
   }
-  std::vector<int> todo;
-  int in_shard = 0, recorded_in_shard = 0;
+  return recorded;
+}
+
+// The trials of this shard, split into recorded ones and those still to run.
+ShardTrials FindTrialsToRun(const StudyOptions& o, const std::string& hash, const fs::path& out) {
+  ShardTrials trials;
+  trials.trials_path = (out / "trials.jsonl").string();
+  const std::set<int> recorded = ReadRecordedTrials(trials.trials_path, hash);
   for (int t = o.shard_index; t < o.trials; t += o.shard_count) {
-    ++in_shard;
+    ++trials.in_shard;
     if (recorded.count(t)) {
-      ++recorded_in_shard;
+      ++trials.recorded_in_shard;
     } else {
-      todo.push_back(t);
+      trials.todo.push_back(t);
     }
   }
-  const fs::path work = out / "work";
+  return trials;
+}
+
+// A fresh work folder (an earlier one, of a killed study, removed) and the plan cache, claimed.
+WorkFolders ClaimWorkFolders(const StudyOptions& o, const fs::path& out) {
+  std::error_code ec;
+  WorkFolders folders;
+  folders.work = out / "work";
+  const fs::path& work = folders.work;
   // Trials in flight when a study was killed: run again. The folder is removed only when it
   // carries the mark the study gave it.
   if (fs::exists(fs::symlink_status(work, ec))) {
@@ -329,72 +412,158 @@ int RunStudy(const StudyOptions& o) {
     fs::remove_all(work, ec);
   }
   ClaimOutputFolder(work.string(), work.string(), "study-work");
-  const std::string plans = o.plan_cache.empty() ? (out / "plans").string() : o.plan_cache;
-  ClaimOutputFolder(plans, o.plan_cache.empty() ? plans : "--plan-cache", "plan-cache");
+  folders.plans = o.plan_cache.empty() ? (out / "plans").string() : o.plan_cache;
+  ClaimOutputFolder(folders.plans, o.plan_cache.empty() ? folders.plans : "--plan-cache",
+                    "plan-cache");
+  return folders;
+}
 
+// The line that opens a study: the scenario, the shard's trials and the jobs at a time.
+void PrintStudyStart(const StudyInputs& in, const StudyFolder& folder, const ShardTrials& trials) {
   std::printf("twinbench study: %s (hash %s), trials %d of shard %s: %d recorded, %d to run, "
               "%d at a time\n",
-              sc.name.c_str(), hash.c_str(), in_shard, shard.c_str(), recorded_in_shard,
-              static_cast<int>(todo.size()), jobs);
+              in.sc.name.c_str(), in.hash.c_str(), trials.in_shard, folder.shard.c_str(),
+              trials.recorded_in_shard, static_cast<int>(trials.todo.size()), in.jobs);
   std::fflush(stdout);
+}
 
-  // SIGINT, SIGTERM and SIGHUP wait on their own thread (InstallInterruptCleanup): here they
-  // stop the trial processes, whose ends wake the loop below; the study then cleans up and
-  // ends by the signal.
-  std::mutex children_mutex;
-  std::set<pid_t> children;
-  SetInterruptHandler([&](int sig) {
-    std::lock_guard<std::mutex> lock(children_mutex);
+// SIGINT, SIGTERM and SIGHUP wait on their own thread (InstallInterruptCleanup): here they
+// stop the trial processes, whose ends wake the trial loop; the study then cleans up and
+// ends by the signal.
+// Restores the default reaction to interrupts when it goes out of scope, an exception
+// included: the study's handler refers to the children of a frame that is then gone.
+struct DefaultInterruptsOnExit {
+  DefaultInterruptsOnExit() = default;
+  DefaultInterruptsOnExit(const DefaultInterruptsOnExit&) = delete;
+  DefaultInterruptsOnExit& operator=(const DefaultInterruptsOnExit&) = delete;
+  ~DefaultInterruptsOnExit() { SetInterruptHandler({}); }
+};
+
+void StopTrialsOnInterrupt(TrialChildren* children) {
+  SetInterruptHandler([children](int sig) {
+    std::lock_guard<std::mutex> lock(children->mutex);
     g_interrupted = sig;
-    for (const pid_t pid : children) kill(pid, SIGTERM);
+    for (const pid_t pid : children->pids) kill(pid, SIGTERM);
   });
-  // One llvmpipe and one OpenCV thread per trial: the processes are the parallelism.
-  // A fixed mmap threshold: glibc raises it whenever a thread frees a large block, so whether
-  // a later large buffer comes from mmap or from the heap (and how it is aligned) would depend
-  // on the timing of the threads (with the address layout, SpawnTrial). twinbench's main() now
-  // fixes it itself (mallopt, 64 MiB, which overrides this variable); the variable stays in the
-  // list because the list's size is part of every trial's stack layout (below).
-  // The trial's whole environment is this fixed list, and its arguments are the same strings
-  // wherever the study's folder lies (relative to the work folder, its working directory, with
-  // the plan cache linked there): the environment and the arguments sit on the stack of the
-  // new process, so their sizes move every stack buffer's alignment, and with it (measured:
-  // a trial under Slurm differed from the same trial run locally by 1e-6 px in the intrinsics)
-  // the result.
-  const std::vector<std::string> env = {"PATH=/usr/local/bin:/usr/bin:/bin", "LANG=C",
-                                        "LC_ALL=C", "LP_NUM_THREADS=1",
-                                        "OPENCV_FOR_THREADS_NUM=1",
-                                        "MALLOC_MMAP_THRESHOLD_=131072"};
-  fs::create_directories(plans, ec);
-  if (!ec) fs::create_directory_symlink(fs::absolute(plans), work / "plans", ec);
-  if (ec) throw InputError((work / "plans").string(), "cannot link the plan cache: " + ec.message());
+}
 
-  Progress progress(o.progress, in_shard, recorded_in_shard);
-  std::map<pid_t, Running> running;
-  std::size_t next = 0;
-  double wall_sum = 0;
-  int finished = 0, stopped = 0;
-  const auto t_study = Clock::now();
-  while ((next < todo.size() || !running.empty()) && !g_interrupted) {
-    while (next < todo.size() && static_cast<int>(running.size()) < jobs) {
-      const int t = todo[next++];
-      Running r;
-      r.trial = t;
-      r.start = Clock::now();
-      r.out = (work / ("trial_" + std::to_string(t))).string();
-      r.log = r.out + ".log";
-      const pid_t pid = SpawnTrial(executable,
-                                   {"run", scenario_path, "--trial", std::to_string(t), "--out",
-                                    "trial_" + std::to_string(t), "--quiet", "--no-images",
-                                    "--plan-cache", "plans"},
-                                   work.string(), env, r.log);
-      {
-        std::lock_guard<std::mutex> lock(children_mutex);
-        children.insert(pid);
-        if (g_interrupted) kill(pid, SIGTERM);
-      }
-      running[pid] = r;
-      progress.Started(static_cast<int>(running.size()));
+// One llvmpipe and one OpenCV thread per trial: the processes are the parallelism.
+// A fixed mmap threshold: glibc raises it whenever a thread frees a large block, so whether
+// a later large buffer comes from mmap or from the heap (and how it is aligned) would depend
+// on the timing of the threads (with the address layout, SpawnTrial). twinbench's main() now
+// fixes it itself (mallopt, 64 MiB, which overrides this variable); the variable stays in the
+// list because the list's size is part of every trial's stack layout (below).
+// The trial's whole environment is this fixed list, and its arguments are the same strings
+// wherever the study's folder lies (relative to the work folder, its working directory, with
+// the plan cache linked there): the environment and the arguments sit on the stack of the
+// new process, so their sizes move every stack buffer's alignment, and with it (measured:
+// a trial under Slurm differed from the same trial run locally by 1e-6 px in the intrinsics)
+// the result.
+std::vector<std::string> TrialEnvironment() {
+  return {"PATH=/usr/local/bin:/usr/bin:/bin", "LANG=C",
+          "LC_ALL=C", "LP_NUM_THREADS=1",
+          "OPENCV_FOR_THREADS_NUM=1",
+          "MALLOC_MMAP_THRESHOLD_=131072"};
+}
+
+// Creates the plan cache and links it into the work folder as plans.
+void LinkPlanCache(const WorkFolders& folders) {
+  std::error_code ec;
+  fs::create_directories(folders.plans, ec);
+  if (!ec) fs::create_directory_symlink(fs::absolute(folders.plans), folders.work / "plans", ec);
+  if (ec) {
+    throw InputError((folders.work / "plans").string(),
+                     "cannot link the plan cache: " + ec.message());
+  }
+}
+
+// Starts trial processes until `jobs` run or none is left to start.
+void StartTrials(const StudyParts& s, TrialChildren* children, Progress* progress,
+                 TrialLoop* loop) {
+  const fs::path& work = s.folders.work;
+  while (loop->next < s.trials.todo.size() && static_cast<int>(loop->running.size()) < s.in.jobs) {
+    const int t = s.trials.todo[loop->next++];
+    Running r;
+    r.trial = t;
+    r.start = Clock::now();
+    r.out = (work / ("trial_" + std::to_string(t))).string();
+    r.log = r.out + ".log";
+    const pid_t pid = SpawnTrial(s.in.executable,
+                                 {"run", s.in.scenario_path, "--trial", std::to_string(t), "--out",
+                                  "trial_" + std::to_string(t), "--quiet", "--no-images",
+                                  "--plan-cache", "plans"},
+                                 work.string(), s.env, r.log);
+    {
+      std::lock_guard<std::mutex> lock(children->mutex);
+      children->pids.insert(pid);
+      if (g_interrupted) kill(pid, SIGTERM);
     }
+    loop->running[pid] = r;
+    progress->Started(static_cast<int>(loop->running.size()));
+  }
+}
+
+// The outcome of a finished trial process: its exit status, its report.json (parsed into
+// *report, which the outcome points to) and, when it failed, the reason.
+TrialOutcome JudgeTrial(const Running& r, int status, json* report) {
+  TrialOutcome outcome;
+  outcome.wall_s = SecondsSince(r.start);
+  outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status)
+                                        : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+  {
+    std::ifstream in(r.out + "/report.json");
+    if (in) {
+      try {
+        *report = json::parse(in);
+        outcome.report = report;
+      } catch (const std::exception&) {
+      }
+    }
+  }
+  if (outcome.exit_code == 0 && outcome.report) {
+    outcome.status = report->value("status", std::string("ok")) == "failed" ? "failed" : "ok";
+  } else {
+    outcome.status = "failed";
+  }
+  if (outcome.status == "failed") {
+    outcome.reason =
+        report->is_object() && report->contains("reason") && (*report)["reason"].is_string()
+            ? (*report)["reason"].get<std::string>()
+            : ReasonFromLog(r.log);
+    if (WIFSIGNALED(status)) {
+      outcome.reason = "killed by signal " + std::to_string(WTERMSIG(status)) +
+                       (outcome.reason.empty() ? "" : ": " + outcome.reason);
+    }
+    if (outcome.reason.empty()) {
+      outcome.reason = "exit code " + std::to_string(outcome.exit_code) + ", no report";
+    }
+  }
+  return outcome;
+}
+
+// Appends the trial's record to trials.jsonl, keeps the log of a failed trial in logs/ and
+// removes the trial's files from the work folder.
+void RecordTrial(const StudyParts& s, const Running& r, const TrialOutcome& outcome) {
+  std::error_code ec;
+  Scenario trial_scenario = s.in.sc;
+  ApplyTrial(r.trial, &trial_scenario);
+  AppendTrialRecord(s.trials.trials_path, MakeTrialRecord(s.in.hash, trial_scenario, outcome));
+  if (outcome.status == "failed") {
+    fs::create_directories(s.folder.out / "logs", ec);
+    fs::rename(r.log, s.folder.out / "logs" / ("trial_" + std::to_string(r.trial) + ".log"), ec);
+  }
+  fs::remove_all(r.out, ec);
+  fs::remove(r.log, ec);
+  fs::remove_all(r.out + ".partial", ec);
+}
+
+// Runs the trials still to run, `jobs` at a time, recording each as it ends, until all are
+// recorded or an interrupt stops them.
+TrialLoop RunTrials(const StudyParts& s, TrialChildren* children, Progress* progress) {
+  TrialLoop loop;
+  loop.start = Clock::now();
+  while ((loop.next < s.trials.todo.size() || !loop.running.empty()) && !g_interrupted) {
+    StartTrials(s, children, progress, &loop);
     int status = 0;
     const pid_t pid = waitpid(-1, &status, 0);
     if (pid < 0) {
@@ -402,89 +571,94 @@ int RunStudy(const StudyOptions& o) {
       throw std::runtime_error(std::string("waitpid failed: ") + std::strerror(errno));
     }
     {
-      std::lock_guard<std::mutex> lock(children_mutex);
-      children.erase(pid);
+      std::lock_guard<std::mutex> lock(children->mutex);
+      children->pids.erase(pid);
     }
-    const auto it = running.find(pid);
-    if (it == running.end()) continue;
+    const auto it = loop.running.find(pid);
+    if (it == loop.running.end()) continue;
     if (g_interrupted) {  // stopped by the interrupt: not a failed trial
-      running.erase(it);
-      ++stopped;
+      loop.running.erase(it);
+      ++loop.stopped;
       continue;
     }
     const Running r = it->second;
-    running.erase(it);
-    TrialOutcome outcome;
-    outcome.wall_s = SecondsSince(r.start);
-    outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status)
-                                          : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+    loop.running.erase(it);
     json report;
-    {
-      std::ifstream in(r.out + "/report.json");
-      if (in) {
-        try {
-          report = json::parse(in);
-          outcome.report = &report;
-        } catch (const std::exception&) {
-        }
-      }
-    }
-    if (outcome.exit_code == 0 && outcome.report) {
-      outcome.status = report.value("status", std::string("ok")) == "failed" ? "failed" : "ok";
-    } else {
-      outcome.status = "failed";
-    }
-    if (outcome.status == "failed") {
-      outcome.reason = report.is_object() && report.contains("reason") && report["reason"].is_string()
-                           ? report["reason"].get<std::string>()
-                           : ReasonFromLog(r.log);
-      if (WIFSIGNALED(status)) {
-        outcome.reason = "killed by signal " + std::to_string(WTERMSIG(status)) +
-                         (outcome.reason.empty() ? "" : ": " + outcome.reason);
-      }
-      if (outcome.reason.empty()) {
-        outcome.reason = "exit code " + std::to_string(outcome.exit_code) + ", no report";
-      }
-    }
-    Scenario trial_scenario = sc;
-    ApplyTrial(r.trial, &trial_scenario);
-    AppendTrialRecord(trials_path, MakeTrialRecord(hash, trial_scenario, outcome));
-    if (outcome.status == "failed") {
-      fs::create_directories(out / "logs", ec);
-      fs::rename(r.log, out / "logs" / ("trial_" + std::to_string(r.trial) + ".log"), ec);
-    }
-    fs::remove_all(r.out, ec);
-    fs::remove(r.log, ec);
-    fs::remove_all(r.out + ".partial", ec);
-    progress.Finished(r.trial, outcome.status, outcome.wall_s, static_cast<int>(running.size()));
-    wall_sum += outcome.wall_s;
-    ++finished;
+    const TrialOutcome outcome = JudgeTrial(r, status, &report);
+    RecordTrial(s, r, outcome);
+    progress->Finished(r.trial, outcome.status, outcome.wall_s,
+                       static_cast<int>(loop.running.size()));
+    loop.wall_sum += outcome.wall_s;
+    ++loop.finished;
   }
-  progress.End();
-  if (g_interrupted) {
-    const int sig = g_interrupted;
-    for (const auto& [pid, r] : running) kill(pid, SIGTERM);
-    for (const auto& [pid, r] : running) waitpid(pid, nullptr, 0);
-    fs::remove_all(work, ec);
-    std::fprintf(stderr, "study: interrupted; %d trial(s) in flight were not recorded; run the "
-                 "same command again to resume\n", stopped + static_cast<int>(running.size()));
-    close(lock_fd);
-    EndBySignal(sig);
-  }
-  SetInterruptHandler({});
-  fs::remove_all(work, ec);
+  return loop;
+}
 
-  const std::vector<json> records = ReadTrialsFile(trials_path).records;
+// After an interrupt: stops the trials still in flight, removes work/ and ends by the signal.
+[[noreturn]] void EndInterruptedStudy(const TrialLoop& loop, const StudyFolder& folder,
+                                      const WorkFolders& folders) {
+  std::error_code ec;
+  const int sig = g_interrupted;
+  for (const auto& [pid, r] : loop.running) kill(pid, SIGTERM);
+  for (const auto& [pid, r] : loop.running) waitpid(pid, nullptr, 0);
+  fs::remove_all(folders.work, ec);
+  std::fprintf(stderr, "study: interrupted; %d trial(s) in flight were not recorded; run the "
+               "same command again to resume\n",
+               loop.stopped + static_cast<int>(loop.running.size()));
+  close(folder.lock_fd);
+  EndBySignal(sig);
+}
+
+// Writes summary.json and summary.html of all recorded trials and prints the closing line.
+void WriteStudySummary(const StudyFolder& folder, const ShardTrials& trials,
+                       const TrialLoop& loop) {
+  const fs::path& out = folder.out;
+  const std::vector<json> records = ReadTrialsFile(trials.trials_path).records;
   const json summary = SummarizeStudy(records);
   WriteFileAtomically((out / "summary.json").string(), summary.dump(2) + "\n");
   WriteFileAtomically((out / "summary.html").string(), RenderStudySummaryHtml(summary, records));
   std::printf("study: %d trials of shard %s recorded (%d failed); this run: %d trials in %.1f "
               "s, mean trial wall time %.2f s; wrote %s/{trials.jsonl, summary.json, "
               "summary.html}\n",
-              in_shard, shard.c_str(), summary["trials"]["failed"].get<int>(), finished,
-              SecondsSince(t_study), finished > 0 ? wall_sum / finished : 0.0,
-              out.string().c_str());
-  close(lock_fd);
+              trials.in_shard, folder.shard.c_str(), summary["trials"]["failed"].get<int>(),
+              loop.finished, SecondsSince(loop.start),
+              loop.finished > 0 ? loop.wall_sum / loop.finished : 0.0, out.string().c_str());
+}
+
+}  // namespace
+
+int RunStudy(const StudyOptions& o) {
+  ValidateStudyOptions(o);
+  // Everything a trial would refuse is refused here, before anything runs.
+  const StudyInputs in = LoadStudyInputs(o);
+  // OUT claimed, locked and holding this study's study.json.
+  const StudyFolder folder = ClaimStudyFolder(o, in);
+  // The trials of the shard not yet in trials.jsonl.
+  const ShardTrials trials = FindTrialsToRun(o, in.hash, folder.out);
+  // A fresh work/ and the plan cache.
+  const WorkFolders folders = ClaimWorkFolders(o, folder.out);
+  // The opening line.
+  PrintStudyStart(in, folder, trials);
+  // From here an interrupt stops the trial processes.
+  TrialChildren children;
+  StopTrialsOnInterrupt(&children);
+  const DefaultInterruptsOnExit default_interrupts_on_exit;
+  // The trial processes' fixed environment.
+  const std::vector<std::string> env = TrialEnvironment();
+  // The plan cache, linked into work/.
+  LinkPlanCache(folders);
+  // The trials, `jobs` at a time.
+  Progress progress(o.progress, trials.in_shard, trials.recorded_in_shard);
+  const TrialLoop loop = RunTrials({in, folder, trials, folders, env}, &children, &progress);
+  progress.End();
+  // Interrupted: clean up and end by the signal.
+  if (g_interrupted) EndInterruptedStudy(loop, folder, folders);
+  SetInterruptHandler({});
+  std::error_code ec;
+  fs::remove_all(folders.work, ec);
+  // summary.json, summary.html and the closing line.
+  WriteStudySummary(folder, trials, loop);
+  close(folder.lock_fd);
   return 0;
 }
 

@@ -35,31 +35,52 @@ void WriteFile(const fs::path& path, const std::string& text) { WriteTextFile(pa
 // parameters its motion separates are at the noise of a few micrometres.
 constexpr double kMinJointSpan = 3.14159265358979323846 / 180.0;  // [rad]
 
-}  // namespace
+/// What `identify` reads: the nominal chain, the tracker files and the model it starts from.
+struct IdentifyInputs {
+  KinematicModel chain;    ///< the nominal model as loaded
+  TrackerFile file;        ///< the measurements
+  TrackerFile validation;  ///< the --validate file (no points without one)
+  RobotModel nominal;      ///< the chain with the declared terms
+};
 
-int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
-  // Everything is validated before anything is written.
+/// What `identify` finds: the calibration, the model discovery and what lowers the rank.
+struct IdentifyOutcome {
+  TrackerCalibrationResult calibration;  ///< identification with held-out scoring
+  DiscoveryResult diagnosis;             ///< model discovery (empty with --no-diagnosis)
+  std::vector<std::string> rank_causes;  ///< sentences naming what lowers the rank
+};
+
+// Checks the options, reads the model and the files and adds the declared terms; throws
+// InputError before anything is written.
+IdentifyInputs ReadIdentifyInputs(const TrackerIdentifyOptions& o) {
   ValidateOutputFolder(o.out_dir, "--out");
   if (!(o.holdout_fraction > 0.0 && o.holdout_fraction <= 0.5)) {
     throw InputError("--holdout", "expected a fraction in (0, 0.5], got " +
                                       std::to_string(o.holdout_fraction));
   }
-  const KinematicModel chain = LoadRobotModelAndWarn(o.model, o.links);
-  const TrackerFile file = ReadTrackerFile(o.measurements, chain, o.ignore_columns);
-  TrackerFile validation;
-  if (!o.validate.empty()) validation = ReadTrackerFile(o.validate, chain, o.ignore_columns);
-  RobotModel nominal = MakeRobotModel(chain);
+  IdentifyInputs in;
+  in.chain = LoadRobotModelAndWarn(o.model, o.links);
+  const KinematicModel& chain = in.chain;
+  in.file = ReadTrackerFile(o.measurements, chain, o.ignore_columns);
+  if (!o.validate.empty()) in.validation = ReadTrackerFile(o.validate, chain, o.ignore_columns);
+  RobotModel& nominal = in.nominal;
+  nominal = MakeRobotModel(chain);
   for (const std::string& text : o.declared_terms) {
     const std::string where = "--declare " + text;
     nominal = WithTerm(nominal, MakeErrorTerm(ParseTermSpec(text, where), chain, chain.name, where));
   }
-  for (const TrackerPoint& p : file.points) {
+  for (const TrackerPoint& p : in.file.points) {
     const std::string missing = MissingContext(nominal, p.context);
     if (!missing.empty()) {
       throw InputError(o.measurements + ":" + std::to_string(p.row),
                        "a declared term needs what this row lacks: " + missing);
     }
   }
+  return in;
+}
+
+// Model discovery's options from the command line, checked when discovery runs.
+DiscoveryOptions IdentifyDiscoveryOptions(const TrackerIdentifyOptions& o) {
   DiscoveryOptions discovery;
   discovery.alpha = o.diagnosis_alpha;
   discovery.min_gain_percent = o.diagnosis_min_gain_percent;
@@ -73,31 +94,44 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
     discovery.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
   }
   if (o.diagnosis) ValidateDiscoveryOptions(discovery);
+  return discovery;
+}
 
+// The identification with held-out scoring; its errors name the measurements file.
+TrackerCalibrationResult CalibrateTrackerFile(const TrackerIdentifyOptions& o,
+                                              const IdentifyInputs& in) {
   TrackerCalibrationOptions options;
   options.holdout_fraction = o.holdout_fraction;
   options.seed = o.seed;
   options.set.source = o.measurements;
   TrackerCalibrationResult r;
   try {
-    r = CalibrateFromTracker(nominal, file.points, validation.points, options);
+    r = CalibrateFromTracker(in.nominal, in.file.points, in.validation.points, options);
   } catch (const InputError& e) {
     if (e.where().rfind(o.measurements, 0) == 0) throw;
     throw InputError(o.measurements, e.what());
   }
+  return r;
+}
 
+// Model discovery from the file's points (when it is asked for); its errors name the file.
+DiscoveryResult DiscoverTrackerFileModel(const TrackerIdentifyOptions& o, const IdentifyInputs& in,
+                                         const DiscoveryOptions& discovery) {
   DiscoveryResult diagnosis;
   if (o.diagnosis) {
     try {
-      diagnosis = DiscoverTrackerModel(nominal, file.points, discovery);
+      diagnosis = DiscoverTrackerModel(in.nominal, in.file.points, discovery);
     } catch (const InputError& e) {
       if (e.where().rfind(o.measurements, 0) == 0) throw;
       throw InputError(o.measurements, e.what());
     }
   }
+  return diagnosis;
+}
 
-  const IdentificationResult& id = r.identified;
-  // What lowers the rank, named: joints the file hardly moves, and poses measured again.
+// What lowers the rank, named: joints the file hardly moves, and poses measured again.
+std::vector<std::string> RankCauses(const KinematicModel& chain, const TrackerFile& file,
+                                    const IdentificationResult& id) {
   std::vector<std::string> rank_causes;
   for (int k = 0; k < chain.num_joints(); ++k) {
     double lo = INFINITY, hi = -INFINITY;
@@ -120,13 +154,24 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
                           std::to_string(file.distinct_poses) +
                           " different poses: a repeat adds no direction to the identification");
   }
+  return rank_causes;
+}
+
+// The report: the file and its columns, the held-out splits, the parameters, the tracker
+// pose, the declared terms, the diagnosis and the warnings.
+json IdentifyReportJson(const TrackerIdentifyOptions& o, const IdentifyInputs& in,
+                        const IdentifyOutcome& outcome) {
+  const KinematicModel& chain = in.chain;
+  const TrackerFile& file = in.file;
+  const TrackerCalibrationResult& r = outcome.calibration;
+  const IdentificationResult& id = r.identified;
   json j;
   j["file"] = o.measurements;
   j["model"] = o.model;
   j["robot"] = chain.name;
   j["points"] = file.points.size();
   j["distinct_poses"] = file.distinct_poses;
-  j["rank_causes"] = rank_causes;
+  j["rank_causes"] = outcome.rank_causes;
   j["columns"] = {{"joints", file.joint_columns},
                   {"sigma", file.has_sigma},
                   {"time", file.has_time},
@@ -167,14 +212,20 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
                        {"rotation_deg", aa.angle() * 180.0 / 3.14159265358979323846},
                        {"rotation_axis", {aa.axis().x(), aa.axis().y(), aa.axis().z()}}};
   j["declared_terms"] = json::array();
-  for (const auto& t : nominal.terms) j["declared_terms"].push_back(TermLabel(t->spec()));
+  for (const auto& t : in.nominal.terms) j["declared_terms"].push_back(TermLabel(t->spec()));
   if (o.diagnosis) {
-    j["diagnosis"] = DiagnosisJson(diagnosis);
+    j["diagnosis"] = DiagnosisJson(outcome.diagnosis);
   } else {
     j["diagnosis"] = {{"verdict", nullptr}, {"skipped", "--no-diagnosis"}};
   }
   j["warnings"] = r.warnings;
+  return j;
+}
 
+// Writes report.json, report.html and identified_<robot>.yaml into a staging folder and
+// publishes it as the output folder (nothing is left behind on an error).
+void WriteIdentifyOutputs(const TrackerIdentifyOptions& o, const KinematicModel& chain,
+                          const json& j, const IdentificationResult& id) {
   const fs::path out(o.out_dir);
   const std::string staging = CreateStagingDirectory(o.out_dir);
   try {
@@ -191,7 +242,17 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
     DiscardStaging(staging);
     throw;
   }
+}
 
+// Prints the summary: the rank, each split's held-out errors, the diagnosis, the warnings
+// and notes, and what was written.
+void PrintIdentifySummary(const TrackerIdentifyOptions& o, const IdentifyInputs& in,
+                          const IdentifyOutcome& outcome) {
+  const KinematicModel& chain = in.chain;
+  const TrackerFile& file = in.file;
+  const TrackerCalibrationResult& r = outcome.calibration;
+  const IdentificationResult& id = r.identified;
+  const fs::path out(o.out_dir);
   std::printf("%s: %zu tracker points, %d identifiable combinations (condition %.3g), %zu "
               "unidentifiable\n",
               chain.name.c_str(), file.points.size(), id.observability.rank,
@@ -206,11 +267,32 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
   std::printf("%-8s %-10zu %18.4f / %7.4f %18.4f / %7.4f   (fitted, not held out)\n", "all",
               file.points.size(), 1e3 * r.all_before.rms, 1e3 * r.all_before.max,
               1e3 * r.all_after.rms, 1e3 * r.all_after.max);
-  if (o.diagnosis) std::printf("%s", DiagnosisSummary(diagnosis).c_str());
+  if (o.diagnosis) std::printf("%s", DiagnosisSummary(outcome.diagnosis).c_str());
   for (const std::string& w : r.warnings) std::fprintf(stderr, "WARNING: %s\n", w.c_str());
-  for (const std::string& c : rank_causes) std::fprintf(stderr, "note: %s\n", c.c_str());
+  for (const std::string& c : outcome.rank_causes) std::fprintf(stderr, "note: %s\n", c.c_str());
   std::printf("wrote %s/report.json, report.html and identified_%s.yaml\n", out.string().c_str(),
               chain.name.c_str());
+}
+
+}  // namespace
+
+int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
+  // Everything is validated before anything is written.
+  const IdentifyInputs in = ReadIdentifyInputs(o);
+  // Model discovery's options, checked before the identification runs.
+  const DiscoveryOptions discovery = IdentifyDiscoveryOptions(o);
+  IdentifyOutcome outcome;
+  // The identification with held-out scoring.
+  outcome.calibration = CalibrateTrackerFile(o, in);
+  // Model discovery (skipped with --no-diagnosis).
+  outcome.diagnosis = DiscoverTrackerFileModel(o, in, discovery);
+  // What lowers the rank, named.
+  outcome.rank_causes = RankCauses(in.chain, in.file, outcome.calibration.identified);
+  // The report, written only once complete.
+  const json j = IdentifyReportJson(o, in, outcome);
+  WriteIdentifyOutputs(o, in.chain, j, outcome.calibration.identified);
+  // The summary on the terminal.
+  PrintIdentifySummary(o, in, outcome);
   return 0;
 }
 

@@ -60,11 +60,39 @@ nlohmann::json StageSummary(const HandclaspStageResult& r, const std::string& ki
   return j;
 }
 
-}  // namespace
+// The workflow's parsed input: the scenario (trial applied) and its sections.
+struct WorkflowInputs {
+  Scenario sc;
+  HandclaspConfig handclasp;
+  CalibrationConfig config;  // the calibration section with the run options applied
+  Acceptance acceptance;
+};
 
-int RunWorkflowScenario(const RunOptions& o) {
-  const auto t_start = Clock::now();
-  Scenario sc = LoadScenario(o.scenario);
+// What the workflow's stages share: the cell, the scenario, where they write, how they report.
+struct WorkflowContext {
+  TwinCell& cell;
+  const Scenario& sc;
+  const HandclaspConfig& handclasp;
+  const fs::path& staging;     // the staging folder of the outputs
+  bool quiet;                  // --quiet
+  Clock::time_point t_start;   // when the run began
+  std::ostream& progress;      // progress lines (discarded when quiet)
+};
+
+// What the workflow's stages produce.
+struct WorkflowState {
+  nlohmann::json report;    // report.json (the calibration stage's keys and the workflow's)
+  nlohmann::json workflow;  // base_frame.workflow
+  std::optional<HandclaspStageResult> stage_a, stage_c;  // (a) and (c), typed
+  std::string failure;      // why the workflow stopped; empty while it goes on
+};
+
+// Loads the scenario, applies the trial and parses every section the workflow needs, and
+// checks the output paths: bad input writes nothing.
+WorkflowInputs LoadWorkflowInputs(const RunOptions& o) {
+  WorkflowInputs in;
+  Scenario& sc = in.sc;
+  sc = LoadScenario(o.scenario);
   ApplyTrial(o.trial, &sc);
   if (!IsPresent(sc.calibration)) {
     throw InputError(sc.path, "the dual-arm workflow needs a calibration: section");
@@ -73,17 +101,204 @@ int RunWorkflowScenario(const RunOptions& o) {
     throw InputError(sc.path, "the dual-arm workflow needs a handclasp: section");
   }
   // Everything is parsed before the cell is built: bad input writes nothing.
-  const HandclaspConfig handclasp = ParseHandclaspConfig(sc);
-  if (handclasp.trials != 1) {
+  in.handclasp = ParseHandclaspConfig(sc);
+  if (in.handclasp.trials != 1) {
     throw InputError(sc.path + " scenario.handclasp.trials",
                      "the dual-arm workflow runs one trial; trials must be 1, got " +
-                         std::to_string(handclasp.trials));
+                         std::to_string(in.handclasp.trials));
   }
-  CalibrationConfig config = ParseCalibrationConfig(sc);
-  ApplyRunOptions(o, &config);  // --no-diagnosis, --plan-cache, images
-  const Acceptance acceptance = ParseAcceptance(sc);
+  in.config = ParseCalibrationConfig(sc);
+  ApplyRunOptions(o, &in.config);  // --no-diagnosis, --plan-cache, images
+  in.acceptance = ParseAcceptance(sc);
   ValidateOutputFolder(o.out_dir, "--out");
   if (!o.junit.empty()) ValidateJunitFile(o.junit, o.out_dir);
+  return in;
+}
+
+// (a) Handclasp with the controllers' nominal kinematics.
+void RunNominalHandclasp(const WorkflowContext& ctx, const std::array<KinematicModel, 2>& nominal,
+                         WorkflowState* state) {
+  ctx.progress << "[" << SecondsSince(ctx.t_start) << " s] (a) handclasp with nominal kinematics\n";
+  state->stage_a = RunHandclaspStage(ctx.cell, ctx.sc, nominal, ctx.progress);
+  const HandclaspStageResult& a = *state->stage_a;
+  state->workflow["nominal_kinematics"] = StageSummary(a, "nominal");
+  if (!a.ok) state->failure = "handclasp with nominal kinematics failed";
+}
+
+// (b) Optical-axis calibration of both robots, told (a)'s constrained estimate. Returns the
+// calibrated models (the nominal ones where it did not run).
+std::array<KinematicModel, 2> RunOpticalAxisCalibration(
+    const WorkflowContext& ctx, const std::array<KinematicModel, 2>& nominal,
+    CalibrationConfig* config, WorkflowState* state) {
+  if (state->failure.empty()) {
+    const std::string back = ReturnToStart(ctx.cell, ctx.sc);
+    if (!back.empty()) state->failure = "before the optical-axis calibration: " + back;
+  }
+  std::array<KinematicModel, 2> calibrated = nominal;
+  if (state->failure.empty()) {
+    config->knowledge.X_B1B2 = state->stage_a->X_B1B2_constrained;
+    ctx.progress << "[" << SecondsSince(ctx.t_start)
+                 << " s] (b) optical-axis calibration of both robots\n";
+    std::fflush(stdout);
+    const OpticalAxisResult b = RunCalibrationStage(ctx.cell, ctx.sc, *config, ctx.staging,
+                                                    ctx.quiet, ctx.t_start, &state->report);
+    std::array<bool, 2> done = {false, false};
+    for (const RobotCalibration& rc_robot : b.robots) {
+      // The identified model's link 7 is the board mount; WithTipTool (in the stage) puts
+      // the tip in its place, keeping X_BL0 and links 1-6 as identified.
+      calibrated[rc_robot.robot] = rc_robot.identified;
+      done[rc_robot.robot] = true;
+    }
+    if (!done[0] || !done[1]) state->failure = "the optical-axis calibration left a robot out";
+    state->workflow["calibration_rough_X_B1B2"] =
+        "base_frame.workflow.nominal_kinematics constrained";
+  }
+  return calibrated;
+}
+
+// (c) Handclasp again with the calibrated kinematics and the small contact error; the
+// tools go back to where they started (the calibration exchanged camera and board), at
+// the start pose, where the calibration exchanged them (wherever the calibration left the
+// robots, the exchanged tools may touch something).
+void RunCalibratedHandclasp(const WorkflowContext& ctx,
+                            const std::array<KinematicModel, 2>& calibrated,
+                            int initial_camera_robot, WorkflowState* state) {
+  if (state->failure.empty()) {
+    const std::string back = ReturnToStart(ctx.cell, ctx.sc);
+    if (!back.empty()) state->failure = "before the second handclasp: " + back;
+  }
+  if (state->failure.empty() && ctx.cell.CameraRobot() != initial_camera_robot) {
+    const MoveResult m = ctx.cell.ExchangeTools();
+    if (m.status != MoveStatus::kSettled) state->failure = "exchanging the tools back: " + m.reason;
+  }
+  if (state->failure.empty()) {
+    ctx.progress << "[" << SecondsSince(ctx.t_start)
+                 << " s] (c) handclasp with calibrated kinematics, "
+                 << 1e3 * ctx.handclasp.calibrated_operator_error_m << " mm operator error\n";
+    HandclaspStageOptions stage;
+    stage.operator_error_m = ctx.handclasp.calibrated_operator_error_m;
+    stage.identify_tips = ctx.handclasp.calibrated_tip_identification;
+    stage.best_fit_frames = true;
+    state->stage_c = RunHandclaspStage(ctx.cell, ctx.sc, calibrated, ctx.progress, stage);
+    const HandclaspStageResult& c = *state->stage_c;
+    state->workflow["calibrated_kinematics"] = StageSummary(c, "calibrated (optical-axis)");
+    if (!c.ok) state->failure = "handclasp with calibrated kinematics failed";
+    if (c.report.contains("coupled_motion")) {
+      state->report["base_frame"]["coupled_motion"] = c.report["coupled_motion"];
+    }
+  }
+}
+
+// Completes report.json: the scenario, the procedure, the status and base_frame.
+void CompleteWorkflowReport(const WorkflowContext& ctx, WorkflowState* state) {
+  nlohmann::json& report = state->report;
+  const std::string& failure = state->failure;
+  if (report.is_null() || !report.contains("scenario")) {
+    report["scenario"] = ScenarioJson(ctx.sc);
+  }
+  report["procedure"] = "dual-arm workflow: handclasp (Gan et al. 2014) with nominal "
+                        "kinematics, optical-axis calibration (Zhu et al. 2019), handclasp "
+                        "with calibrated kinematics";
+  report["status"] = failure.empty() ? "ok" : "failed";
+  if (!failure.empty()) report["reason"] = failure;
+  report["base_frame"]["installation"] = ToString(ctx.handclasp.constraint);
+  report["base_frame"]["workflow"] = state->workflow;
+  if (report.contains("timing_s")) {
+    report["timing_s"]["workflow_total"] = SecondsSince(ctx.t_start);
+  }
+}
+
+// A refused stage is exit 2 with its reason (README, exit codes); nothing is written.
+void ThrowIfRefused(const Scenario& sc, const WorkflowState& state) {
+  if (state.failure.empty()) return;
+  std::string detail;
+  for (const std::optional<HandclaspStageResult>* stage : {&state.stage_c, &state.stage_a}) {
+    if (*stage && !(*stage)->ok && !(*stage)->reason.empty()) {
+      detail = ": " + (*stage)->reason;
+      break;
+    }
+  }
+  throw InputError(sc.path, "the dual-arm workflow refused: " + state.failure + detail);
+}
+
+// Writes report.json and report.html into the staging folder.
+void WriteWorkflowReport(const fs::path& staging, const nlohmann::json& report) {
+  {
+    std::ofstream f(staging / "report.json");
+    f << report.dump(2) << '\n';
+    if (!f) throw InputError((staging / "report.json").string(), "writing the report failed");
+  }
+  {
+    std::ofstream f(staging / "report.html");
+    f << RenderReportHtml(report);
+    if (!f) throw InputError((staging / "report.html").string(), "writing the report failed");
+  }
+}
+
+// One stage's line of the closing summary: its delivered estimate's errors, or "failed".
+void PrintStageLine(const HandclaspStageResult& r, const char* label) {
+  if (!r.ok) {
+    std::printf("%-34s failed\n", label);
+    return;
+  }
+  const ScoredBaseFrame& d = r.delivered();
+  std::printf("%-34s e_tran %8.3f mm  e_rot %7.4f deg  (%s; physical %.3f mm, %.4f deg)\n",
+              label, d.kinematic.e_tran_mm, d.kinematic.e_rot_deg, r.delivered_name(),
+              d.physical.e_tran_mm, d.physical.e_rot_deg);
+  if (std::isfinite(r.coupled_motion_max_deviation_mm)) {
+    std::printf("%-34s coupled motion: largest tip-to-tip deviation %.3f mm\n", "",
+                r.coupled_motion_max_deviation_mm);
+  }
+}
+
+// The closing summary: both handclasp stages' errors and what was written.
+void PrintWorkflowSummary(const WorkflowContext& ctx, const WorkflowState& state,
+                          const fs::path& out) {
+  std::printf("\nbase frame (%s installation):\n", ToString(ctx.handclasp.constraint));
+  PrintStageLine(*state.stage_a, "  handclasp, nominal kinematics");
+  if (state.stage_c) PrintStageLine(*state.stage_c, "  handclasp, calibrated kinematics");
+  std::printf("wrote %s/{report.json, report.html, measurements.csv, servo_*.png}\n",
+              out.string().c_str());
+}
+
+// Runs stages (a) to (c), writes the report to the staging folder and publishes it to `out`.
+// Returns the acceptance criteria's verdict; throws InputError when a stage refused.
+AcceptanceVerdict RunWorkflow(const WorkflowContext& ctx, CalibrationConfig* config,
+                              const Acceptance& acceptance, const fs::path& out) {
+  ctx.progress << "twinbench run: dual-arm workflow, scenario " << ctx.sc.name << " ("
+               << ctx.sc.path << ")\n";
+  const int initial_camera_robot = ctx.cell.CameraRobot();
+  WorkflowState state;
+  const std::array<KinematicModel, 2> nominal = {ctx.sc.twin.robots[0].model,
+                                                 ctx.sc.twin.robots[1].model};
+  // (a) Handclasp with the controllers' nominal kinematics.
+  RunNominalHandclasp(ctx, nominal, &state);
+  // (b) Optical-axis calibration of both robots, told (a)'s constrained estimate.
+  const std::array<KinematicModel, 2> calibrated =
+      RunOpticalAxisCalibration(ctx, nominal, config, &state);
+  // (c) Handclasp again with the calibrated kinematics.
+  RunCalibratedHandclasp(ctx, calibrated, initial_camera_robot, &state);
+  // The report's workflow keys.
+  CompleteWorkflowReport(ctx, &state);
+  // A refused stage ends the run here.
+  ThrowIfRefused(ctx.sc, state);
+  // The acceptance criteria.
+  const AcceptanceVerdict verdict = EvaluateAcceptance(acceptance, &state.report);
+  // report.json and report.html, published with the stages' files.
+  WriteWorkflowReport(ctx.staging, state.report);
+  PublishDirectory(ctx.staging.string(), out.string());
+  // The closing summary.
+  if (!ctx.quiet) PrintWorkflowSummary(ctx, state, out);
+  return verdict;
+}
+
+}  // namespace
+
+int RunWorkflowScenario(const RunOptions& o) {
+  const auto t_start = Clock::now();
+  // Everything is parsed before the cell is built: bad input writes nothing.
+  WorkflowInputs in = LoadWorkflowInputs(o);
+  const Scenario& sc = in.sc;
   InstallMujocoErrorHandlers();
   TwinCell cell(sc.twin, sc.path);  // a cell that does not settle at its start is bad input
 
@@ -93,131 +308,9 @@ int RunWorkflowScenario(const RunOptions& o) {
   std::ostream& progress = o.quiet ? static_cast<std::ostream&>(discard) : std::cout;
   AcceptanceVerdict verdict;
   try {
-    progress << "twinbench run: dual-arm workflow, scenario " << sc.name << " (" << sc.path
-             << ")\n";
-    const int initial_camera_robot = cell.CameraRobot();
-    nlohmann::json report;
-    nlohmann::json workflow;
-    std::optional<HandclaspStageResult> stage_a, stage_c;  // (a) and (c), typed
-
-    // (a) Handclasp with the controllers' nominal kinematics.
-    const std::array<KinematicModel, 2> nominal = {sc.twin.robots[0].model,
-                                                   sc.twin.robots[1].model};
-    progress << "[" << SecondsSince(t_start) << " s] (a) handclasp with nominal kinematics\n";
-    stage_a = RunHandclaspStage(cell, sc, nominal, progress);
-    const HandclaspStageResult& a = *stage_a;
-    workflow["nominal_kinematics"] = StageSummary(a, "nominal");
-    std::string failure;
-    if (!a.ok) failure = "handclasp with nominal kinematics failed";
-
-    // (b) Optical-axis calibration of both robots, told (a)'s constrained estimate.
-    if (failure.empty()) {
-      const std::string back = ReturnToStart(cell, sc);
-      if (!back.empty()) failure = "before the optical-axis calibration: " + back;
-    }
-    std::array<KinematicModel, 2> calibrated = nominal;
-    if (failure.empty()) {
-      config.knowledge.X_B1B2 = a.X_B1B2_constrained;
-      progress << "[" << SecondsSince(t_start)
-               << " s] (b) optical-axis calibration of both robots\n";
-      std::fflush(stdout);
-      const OpticalAxisResult b =
-          RunCalibrationStage(cell, sc, config, staging, o.quiet, t_start, &report);
-      std::array<bool, 2> done = {false, false};
-      for (const RobotCalibration& rc_robot : b.robots) {
-        // The identified model's link 7 is the board mount; WithTipTool (in the stage) puts
-        // the tip in its place, keeping X_BL0 and links 1-6 as identified.
-        calibrated[rc_robot.robot] = rc_robot.identified;
-        done[rc_robot.robot] = true;
-      }
-      if (!done[0] || !done[1]) failure = "the optical-axis calibration left a robot out";
-      workflow["calibration_rough_X_B1B2"] = "base_frame.workflow.nominal_kinematics constrained";
-    }
-
-    // (c) Handclasp again with the calibrated kinematics and the small contact error; the
-    // tools go back to where they started (the calibration exchanged camera and board), at
-    // the start pose, where the calibration exchanged them (wherever the calibration left the
-    // robots, the exchanged tools may touch something).
-    if (failure.empty()) {
-      const std::string back = ReturnToStart(cell, sc);
-      if (!back.empty()) failure = "before the second handclasp: " + back;
-    }
-    if (failure.empty() && cell.CameraRobot() != initial_camera_robot) {
-      const MoveResult m = cell.ExchangeTools();
-      if (m.status != MoveStatus::kSettled) failure = "exchanging the tools back: " + m.reason;
-    }
-    if (failure.empty()) {
-      progress << "[" << SecondsSince(t_start) << " s] (c) handclasp with calibrated kinematics, "
-               << 1e3 * handclasp.calibrated_operator_error_m << " mm operator error\n";
-      HandclaspStageOptions stage;
-      stage.operator_error_m = handclasp.calibrated_operator_error_m;
-      stage.identify_tips = handclasp.calibrated_tip_identification;
-      stage.best_fit_frames = true;
-      stage_c = RunHandclaspStage(cell, sc, calibrated, progress, stage);
-      const HandclaspStageResult& c = *stage_c;
-      workflow["calibrated_kinematics"] = StageSummary(c, "calibrated (optical-axis)");
-      if (!c.ok) failure = "handclasp with calibrated kinematics failed";
-      if (c.report.contains("coupled_motion")) {
-        report["base_frame"]["coupled_motion"] = c.report["coupled_motion"];
-      }
-    }
-    if (report.is_null() || !report.contains("scenario")) {
-      report["scenario"] = ScenarioJson(sc);
-    }
-    report["procedure"] = "dual-arm workflow: handclasp (Gan et al. 2014) with nominal "
-                          "kinematics, optical-axis calibration (Zhu et al. 2019), handclasp "
-                          "with calibrated kinematics";
-    report["status"] = failure.empty() ? "ok" : "failed";
-    if (!failure.empty()) report["reason"] = failure;
-    report["base_frame"]["installation"] = ToString(handclasp.constraint);
-    report["base_frame"]["workflow"] = workflow;
-    if (report.contains("timing_s")) report["timing_s"]["workflow_total"] = SecondsSince(t_start);
-    if (!failure.empty()) {
-      // A refused stage is exit 2 with its reason (README, exit codes); nothing is written.
-      std::string detail;
-      for (const std::optional<HandclaspStageResult>* stage : {&stage_c, &stage_a}) {
-        if (*stage && !(*stage)->ok && !(*stage)->reason.empty()) {
-          detail = ": " + (*stage)->reason;
-          break;
-        }
-      }
-      throw InputError(sc.path, "the dual-arm workflow refused: " + failure + detail);
-    }
-    verdict = EvaluateAcceptance(acceptance, &report);
-
-    {
-      std::ofstream f(staging / "report.json");
-      f << report.dump(2) << '\n';
-      if (!f) throw InputError((staging / "report.json").string(), "writing the report failed");
-    }
-    {
-      std::ofstream f(staging / "report.html");
-      f << RenderReportHtml(report);
-      if (!f) throw InputError((staging / "report.html").string(), "writing the report failed");
-    }
-    PublishDirectory(staging.string(), out.string());
-
-    const auto line = [&](const HandclaspStageResult& r, const char* label) {
-      if (!r.ok) {
-        std::printf("%-34s failed\n", label);
-        return;
-      }
-      const ScoredBaseFrame& d = r.delivered();
-      std::printf("%-34s e_tran %8.3f mm  e_rot %7.4f deg  (%s; physical %.3f mm, %.4f deg)\n",
-                  label, d.kinematic.e_tran_mm, d.kinematic.e_rot_deg, r.delivered_name(),
-                  d.physical.e_tran_mm, d.physical.e_rot_deg);
-      if (std::isfinite(r.coupled_motion_max_deviation_mm)) {
-        std::printf("%-34s coupled motion: largest tip-to-tip deviation %.3f mm\n", "",
-                    r.coupled_motion_max_deviation_mm);
-      }
-    };
-    if (!o.quiet) {
-      std::printf("\nbase frame (%s installation):\n", ToString(handclasp.constraint));
-      line(*stage_a, "  handclasp, nominal kinematics");
-      if (stage_c) line(*stage_c, "  handclasp, calibrated kinematics");
-      std::printf("wrote %s/{report.json, report.html, measurements.csv, servo_*.png}\n",
-                  out.string().c_str());
-    }
+    // Stages (a) to (c), the report and the summary.
+    const WorkflowContext ctx{cell, sc, in.handclasp, staging, o.quiet, t_start, progress};
+    verdict = RunWorkflow(ctx, &in.config, in.acceptance, out);
   } catch (const InputError& e) {
     DiscardStaging(staging.string());
     if (e.where().rfind(sc.path, 0) == 0) throw;

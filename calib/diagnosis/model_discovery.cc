@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <exception>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -659,36 +660,50 @@ const char* DriverText(TermDriver d) {
   return "?";
 }
 
-// Scores one candidate against the step's base (its region cross-validation `base_cv`).
-CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base_rank,
-                              const TermSpec& spec, const std::vector<int>& region, int folds,
-                              const CrossValidation& base_cv, bool cross_validate = true) {
-  CandidateScore c;
-  c.spec = spec;
-  c.label = TermLabel(spec);
-  RobotModel model;
+// Sets `model` to `base` with the term of `spec`; false (c says why) where the term cannot be
+// made or the data lacks the context it needs.
+bool BuildCandidateModel(const Data& data, const RobotModel& base, const TermSpec& spec,
+                         RobotModel* model, CandidateScore* c) {
   try {
-    model = WithTerm(base, MakeErrorTerm(spec, base.chain, base.name(), "candidate " + c.label));
+    *model = WithTerm(base, MakeErrorTerm(spec, base.chain, base.name(), "candidate " + c->label));
   } catch (const InputError& e) {
-    c.applicable = false;
-    c.note = e.what();
-    return c;
+    c->applicable = false;
+    c->note = e.what();
+    return false;
   }
   for (int i = 0; i < data.size(); ++i) {
-    const std::string missing = MissingContext(model, data.context(i));
+    const std::string missing = MissingContext(*model, data.context(i));
     if (!missing.empty()) {
-      c.applicable = false;
-      c.note = "not applicable: " + missing + " (" + data.Where(i) + ")";
-      return c;
+      c->applicable = false;
+      c->note = "not applicable: " + missing + " (" + data.Where(i) + ")";
+      return false;
     }
   }
-  const int added = static_cast<int>(model.terms.back()->parameters().size());
-  c.driver = model.terms.back()->driver();
-  Fit all = data.FitOn(model, {}, "candidate " + c.label + ", all data");
-  const int first = model.num_parameters() - added;
-  int rank = all.result.observability.rank;
-  if (model.terms.back()->has_dormant_parameters() && rank > base_rank &&
-      rank < base_rank + added) {
+  return true;
+}
+
+// A candidate's model and its fit on every unit of data.
+struct CandidateFit {
+  RobotModel model;  // the base with the term (restarted: from its first fit's term values)
+  Fit all;           // the fit on every unit
+  int added = 0;     // the term's parameters
+  int first = 0;     // index of its first parameter in the model
+  int rank = 0;      // of the all-data fit
+};
+
+// Fits the candidate's `model` on all the data; where dormant parameters were left partly
+// unidentified, restarts from that first solution and keeps the restart if it is better.
+CandidateFit FitCandidate(const Data& data, RobotModel model, int base_rank,
+                          CandidateScore* c) {
+  CandidateFit f;
+  f.added = static_cast<int>(model.terms.back()->parameters().size());
+  const int added = f.added;
+  c->driver = model.terms.back()->driver();
+  f.all = data.FitOn(model, {}, "candidate " + c->label + ", all data");
+  f.first = model.num_parameters() - added;
+  f.rank = f.all.result.observability.rank;
+  if (model.terms.back()->has_dormant_parameters() && f.rank > base_rank &&
+      f.rank < base_rank + added) {
     // Some parameters only have a gradient once the term acts (a time constant while the
     // amplitude is zero): start again from the first solution's term values, and keep that
     // start (for the cross-validation too) if more of the term is then identifiable and the
@@ -696,71 +711,115 @@ CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base
     // constant fell to seconds, a step that the geometry's scale absorbs, fitted the session
     // as the geometry alone did, and its candidate lost the gain its first solution had.)
     RobotModel restart = model;
-    restart.term_values.tail(added) = all.result.model.term_values.tail(added);
-    Fit again = data.FitOn(restart, {}, "candidate " + c.label + ", all data, restarted");
-    if (again.result.observability.rank > rank &&
-        ResidualRms(again.result) <= (1.0 + 1e-6) * ResidualRms(all.result)) {
+    restart.term_values.tail(added) = f.all.result.model.term_values.tail(added);
+    Fit again = data.FitOn(restart, {}, "candidate " + c->label + ", all data, restarted");
+    if (again.result.observability.rank > f.rank &&
+        ResidualRms(again.result) <= (1.0 + 1e-6) * ResidualRms(f.all.result)) {
       model = std::move(restart);
-      all = std::move(again);
-      rank = all.result.observability.rank;
-      c.restarted = true;
+      f.all = std::move(again);
+      f.rank = f.all.result.observability.rank;
+      c->restarted = true;
     }
   }
-  for (int k = 0; k < added; ++k) {
-    const IdentifiedParameter& ip = all.result.parameters[first + k];
-    c.parameters.push_back({ip.name, ip.unit, ip.estimated, ip.sigma});
+  f.model = std::move(model);
+  return f;
+}
+
+// Records the term's parameters as fitted on all the data and its size test (SizeTest) at
+// the data's latest time stamp.
+void RecordParametersAndSize(const Data& data, const CandidateFit& f, CandidateScore* c) {
+  for (int k = 0; k < f.added; ++k) {
+    const IdentifiedParameter& ip = f.all.result.parameters[f.first + k];
+    c->parameters.push_back({ip.name, ip.unit, ip.estimated, ip.sigma});
   }
   double session_s = std::numeric_limits<double>::quiet_NaN();
   for (int i = 0; i < data.size(); ++i) {
     const MeasurementContext& x = data.context(i);
     if (x.has_time() && (std::isnan(session_s) || x.time_s > session_s)) session_s = x.time_s;
   }
-  SizeTest(all.result, first, *model.terms.back(), session_s, &c);
-  if (rank <= base_rank) {
-    c.identifiable = false;
-    c.note = "unidentifiable from " + data.Measured() + ": the rank does not rise with its " +
-             std::to_string(added) + " parameter(s) (the measurements cannot tell it from the "
-             "geometry, or it has nothing to act on)";
-    return c;
+  SizeTest(f.all.result, f.first, *f.model.terms.back(), session_s, c);
+}
+
+// Whether the term raises the rank above `base_rank`; notes why not, or that it does partly.
+bool RaisesRank(const Data& data, const CandidateFit& f, int base_rank, CandidateScore* c) {
+  if (f.rank <= base_rank) {
+    c->identifiable = false;
+    c->note = "unidentifiable from " + data.Measured() + ": the rank does not rise with its " +
+              std::to_string(f.added) + " parameter(s) (the measurements cannot tell it from "
+              "the geometry, or it has nothing to act on)";
+    return false;
   }
-  if (rank < base_rank + added) {
+  if (f.rank < base_rank + f.added) {
     // Partly identifiable (e.g. a mount deflection along the flange axis is the tool length's):
     // the engine identifies only the combinations the data sees, the rest stay at zero.
-    c.note = "partly identifiable: the rank rises by " + std::to_string(rank - base_rank) +
-             " of its " + std::to_string(added) + " parameters";
+    c->note = "partly identifiable: the rank rises by " + std::to_string(f.rank - base_rank) +
+              " of its " + std::to_string(f.added) + " parameters";
   }
-  // Disguise of the geometry: the canonical correlations of the term's columns with the
-  // geometric ones (TermGeometryDependence); the directions that did not raise the rank lie in
-  // the geometry by definition and are left out, the largest of the rest is the measure.
-  const std::string block = ParameterLayout(model).blocks().back().name;
-  for (const TermGeometryDependence& d : all.result.term_dependence) {
+  return true;
+}
+
+// Disguise of the geometry: the canonical correlations of the term's columns with the
+// geometric ones (TermGeometryDependence); the directions that did not raise the rank lie in
+// the geometry by definition and are left out, the largest of the rest is the measure.
+void MeasureGeometryDisguise(const CandidateFit& f, int base_rank, CandidateScore* c) {
+  const std::string block = ParameterLayout(f.model).blocks().back().name;
+  for (const TermGeometryDependence& d : f.all.result.term_dependence) {
     if (d.block != block) continue;
-    const int rise = rank - base_rank;
+    const int rise = f.rank - base_rank;
     const int skip = std::max(0, static_cast<int>(d.canonical_correlations.size()) - rise);
     if (skip < static_cast<int>(d.canonical_correlations.size())) {
-      c.max_geometry_correlation = d.canonical_correlations[skip];
-      c.correlated_with = d.nearest_geometric[skip];
+      c->max_geometry_correlation = d.canonical_correlations[skip];
+      c->correlated_with = d.nearest_geometric[skip];
     }
   }
+}
+
+// The candidate's region cross-validation against the base's `base_cv`: held-out RMS, gain
+// and Wilcoxon's one-sided p on the per-unit loss differences.
+void TestHeldOut(const Data& data, const RobotModel& model, const std::vector<int>& region,
+                 int folds, const CrossValidation& base_cv, CandidateScore* c) {
+  const CrossValidation cv = CrossValidate(data, model, region, folds, "candidate " + c->label);
+  c->heldout_rms_m = cv.Rms();
+  const double base_sse = base_cv.Sse();
+  c->gain_percent = base_sse > 0 ? 100.0 * (1.0 - cv.Sse() / base_sse) : 0.0;
+  std::vector<double> d(cv.loss.size());
+  for (std::size_t i = 0; i < d.size(); ++i) d[i] = base_cv.loss[i] - cv.loss[i];
+  c->p_value = stats::WilcoxonSignedRankGreater(d).p_value;
+  c->heldout_loss = cv.loss;
+  c->tested = true;
+}
+
+// Scores one candidate against the step's base (its region cross-validation `base_cv`).
+CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base_rank,
+                              const TermSpec& spec, const std::vector<int>& region, int folds,
+                              const CrossValidation& base_cv, bool cross_validate = true) {
+  CandidateScore c;
+  c.spec = spec;
+  c.label = TermLabel(spec);
+  // The base with the term, where it applies to the data.
+  RobotModel model;
+  if (!BuildCandidateModel(data, base, spec, &model, &c)) return c;
+  // Its fit on all the data, restarted where dormant parameters need it.
+  const CandidateFit fit = FitCandidate(data, std::move(model), base_rank, &c);
+  // Its parameters and whether its size is told from zero.
+  RecordParametersAndSize(data, fit, &c);
+  // Identifiable at all (the rank rises)?
+  if (!RaisesRank(data, fit, base_rank, &c)) return c;
+  // How nearly it is the geometry in disguise.
+  MeasureGeometryDisguise(fit, base_rank, &c);
   if (!cross_validate) {
     c.note = (c.note.empty() ? "" : c.note + "; ") +
              "fitted on all the data, not tested: the residual is consistent with the noise";
     return c;
   }
-  const CrossValidation cv = CrossValidate(data, model, region, folds, "candidate " + c.label);
-  c.heldout_rms_m = cv.Rms();
-  const double base_sse = base_cv.Sse();
-  c.gain_percent = base_sse > 0 ? 100.0 * (1.0 - cv.Sse() / base_sse) : 0.0;
-  std::vector<double> d(cv.loss.size());
-  for (std::size_t i = 0; i < d.size(); ++i) d[i] = base_cv.loss[i] - cv.loss[i];
-  c.p_value = stats::WilcoxonSignedRankGreater(d).p_value;
-  c.heldout_loss = cv.loss;
-  c.tested = true;
+  // Held out in the region folds against the base.
+  TestHeldOut(data, fit.model, region, folds, base_cv, &c);
   return c;
 }
 
 // Every candidate of `specs` scored beside `current` (ScoreCandidate), `jobs` at a time; a
-// candidate whose identification throws is reported unidentifiable with the reason.
+// candidate whose identification refuses the data (InputError) is reported unidentifiable with
+// the reason; any other exception is a bug and is rethrown once the workers have ended.
 std::vector<CandidateScore> ScoreAll(const Data& data, const RobotModel& current, int base_rank,
                                      const std::vector<TermSpec>& specs,
                                      const std::vector<int>& region, int folds,
@@ -771,16 +830,24 @@ std::vector<CandidateScore> ScoreAll(const Data& data, const RobotModel& current
   std::vector<CandidateScore> out(specs.size());
   std::atomic<int> next{0}, done{0};
   std::mutex mutex;
+  // The first bug (anything but a refusal of the data) of any worker, rethrown after the join:
+  // a bug is never turned into a candidate's note.
+  std::exception_ptr bug;
   const auto worker = [&]() {
     for (int k = next++; k < static_cast<int>(specs.size()); k = next++) {
       try {
         out[k] = ScoreCandidate(data, current, base_rank, specs[k], region, folds, base_cv,
                                 cross_validate);
-      } catch (const std::exception& e) {
+      } catch (const InputError& e) {
         out[k].spec = specs[k];
         out[k].label = TermLabel(specs[k]);
         out[k].identifiable = false;
         out[k].note = std::string("its identification failed: ") + e.what();
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!bug) bug = std::current_exception();
+        next = static_cast<int>(specs.size());  // no further candidates
+        return;
       }
       const int d = ++done;
       std::lock_guard<std::mutex> lock(mutex);
@@ -793,6 +860,7 @@ std::vector<CandidateScore> ScoreAll(const Data& data, const RobotModel& current
     pool.emplace_back(worker);
   }
   for (std::thread& t : pool) t.join();
+  if (bug) std::rethrow_exception(bug);
   return out;
 }
 
@@ -875,15 +943,25 @@ void Evidence(const RobotModel& model, const Data& data, const CrossValidation& 
   if (r->evidence.size() > 8) r->evidence.resize(8);
 }
 
-// Steps 2-4 of the header on any kind of data; `r` holds the noise floor and the fold rules.
-void Discover(const Data& data, const RobotModel& start, const std::vector<int>& random,
-              int random_folds, const std::vector<int>& region, int folds,
-              const std::string& random_rule,
-              const DiscoveryOptions& o, DiscoveryResult* out) {
-  DiscoveryResult& r = *out;
-  const auto say = [&](const std::string& line) {
-    if (o.progress) o.progress(line);
-  };
+// What every stage of the search reads: Discover's arguments and what it derives from them.
+struct Search {
+  const Data& data;
+  const RobotModel& start;
+  const std::vector<int>& random;  // each unit's fold of the residual test
+  int random_folds;
+  const std::vector<int>& region;  // each unit's region fold
+  int folds;                       // of the region folds
+  const std::string& random_rule;
+  const DiscoveryOptions& o;
+  std::vector<TermSpec> all_specs;  // the candidates
+  int jobs;                         // parallel candidate evaluations
+  std::function<void(const std::string&)> say;  // progress lines
+};
+
+// The model every fit starts from: `start`, with its declared terms' dormant parameters taken
+// from a first all-data fit where that identifies more and fits no worse.
+RobotModel WakeDormantTerms(const Data& data, const RobotModel& start,
+                            const std::function<void(const std::string&)>& say) {
   RobotModel current = start;
   if (HasDormantTermsAtZero(start)) {
     // A declared term whose dormant parameters sleep at zero (a warm-up's time constant):
@@ -898,257 +976,394 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
       say("diagnosis: the declared terms' dormant parameters start from a first fit");
     }
   }
-  const std::vector<TermSpec> all_specs =
-      o.candidates.empty() ? CandidateTermSpecs(start.chain) : o.candidates;
-  const int jobs = o.jobs > 0 ? o.jobs : UsableCpuCount();
-  say("diagnosis: residual test of the starting model (" + std::to_string(random_folds) +
-      " folds)");
-  r.test_before =
-      RunResidualTest(data, current, random, random_folds, o, random_rule, "residual test");
-  CrossValidation current_region = CrossValidate(data, current, region, folds, "region folds");
-  r.heldout_rms_start_m = current_region.Rms();
-  if (!r.test_before.systematic) {
-    r.verdict = "consistent_with_noise";
-    std::ostringstream os;
-    os << "the residuals of the residual test (RMS " << Mm(r.test_before.rms_m)
-       << ") are consistent with the noise floor (sigma " << Mm(r.noise.sigma_m)
-       << " per coordinate): p = "
-       << r.test_before.p_value << " >= alpha = " << o.alpha << "; no effect searched";
-    r.reason = os.str();
-    r.test_after = r.test_before;
-    r.heldout_rms_discovered_m = r.heldout_rms_start_m;
-    if (o.screen_when_noise) {
-      const int base_rank = data.FitOn(current, {}, "screen base").result.observability.rank;
-      r.screened = ScoreAll(data, current, base_rank, all_specs, region, folds, current_region,
-                            false, jobs, say, "screen");
-      int seen = 0, unseen = 0;
-      for (const CandidateScore& c : r.screened) {
-        seen += c.applicable && c.identifiable;
-        unseen += c.applicable && !c.identifiable;
-      }
-      r.reason += "; of " + std::to_string(r.screened.size()) +
-                  " candidates fitted beside the model the data could see " + std::to_string(seen) +
-                  ", " + std::to_string(unseen) + " are unidentifiable from them (screened[])";
-    }
-  } else {
-    for (int step = 1; step <= o.max_effects; ++step) {
-      const int base_rank = data.FitOn(current, {}, "step base").result.observability.rank;
-      DiscoveryStep s;
-      s.index = step;
-      s.heldout_rms_before_m = current_region.Rms();
-      s.candidates = ScoreAll(data, current, base_rank, all_specs, region, folds, current_region,
-                              true, jobs, say, "step " + std::to_string(step));
+  return current;
+}
 
-      // Holm over the tested candidates; the largest gain is accepted only if it passes.
-      std::vector<int> tested;
-      std::vector<double> p;
-      for (int k = 0; k < static_cast<int>(s.candidates.size()); ++k) {
-        if (s.candidates[k].tested) {
-          tested.push_back(k);
-          p.push_back(s.candidates[k].p_value);
-        }
-      }
-      // Every tested candidate is in the family; one whose size the data cannot tell from
-      // zero (SizeTest) is not eligible.
-      const std::vector<double> adjusted = stats::HolmAdjust(p);
-      int best = -1;
-      for (std::size_t t = 0; t < tested.size(); ++t) {
-        CandidateScore& c = s.candidates[tested[t]];
-        c.p_adjusted = adjusted[t];
-        if (c.size_p_value >= o.alpha) {
-          std::ostringstream why;
-          why << "its size is not told from zero: Wald chi-square " << c.size_statistic
-              << " on " << c.size_dof << " dof, p = " << c.size_p_value << " >= " << o.alpha;
-          c.note = c.note.empty() ? why.str() : c.note + "; " + why.str();
-          continue;
-        }
-        if (best < 0 || c.gain_percent > s.candidates[best].gain_percent) best = tested[t];
-      }
-      s.heldout_rms_after_m = s.heldout_rms_before_m;
-      // Why an eligible candidate would not be accepted on its own; empty: it would be.
-      const auto refusal = [&](const CandidateScore& c) {
-        std::ostringstream why;
-        if (c.p_adjusted >= o.alpha) {
-          why << "not significant: Holm-adjusted p = " << c.p_adjusted << " >= " << o.alpha
-              << " over " << tested.size() << " candidates";
-        } else if (c.gain_percent < o.min_gain_percent) {
-          why << c.gain_percent << " % < the " << o.min_gain_percent << " % worth a term";
-        } else if (c.max_geometry_correlation >= o.correlation_limit) {
-          why << "a disguise of the geometry: |rho| = " << c.max_geometry_correlation
-              << " with " << c.correlated_with;
-        }
-        return why.str();
-      };
-      // The driver preference (header, step 3): the region folds are parts of one session, so
-      // they cannot test how a clock-driven term carries over to later times. Where the leader
-      // is clock-driven and an acceptable candidate with an earlier driver (TermDriver) is not
-      // told apart from it (the leader's held-out loss below the other's, summed per region
-      // fold, by the sign-flip test: p >= alpha), that candidate is taken instead: of several,
-      // the earliest driver, then the largest gain. The folds are the independent units here,
-      // not the points: a fold's points share the error of the model fitted without them, and
-      // between two near-equal models that shared error is the whole difference. Per point,
-      // Wilcoxon called a 0.14-point gain difference (a time-linear growth against the same
-      // growth read by a 0.03 K sensor, synthetic tracker data) significant at p = 0.0007.
-      if (best >= 0 && s.candidates[best].driver != TermDriver::kMeasured &&
-          refusal(s.candidates[best]).empty()) {
-        const CandidateScore& lead = s.candidates[best];
-        int preferred = -1;
-        for (int k : tested) {
-          CandidateScore& c = s.candidates[k];
-          if (c.driver >= lead.driver || c.size_p_value >= o.alpha || !refusal(c).empty()) {
-            continue;
-          }
-          if (c.heldout_loss.size() != lead.heldout_loss.size() ||
-              region.size() != lead.heldout_loss.size()) {
-            continue;
-          }
-          c.versus_leader_p_value = FoldSignFlipP(c, lead, region, folds);
-          if (c.versus_leader_p_value < o.alpha) {
-            std::ostringstream why;
-            why << "not preferred for its driver (" << DriverText(c.driver) << "): "
-                << lead.label << " (" << DriverText(lead.driver)
-                << ") is better in the region folds (sign-flip p = " << c.versus_leader_p_value
-                << " < " << o.alpha << ")";
-            c.note = c.note.empty() ? why.str() : c.note + "; " + why.str();
-            continue;
-          }
-          const CandidateScore* q = preferred >= 0 ? &s.candidates[preferred] : nullptr;
-          if (!q || c.driver < q->driver ||
-              (c.driver == q->driver && c.gain_percent > q->gain_percent)) {
-            preferred = k;
-          }
-        }
-        if (preferred >= 0) {
-          CandidateScore& leader = s.candidates[best];
-          CandidateScore& c = s.candidates[preferred];
-          c.preferred_over = leader.label;
-          std::ostringstream why;
-          why << "largest held-out gain (" << leader.gain_percent << " %), but driven by "
-              << DriverText(leader.driver) << " and not told apart from " << c.label << " ("
-              << c.gain_percent << " %, sign-flip p over the region folds = "
-              << c.versus_leader_p_value << " >= " << o.alpha << "), driven by "
-              << DriverText(c.driver);
-          leader.note = leader.note.empty() ? why.str() : leader.note + "; " + why.str();
-          best = preferred;
-        }
-      }
-      // A shape held at its start (header, step 3): a term whose shape (a warm-up's time
-      // constant) the data left at the value its search started from is that start's
-      // assumption; where the same term with its shape estimated from another start would be
-      // accepted and the region folds cannot tell the two apart, the estimated one is taken.
-      std::string shape_choice;  // why this rule changed the choice
-      if (best >= 0 && !s.candidates[best].restarted && refusal(s.candidates[best]).empty() &&
-          s.candidates[best].heldout_loss.size() == region.size() &&
-          HasDormantParameters(s.candidates[best].spec, start)) {
-        const CandidateScore& held = s.candidates[best];
-        int estimated = -1;
-        double estimated_p = 1.0;
-        for (int k : tested) {
-          const CandidateScore& c = s.candidates[k];
-          if (k == best || c.spec.type != held.spec.type || !c.restarted ||
-              c.size_p_value >= o.alpha || !refusal(c).empty() ||
-              c.heldout_loss.size() != region.size()) {
-            continue;
-          }
-          const double p_fold = FoldSignFlipP(c, held, region, folds);
-          if (p_fold < o.alpha) continue;
-          if (estimated < 0 || c.gain_percent > s.candidates[estimated].gain_percent) {
-            estimated = k;
-            estimated_p = p_fold;
-          }
-        }
-        if (estimated >= 0) {
-          CandidateScore& was = s.candidates[best];
-          CandidateScore& c = s.candidates[estimated];
-          std::ostringstream why;
-          why << "its shape stayed at the start of its search (the data did not identify it "
-                 "there), and "
-              << c.label << " estimates it with a held-out loss the region folds do not tell "
-              << "apart (sign-flip p = " << estimated_p << " >= " << o.alpha << ")";
-          was.note = was.note.empty() ? why.str() : was.note + "; " + why.str();
-          std::ostringstream accepted_why;
-          accepted_why << "accepted in place of " << was.label
-                       << ", whose shape stayed at the start of its search: this one estimates "
-                          "it, and the region folds do not tell the two apart (sign-flip p = "
-                       << estimated_p << ")";
-          shape_choice = accepted_why.str();
-          c.preferred_over = was.label;
-          best = estimated;
-        }
-      }
-      if (best >= 0) {
-        CandidateScore& c = s.candidates[best];
-        const std::string refused = refusal(c);
-        std::ostringstream why;
-        if (!refused.empty()) {
-          why << "largest held-out gain, but " << refused;
-        } else if (!shape_choice.empty()) {
-          c.accepted = true;
-          why << shape_choice << "; held-out gain " << c.gain_percent
-              << " %, Holm-adjusted p = " << c.p_adjusted << " over " << tested.size()
-              << " candidates";
-        } else if (!c.preferred_over.empty()) {
-          c.accepted = true;
-          why << "accepted in place of " << c.preferred_over << " (driven by "
-              << DriverText(c.driver) << ", fold p = "
-              << c.versus_leader_p_value << "): held-out gain " << c.gain_percent
-              << " %, Holm-adjusted p = " << c.p_adjusted << " over " << tested.size()
-              << " candidates";
-        } else {
-          c.accepted = true;
-          why << "accepted: largest held-out gain (" << c.gain_percent
-              << " %), Holm-adjusted p = " << c.p_adjusted << " over " << tested.size()
-              << " candidates";
-        }
-        c.note = c.note.empty() ? why.str() : c.note + "; " + why.str();
-      }
-      if (best < 0 || !s.candidates[best].accepted) {
-        r.steps.push_back(std::move(s));
-        break;
-      }
-      const CandidateScore& accepted = s.candidates[best];
-      s.accepted = best;
-      current = WithTerm(current, MakeErrorTerm(accepted.spec, start.chain, start.name()));
-      if (accepted.restarted) {
-        // Its fits start where its first fit ended (ScoreCandidate), for the same reason.
-        const int added = static_cast<int>(accepted.parameters.size());
-        for (int k = 0; k < added; ++k) {
-          current.term_values(current.term_values.size() - added + k) =
-              accepted.parameters[k].estimated;
-        }
-      }
-      current_region = CrossValidate(data, current, region, folds, "region folds");
-      s.heldout_rms_after_m = current_region.Rms();
-      r.effects_added.push_back(accepted);
-      say("diagnosis: step " + std::to_string(step) + " added " + accepted.label +
-          ", held-out RMS " + Mm(s.heldout_rms_before_m) + " -> " + Mm(s.heldout_rms_after_m));
-      r.steps.push_back(std::move(s));
-      // Once the residual is consistent with the noise there is nothing left to explain: a
-      // further term could only fit noise.
-      r.test_after =
-          RunResidualTest(data, current, random, random_folds, o, random_rule, "residual test");
-      if (!r.test_after.systematic) break;
+// Step 2 on the starting model (r->test_before); returns its region cross-validation, the
+// base of the first step.
+CrossValidation TestStartingModel(const Search& search, const RobotModel& current,
+                                  DiscoveryResult* out) {
+  DiscoveryResult& r = *out;
+  search.say("diagnosis: residual test of the starting model (" +
+             std::to_string(search.random_folds) + " folds)");
+  r.test_before = RunResidualTest(search.data, current, search.random, search.random_folds,
+                                  search.o, search.random_rule, "residual test");
+  CrossValidation current_region =
+      CrossValidate(search.data, current, search.region, search.folds, "region folds");
+  r.heldout_rms_start_m = current_region.Rms();
+  return current_region;
+}
+
+// The verdict "consistent_with_noise", and with screen_when_noise every candidate fitted on
+// all the data beside the model (DiscoveryResult::screened).
+void ConcludeConsistentWithNoise(const Search& search, const RobotModel& current,
+                                 const CrossValidation& current_region, DiscoveryResult* out) {
+  DiscoveryResult& r = *out;
+  const DiscoveryOptions& o = search.o;
+  r.verdict = "consistent_with_noise";
+  std::ostringstream os;
+  os << "the residuals of the residual test (RMS " << Mm(r.test_before.rms_m)
+     << ") are consistent with the noise floor (sigma " << Mm(r.noise.sigma_m)
+     << " per coordinate): p = "
+     << r.test_before.p_value << " >= alpha = " << o.alpha << "; no effect searched";
+  r.reason = os.str();
+  r.test_after = r.test_before;
+  r.heldout_rms_discovered_m = r.heldout_rms_start_m;
+  if (o.screen_when_noise) {
+    const int base_rank = search.data.FitOn(current, {}, "screen base").result.observability.rank;
+    r.screened = ScoreAll(search.data, current, base_rank, search.all_specs, search.region,
+                          search.folds, current_region, false, search.jobs, search.say,
+                          "screen");
+    int seen = 0, unseen = 0;
+    for (const CandidateScore& c : r.screened) {
+      seen += c.applicable && c.identifiable;
+      unseen += c.applicable && !c.identifiable;
     }
-    r.heldout_rms_discovered_m = current_region.Rms();
-    if (r.effects_added.empty()) {
-      r.test_after = r.test_before;
-      r.verdict = "unexplained";
-      std::ostringstream os;
-      os << "the residuals of the residual test (RMS " << Mm(r.test_before.rms_m)
-         << ") are systematic (p = " << r.test_before.p_value << " against sigma "
-         << Mm(r.noise.sigma_m) << " per coordinate) and no candidate effect passes";
-      r.reason = os.str();
-    } else {
-      r.verdict = "effects_added";
-      std::ostringstream os;
-      os << r.effects_added.size() << " effect(s) added; region-disjoint held-out RMS "
-         << Mm(r.heldout_rms_start_m) << " -> " << Mm(r.heldout_rms_discovered_m)
-         << "; the residual is then " << (r.test_after.systematic ? "still systematic" :
-                                                                    "consistent with noise")
-         << " (p = " << r.test_after.p_value << ")";
-      r.reason = os.str();
+    r.reason += "; of " + std::to_string(r.screened.size()) +
+                " candidates fitted beside the model the data could see " + std::to_string(seen) +
+                ", " + std::to_string(unseen) + " are unidentifiable from them (screened[])";
+  }
+}
+
+// Step `step`'s candidates, each scored beside `current` (ScoreAll) against its region
+// cross-validation `current_region`.
+DiscoveryStep ScoreStep(const Search& search, const RobotModel& current,
+                        const CrossValidation& current_region, int step) {
+  const int base_rank = search.data.FitOn(current, {}, "step base").result.observability.rank;
+  DiscoveryStep s;
+  s.index = step;
+  s.heldout_rms_before_m = current_region.Rms();
+  s.candidates = ScoreAll(search.data, current, base_rank, search.all_specs, search.region,
+                          search.folds, current_region, true, search.jobs, search.say,
+                          "step " + std::to_string(step));
+  return s;
+}
+
+// The step's tested candidates (indices) and the one of largest gain among them whose size
+// the data tell from zero (-1 none).
+struct Selection {
+  std::vector<int> tested;
+  int best = -1;
+};
+
+// Holm over the tested candidates (CandidateScore::p_adjusted) and the largest gain among
+// those that pass the size test; the others' notes say why they are not eligible.
+Selection SelectLargestGain(const DiscoveryOptions& o, DiscoveryStep* step) {
+  DiscoveryStep& s = *step;
+  Selection sel;
+  std::vector<int>& tested = sel.tested;
+  // Holm over the tested candidates; the largest gain is accepted only if it passes.
+  std::vector<double> p;
+  for (int k = 0; k < static_cast<int>(s.candidates.size()); ++k) {
+    if (s.candidates[k].tested) {
+      tested.push_back(k);
+      p.push_back(s.candidates[k].p_value);
     }
   }
+  // Every tested candidate is in the family; one whose size the data cannot tell from
+  // zero (SizeTest) is not eligible.
+  const std::vector<double> adjusted = stats::HolmAdjust(p);
+  int& best = sel.best;
+  for (std::size_t t = 0; t < tested.size(); ++t) {
+    CandidateScore& c = s.candidates[tested[t]];
+    c.p_adjusted = adjusted[t];
+    if (c.size_p_value >= o.alpha) {
+      std::ostringstream why;
+      why << "its size is not told from zero: Wald chi-square " << c.size_statistic
+          << " on " << c.size_dof << " dof, p = " << c.size_p_value << " >= " << o.alpha;
+      c.note = c.note.empty() ? why.str() : c.note + "; " + why.str();
+      continue;
+    }
+    if (best < 0 || c.gain_percent > s.candidates[best].gain_percent) best = tested[t];
+  }
+  return sel;
+}
+
+// Why an eligible candidate would not be accepted on its own; empty: it would be.
+std::string Refusal(const CandidateScore& c, const DiscoveryOptions& o,
+                    const std::vector<int>& tested) {
+  std::ostringstream why;
+  if (c.p_adjusted >= o.alpha) {
+    why << "not significant: Holm-adjusted p = " << c.p_adjusted << " >= " << o.alpha
+        << " over " << tested.size() << " candidates";
+  } else if (c.gain_percent < o.min_gain_percent) {
+    why << c.gain_percent << " % < the " << o.min_gain_percent << " % worth a term";
+  } else if (c.max_geometry_correlation >= o.correlation_limit) {
+    why << "a disguise of the geometry: |rho| = " << c.max_geometry_correlation
+        << " with " << c.correlated_with;
+  }
+  return why.str();
+}
+
+// The driver preference (header, step 3): the region folds are parts of one session, so
+// they cannot test how a clock-driven term carries over to later times. Where the leader
+// is clock-driven and an acceptable candidate with an earlier driver (TermDriver) is not
+// told apart from it (the leader's held-out loss below the other's, summed per region
+// fold, by the sign-flip test: p >= alpha), that candidate is taken instead: of several,
+// the earliest driver, then the largest gain. The folds are the independent units here,
+// not the points: a fold's points share the error of the model fitted without them, and
+// between two near-equal models that shared error is the whole difference. Per point,
+// Wilcoxon called a 0.14-point gain difference (a time-linear growth against the same
+// growth read by a 0.03 K sensor, synthetic tracker data) significant at p = 0.0007.
+// Returns the choice, `best` where nothing is preferred.
+int PreferEarlierDriver(const Search& search, const std::vector<int>& tested, int best,
+                        DiscoveryStep* step) {
+  DiscoveryStep& s = *step;
+  const DiscoveryOptions& o = search.o;
+  const std::vector<int>& region = search.region;
+  const int folds = search.folds;
+  if (!(best >= 0 && s.candidates[best].driver != TermDriver::kMeasured &&
+        Refusal(s.candidates[best], o, tested).empty())) {
+    return best;
+  }
+  const CandidateScore& lead = s.candidates[best];
+  int preferred = -1;
+  for (int k : tested) {
+    CandidateScore& c = s.candidates[k];
+    if (c.driver >= lead.driver || c.size_p_value >= o.alpha || !Refusal(c, o, tested).empty()) {
+      continue;
+    }
+    if (c.heldout_loss.size() != lead.heldout_loss.size() ||
+        region.size() != lead.heldout_loss.size()) {
+      continue;
+    }
+    c.versus_leader_p_value = FoldSignFlipP(c, lead, region, folds);
+    if (c.versus_leader_p_value < o.alpha) {
+      std::ostringstream why;
+      why << "not preferred for its driver (" << DriverText(c.driver) << "): "
+          << lead.label << " (" << DriverText(lead.driver)
+          << ") is better in the region folds (sign-flip p = " << c.versus_leader_p_value
+          << " < " << o.alpha << ")";
+      c.note = c.note.empty() ? why.str() : c.note + "; " + why.str();
+      continue;
+    }
+    const CandidateScore* q = preferred >= 0 ? &s.candidates[preferred] : nullptr;
+    if (!q || c.driver < q->driver ||
+        (c.driver == q->driver && c.gain_percent > q->gain_percent)) {
+      preferred = k;
+    }
+  }
+  if (preferred >= 0) {
+    CandidateScore& leader = s.candidates[best];
+    CandidateScore& c = s.candidates[preferred];
+    c.preferred_over = leader.label;
+    std::ostringstream why;
+    why << "largest held-out gain (" << leader.gain_percent << " %), but driven by "
+        << DriverText(leader.driver) << " and not told apart from " << c.label << " ("
+        << c.gain_percent << " %, sign-flip p over the region folds = "
+        << c.versus_leader_p_value << " >= " << o.alpha << "), driven by "
+        << DriverText(c.driver);
+    leader.note = leader.note.empty() ? why.str() : leader.note + "; " + why.str();
+    best = preferred;
+  }
+  return best;
+}
+
+// A shape held at its start (header, step 3): a term whose shape (a warm-up's time
+// constant) the data left at the value its search started from is that start's
+// assumption; where the same term with its shape estimated from another start would be
+// accepted and the region folds cannot tell the two apart, the estimated one is taken.
+// Returns the choice, `best` where nothing changed; `shape_choice` says why it changed.
+int PreferEstimatedShape(const Search& search, const std::vector<int>& tested, int best,
+                         DiscoveryStep* step, std::string* shape_choice) {
+  DiscoveryStep& s = *step;
+  const DiscoveryOptions& o = search.o;
+  const std::vector<int>& region = search.region;
+  const int folds = search.folds;
+  if (!(best >= 0 && !s.candidates[best].restarted &&
+        Refusal(s.candidates[best], o, tested).empty() &&
+        s.candidates[best].heldout_loss.size() == region.size() &&
+        HasDormantParameters(s.candidates[best].spec, search.start))) {
+    return best;
+  }
+  const CandidateScore& held = s.candidates[best];
+  int estimated = -1;
+  double estimated_p = 1.0;
+  for (int k : tested) {
+    const CandidateScore& c = s.candidates[k];
+    if (k == best || c.spec.type != held.spec.type || !c.restarted ||
+        c.size_p_value >= o.alpha || !Refusal(c, o, tested).empty() ||
+        c.heldout_loss.size() != region.size()) {
+      continue;
+    }
+    const double p_fold = FoldSignFlipP(c, held, region, folds);
+    if (p_fold < o.alpha) continue;
+    if (estimated < 0 || c.gain_percent > s.candidates[estimated].gain_percent) {
+      estimated = k;
+      estimated_p = p_fold;
+    }
+  }
+  if (estimated >= 0) {
+    CandidateScore& was = s.candidates[best];
+    CandidateScore& c = s.candidates[estimated];
+    std::ostringstream why;
+    why << "its shape stayed at the start of its search (the data did not identify it "
+           "there), and "
+        << c.label << " estimates it with a held-out loss the region folds do not tell "
+        << "apart (sign-flip p = " << estimated_p << " >= " << o.alpha << ")";
+    was.note = was.note.empty() ? why.str() : was.note + "; " + why.str();
+    std::ostringstream accepted_why;
+    accepted_why << "accepted in place of " << was.label
+                 << ", whose shape stayed at the start of its search: this one estimates "
+                    "it, and the region folds do not tell the two apart (sign-flip p = "
+                 << estimated_p << ")";
+    *shape_choice = accepted_why.str();
+    c.preferred_over = was.label;
+    best = estimated;
+  }
+  return best;
+}
+
+// Accepts the chosen candidate `best` (CandidateScore::accepted) unless it is refused, and
+// notes why either way; nothing where best < 0.
+void DecideOnChoice(const DiscoveryOptions& o, const std::vector<int>& tested, int best,
+                    const std::string& shape_choice, DiscoveryStep* step) {
+  DiscoveryStep& s = *step;
+  if (best < 0) return;
+  CandidateScore& c = s.candidates[best];
+  const std::string refused = Refusal(c, o, tested);
+  std::ostringstream why;
+  if (!refused.empty()) {
+    why << "largest held-out gain, but " << refused;
+  } else if (!shape_choice.empty()) {
+    c.accepted = true;
+    why << shape_choice << "; held-out gain " << c.gain_percent
+        << " %, Holm-adjusted p = " << c.p_adjusted << " over " << tested.size()
+        << " candidates";
+  } else if (!c.preferred_over.empty()) {
+    c.accepted = true;
+    why << "accepted in place of " << c.preferred_over << " (driven by "
+        << DriverText(c.driver) << ", fold p = "
+        << c.versus_leader_p_value << "): held-out gain " << c.gain_percent
+        << " %, Holm-adjusted p = " << c.p_adjusted << " over " << tested.size()
+        << " candidates";
+  } else {
+    c.accepted = true;
+    why << "accepted: largest held-out gain (" << c.gain_percent
+        << " %), Holm-adjusted p = " << c.p_adjusted << " over " << tested.size()
+        << " candidates";
+  }
+  c.note = c.note.empty() ? why.str() : c.note + "; " + why.str();
+}
+
+// The step's choice among its scored candidates (header, step 3): the index of the chosen
+// one, -1 none; it is accepted only where its CandidateScore::accepted says so.
+int ChooseCandidate(const Search& search, DiscoveryStep* step) {
+  // Holm-adjusted p-values, and the largest gain among those with a size.
+  const Selection sel = SelectLargestGain(search.o, step);
+  step->heldout_rms_after_m = step->heldout_rms_before_m;
+  // A clock-driven leader gives way to an earlier driver the folds cannot tell from it.
+  int best = PreferEarlierDriver(search, sel.tested, sel.best, step);
+  // A shape left at its start gives way to the same term with its shape estimated.
+  std::string shape_choice;  // why this rule changed the choice
+  best = PreferEstimatedShape(search, sel.tested, best, step, &shape_choice);
+  // Accepted or refused, with the reason.
+  DecideOnChoice(search.o, sel.tested, best, shape_choice, step);
+  return best;
+}
+
+// Adds the accepted candidate `best` of step `s` to `current`, records the step and tests the
+// extended model (r->test_after); returns whether its residual is still systematic.
+bool AcceptTerm(const Search& search, DiscoveryStep s, int best, RobotModel* current,
+                CrossValidation* current_region, DiscoveryResult* out) {
+  DiscoveryResult& r = *out;
+  const RobotModel& start = search.start;
+  const CandidateScore& accepted = s.candidates[best];
+  s.accepted = best;
+  *current = WithTerm(*current, MakeErrorTerm(accepted.spec, start.chain, start.name()));
+  if (accepted.restarted) {
+    // Its fits start where its first fit ended (ScoreCandidate), for the same reason.
+    const int added = static_cast<int>(accepted.parameters.size());
+    for (int k = 0; k < added; ++k) {
+      current->term_values(current->term_values.size() - added + k) =
+          accepted.parameters[k].estimated;
+    }
+  }
+  *current_region =
+      CrossValidate(search.data, *current, search.region, search.folds, "region folds");
+  s.heldout_rms_after_m = current_region->Rms();
+  r.effects_added.push_back(accepted);
+  search.say("diagnosis: step " + std::to_string(s.index) + " added " + accepted.label +
+             ", held-out RMS " + Mm(s.heldout_rms_before_m) + " -> " +
+             Mm(s.heldout_rms_after_m));
+  r.steps.push_back(std::move(s));
+  // Once the residual is consistent with the noise there is nothing left to explain: a
+  // further term could only fit noise.
+  r.test_after = RunResidualTest(search.data, *current, search.random, search.random_folds,
+                                 search.o, search.random_rule, "residual test");
+  return r.test_after.systematic;
+}
+
+// Forward selection (header, step 3): one term per step added to `current`, until none is
+// accepted, the residual is consistent with the noise, or max_effects are in.
+void SelectTerms(const Search& search, RobotModel* current, CrossValidation* current_region,
+                 DiscoveryResult* r) {
+  for (int step = 1; step <= search.o.max_effects; ++step) {
+    // Every candidate scored beside the current model.
+    DiscoveryStep s = ScoreStep(search, *current, *current_region, step);
+    // The choice among them, accepted or not.
+    const int best = ChooseCandidate(search, &s);
+    if (best < 0 || !s.candidates[best].accepted) {
+      r->steps.push_back(std::move(s));
+      break;
+    }
+    // The extended model; stop once its residual is noise.
+    if (!AcceptTerm(search, std::move(s), best, current, current_region, r)) break;
+  }
+}
+
+// The verdict after a search (header, step 4): "effects_added" or "unexplained", with its
+// reason; `current_region` is the discovered model's region cross-validation.
+void StateSearchVerdict(const CrossValidation& current_region, DiscoveryResult* out) {
+  DiscoveryResult& r = *out;
+  r.heldout_rms_discovered_m = current_region.Rms();
+  if (r.effects_added.empty()) {
+    r.test_after = r.test_before;
+    r.verdict = "unexplained";
+    std::ostringstream os;
+    os << "the residuals of the residual test (RMS " << Mm(r.test_before.rms_m)
+       << ") are systematic (p = " << r.test_before.p_value << " against sigma "
+       << Mm(r.noise.sigma_m) << " per coordinate) and no candidate effect passes";
+    r.reason = os.str();
+  } else {
+    r.verdict = "effects_added";
+    std::ostringstream os;
+    os << r.effects_added.size() << " effect(s) added; region-disjoint held-out RMS "
+       << Mm(r.heldout_rms_start_m) << " -> " << Mm(r.heldout_rms_discovered_m)
+       << "; the residual is then " << (r.test_after.systematic ? "still systematic" :
+                                                                  "consistent with noise")
+       << " (p = " << r.test_after.p_value << ")";
+    r.reason = os.str();
+  }
+}
+
+// Steps 2-4 of the header on any kind of data; `r` holds the noise floor and the fold rules.
+void Discover(const Data& data, const RobotModel& start, const std::vector<int>& random,
+              int random_folds, const std::vector<int>& region, int folds,
+              const std::string& random_rule,
+              const DiscoveryOptions& o, DiscoveryResult* out) {
+  DiscoveryResult& r = *out;
+  const auto say = [&](const std::string& line) {
+    if (o.progress) o.progress(line);
+  };
+  // The starting model, its declared terms' dormant parameters woken where that helps.
+  RobotModel current = WakeDormantTerms(data, start, say);
+  // The candidates, the parallelism and the rest of what every stage reads.
+  const Search search{data, start, random, random_folds, region, folds, random_rule, o,
+                      o.candidates.empty() ? CandidateTermSpecs(start.chain) : o.candidates,
+                      o.jobs > 0 ? o.jobs : UsableCpuCount(), say};
+  // Step 2: the residual test of the starting model, and its region cross-validation.
+  CrossValidation current_region = TestStartingModel(search, current, &r);
+  if (!r.test_before.systematic) {
+    // Step 4 without a search: consistent with the noise, the candidates screened.
+    ConcludeConsistentWithNoise(search, current, current_region, &r);
+  } else {
+    // Step 3: forward selection of terms.
+    SelectTerms(search, &current, &current_region, &r);
+    // Step 4: the verdict on what the search added.
+    StateSearchVerdict(current_region, &r);
+  }
+  // The discovered model on all the data, and the residual's evidence.
   const Fit final_fit = data.FitOn(current, {}, "discovered model, all data");
   r.model = final_fit.result.model;
   r.X_TB = final_fit.X_TB;

@@ -114,6 +114,148 @@ Teach TeachOne(const std::array<KinematicModel, 2>& m, const Transform& X_B1B2,
   return t;
 }
 
+// Throws InputError naming the first taught joint vector that is not finite.
+void RequireFiniteTaughtAngles(const std::vector<JointVector>& taught_q1) {
+  for (size_t i = 0; i < taught_q1.size(); ++i) {
+    if (!taught_q1[i].allFinite()) {
+      throw InputError("RunHandclaspProcedure taught_q1[" + std::to_string(i) + "]",
+                       "joint angles must be finite");
+    }
+  }
+}
+
+// Writes "handclasp: line" to log when there is one.
+void Note(std::ostream* log, const std::string& line) {
+  if (log) *log << "handclasp: " << line << "\n";
+}
+
+// What the contact loop works with: the cell, the pendant tip models, the options, the log
+// (may be null) and robot 2's start pose.
+struct ContactSession {
+  Cell& cell;
+  const std::array<KinematicModel, 2>& pendant_tip_models;
+  const HandclaspOptions& options;
+  std::ostream* log;
+  JointVector q2_home;  // robot 2's encoders before the first contact [rad]
+};
+
+// Robot 2 backs off along its tip axis (pendant IK, a linear tool move on a pendant), then
+// returns to where it started.
+void RetractRobot2(const ContactSession& s, const std::string& what) {
+  const JointVector q2 = s.cell.ReadEncoders(1);
+  if (s.options.retract_m > 0) {
+    const Transform X = EndPose(s.pendant_tip_models[1], q2) *
+                        Eigen::Translation3d(0, 0, -s.options.retract_m);
+    const IkResult ik = SolveIk(s.pendant_tip_models[1], X, q2, s.options.ik);
+    if (ik.status == IkStatus::kSuccess) {
+      const MoveResult back = s.cell.MoveTo(1, ik.q);
+      if (back.status != MoveStatus::kSettled) {
+        Note(s.log, what + ": backing off: " + ToString(back.status) + ": " + back.reason);
+      }
+    }
+  }
+  const MoveResult home = s.cell.MoveTo(1, s.q2_home);
+  if (home.status != MoveStatus::kSettled) {
+    Note(s.log, what + ": robot 2 back to its start pose: " + ToString(home.status) + ": " +
+                    home.reason);
+  }
+}
+
+// For each taught point: robot 1 there, robot 2 jogged onto its tip, both encoders read and
+// the pendant tip positions recorded, robot 2 retracted; failed moves go to result->skipped.
+void RegisterContacts(const ContactSession& s, const std::vector<JointVector>& taught_q1,
+                      HandclaspResult* result) {
+  for (size_t i = 0; i < taught_q1.size(); ++i) {
+    const std::string what = "point " + std::to_string(i);
+    const MoveResult move = s.cell.MoveTo(0, taught_q1[i]);
+    if (move.status != MoveStatus::kSettled) {
+      result->skipped.push_back(what + ": robot 1 move " + ToString(move.status) + ": " +
+                                move.reason);
+      Note(s.log, "skipped " + result->skipped.back());
+      continue;
+    }
+    const MoveResult jog = s.cell.JogTipToContact(1);
+    if (jog.status != MoveStatus::kSettled) {
+      result->skipped.push_back(what + ": contact " + ToString(jog.status) + ": " + jog.reason);
+      Note(s.log, "skipped " + result->skipped.back());
+      RetractRobot2(s, what);
+      continue;
+    }
+    HandclaspContact c;
+    c.point = static_cast<int>(i);
+    c.q1 = s.cell.ReadEncoders(0);
+    c.q2 = s.cell.ReadEncoders(1);
+    c.p_B1 = EndPose(s.pendant_tip_models[0], c.q1).translation();
+    c.p_B2 = EndPose(s.pendant_tip_models[1], c.q2).translation();
+    result->contacts.push_back(c);
+    Note(s.log, what + ": contact at " + Mm(c.p_B1) + " in B1, " + Mm(c.p_B2) + " in B2");
+    RetractRobot2(s, what);
+  }
+}
+
+// False, with status kTooFewContacts and the skipped points in the reason, when fewer than
+// kMinContacts of the `taught` points gave a contact.
+bool HasEnoughContacts(size_t taught, HandclaspResult* result) {
+  if (result->contacts.size() < static_cast<size_t>(kMinContacts)) {
+    result->status = HandclaspResult::Status::kTooFewContacts;
+    result->reason = "only " + std::to_string(result->contacts.size()) + " of " +
+                     std::to_string(taught) + " handclasp contacts succeeded, need " +
+                     std::to_string(kMinContacts);
+    for (const std::string& s : result->skipped) result->reason += "; " + s;
+    return false;
+  }
+  return true;
+}
+
+// CalibrateBaseFrame on the contacts' point pairs; false, with status kCalibrationFailed, when
+// it did not succeed. Its warnings are logged.
+bool CalibrateFromContacts(const HandclaspOptions& options, std::ostream* log,
+                           HandclaspResult* result) {
+  std::vector<Vector3> p_B1, p_B2;
+  for (const HandclaspContact& c : result->contacts) {
+    p_B1.push_back(c.p_B1);
+    p_B2.push_back(c.p_B2);
+  }
+  result->calibration = CalibrateBaseFrame(p_B1, p_B2, options.constraint, options.base);
+  for (const std::string& w : result->calibration.warnings) Note(log, "warning: " + w);
+  if (!result->calibration.ok()) {
+    result->status = HandclaspResult::Status::kCalibrationFailed;
+    result->reason = std::string("base calibration ") + ToString(result->calibration.status) +
+                     ": " + result->calibration.reason;
+    return false;
+  }
+  return true;
+}
+
+// RefineBaseAndTips from the contacts' flange poses, started at the general X_B1B2; a failure
+// becomes a warning of the calibration.
+void IdentifyTips(const std::array<KinematicModel, 2>& pendant_tip_models,
+                  const TipRefinementOptions& tip_options, std::ostream* log,
+                  HandclaspResult* result) {
+  // Flange poses from the pendant models (tip tool removed) and the tips on the flanges.
+  std::vector<Transform> X_B1F1, X_B2F2;
+  std::array<KinematicModel, 2> flange = pendant_tip_models;
+  for (KinematicModel& f : flange) f.X_LtE = Transform::Identity();
+  for (const HandclaspContact& c : result->contacts) {
+    X_B1F1.push_back(EndPose(flange[0], c.q1));
+    X_B2F2.push_back(EndPose(flange[1], c.q2));
+  }
+  const Transform& X_FTip1 = pendant_tip_models[0].X_LtE;
+  result->tips = RefineBaseAndTips(X_B1F1, X_B2F2, X_FTip1.translation(),
+                                   pendant_tip_models[1].X_LtE.translation(),
+                                   X_FTip1.linear().col(2), result->calibration.X_B1B2_general,
+                                   tip_options);
+  if (result->tips.ok) {
+    Note(log, "tips identified: robot 1 " + Mm(result->tips.dt1_F1) + ", robot 2 " +
+                  Mm(result->tips.dt2_F2) + " on the flanges; RMS contact mismatch " +
+                  std::to_string(1e3 * result->tips.rms_residual_before_m) + " -> " +
+                  std::to_string(1e3 * result->tips.rms_residual_m) + " mm");
+  } else {
+    result->calibration.warnings.push_back("tip identification: " + result->tips.reason);
+    Note(log, "warning: tip identification: " + result->tips.reason);
+  }
+}
+
 }  // namespace
 
 KinematicModel WithTipTool(const KinematicModel& flange_model, const Transform& X_FTip) {
@@ -254,111 +396,19 @@ HandclaspResult RunHandclaspProcedure(Cell& cell,
                                       const std::vector<JointVector>& taught_q1,
                                       const HandclaspOptions& options, std::ostream* log) {
   options.Validate();
-  for (size_t i = 0; i < taught_q1.size(); ++i) {
-    if (!taught_q1[i].allFinite()) {
-      throw InputError("RunHandclaspProcedure taught_q1[" + std::to_string(i) + "]",
-                       "joint angles must be finite");
-    }
-  }
-  const auto note = [log](const std::string& line) {
-    if (log) *log << "handclasp: " << line << "\n";
-  };
+  RequireFiniteTaughtAngles(taught_q1);
   HandclaspResult result;
-  const JointVector q2_home = cell.ReadEncoders(1);
-  // Robot 2 backs off along its tip axis (pendant IK, a linear tool move on a pendant), then
-  // returns to where it started.
-  const auto retract = [&](const std::string& what) {
-    const JointVector q2 = cell.ReadEncoders(1);
-    if (options.retract_m > 0) {
-      const Transform X = EndPose(pendant_tip_models[1], q2) *
-                          Eigen::Translation3d(0, 0, -options.retract_m);
-      const IkResult ik = SolveIk(pendant_tip_models[1], X, q2, options.ik);
-      if (ik.status == IkStatus::kSuccess) {
-        const MoveResult back = cell.MoveTo(1, ik.q);
-        if (back.status != MoveStatus::kSettled) {
-          note(what + ": backing off: " + ToString(back.status) + ": " + back.reason);
-        }
-      }
-    }
-    const MoveResult home = cell.MoveTo(1, q2_home);
-    if (home.status != MoveStatus::kSettled) {
-      note(what + ": robot 2 back to its start pose: " + ToString(home.status) + ": " +
-           home.reason);
-    }
-  };
-  for (size_t i = 0; i < taught_q1.size(); ++i) {
-    const std::string what = "point " + std::to_string(i);
-    const MoveResult move = cell.MoveTo(0, taught_q1[i]);
-    if (move.status != MoveStatus::kSettled) {
-      result.skipped.push_back(what + ": robot 1 move " + ToString(move.status) + ": " +
-                               move.reason);
-      note("skipped " + result.skipped.back());
-      continue;
-    }
-    const MoveResult jog = cell.JogTipToContact(1);
-    if (jog.status != MoveStatus::kSettled) {
-      result.skipped.push_back(what + ": contact " + ToString(jog.status) + ": " + jog.reason);
-      note("skipped " + result.skipped.back());
-      retract(what);
-      continue;
-    }
-    HandclaspContact c;
-    c.point = static_cast<int>(i);
-    c.q1 = cell.ReadEncoders(0);
-    c.q2 = cell.ReadEncoders(1);
-    c.p_B1 = EndPose(pendant_tip_models[0], c.q1).translation();
-    c.p_B2 = EndPose(pendant_tip_models[1], c.q2).translation();
-    result.contacts.push_back(c);
-    note(what + ": contact at " + Mm(c.p_B1) + " in B1, " + Mm(c.p_B2) + " in B2");
-    retract(what);
-  }
-  using S = HandclaspResult::Status;
-  if (result.contacts.size() < static_cast<size_t>(kMinContacts)) {
-    result.status = S::kTooFewContacts;
-    result.reason = "only " + std::to_string(result.contacts.size()) + " of " +
-                    std::to_string(taught_q1.size()) + " handclasp contacts succeeded, need " +
-                    std::to_string(kMinContacts);
-    for (const std::string& s : result.skipped) result.reason += "; " + s;
-    return result;
-  }
-  std::vector<Vector3> p_B1, p_B2;
-  for (const HandclaspContact& c : result.contacts) {
-    p_B1.push_back(c.p_B1);
-    p_B2.push_back(c.p_B2);
-  }
-  result.calibration = CalibrateBaseFrame(p_B1, p_B2, options.constraint, options.base);
-  for (const std::string& w : result.calibration.warnings) note("warning: " + w);
-  if (!result.calibration.ok()) {
-    result.status = S::kCalibrationFailed;
-    result.reason = std::string("base calibration ") + ToString(result.calibration.status) +
-                    ": " + result.calibration.reason;
-    return result;
-  }
-  if (options.identify_tips) {
-    // Flange poses from the pendant models (tip tool removed) and the tips on the flanges.
-    std::vector<Transform> X_B1F1, X_B2F2;
-    std::array<KinematicModel, 2> flange = pendant_tip_models;
-    for (KinematicModel& f : flange) f.X_LtE = Transform::Identity();
-    for (const HandclaspContact& c : result.contacts) {
-      X_B1F1.push_back(EndPose(flange[0], c.q1));
-      X_B2F2.push_back(EndPose(flange[1], c.q2));
-    }
-    const Transform& X_FTip1 = pendant_tip_models[0].X_LtE;
-    result.tips = RefineBaseAndTips(X_B1F1, X_B2F2, X_FTip1.translation(),
-                                    pendant_tip_models[1].X_LtE.translation(),
-                                    X_FTip1.linear().col(2), result.calibration.X_B1B2_general,
-                                    options.tips);
-    if (result.tips.ok) {
-      note("tips identified: robot 1 " + Mm(result.tips.dt1_F1) + ", robot 2 " +
-           Mm(result.tips.dt2_F2) + " on the flanges; RMS contact mismatch " +
-           std::to_string(1e3 * result.tips.rms_residual_before_m) + " -> " +
-           std::to_string(1e3 * result.tips.rms_residual_m) + " mm");
-    } else {
-      result.calibration.warnings.push_back("tip identification: " + result.tips.reason);
-      note("warning: tip identification: " + result.tips.reason);
-    }
-  }
-  result.status = S::kSuccess;
+  // Robot 2's pose before the first contact: where it returns after each one.
+  const ContactSession session{cell, pendant_tip_models, options, log, cell.ReadEncoders(1)};
+  // Robot 1 to each taught point, robot 2 jogged onto it; failures are skipped.
+  RegisterContacts(session, taught_q1, &result);
+  // At least kMinContacts contacts (paper section 2.2).
+  if (!HasEnoughContacts(taught_q1.size(), &result)) return result;
+  // X_B1B2, general and installation-constrained, from the contact pairs.
+  if (!CalibrateFromContacts(options, log, &result)) return result;
+  // Optionally X_B1B2 jointly with both tips on their flanges (beyond the paper).
+  if (options.identify_tips) IdentifyTips(pendant_tip_models, options.tips, log, &result);
+  result.status = HandclaspResult::Status::kSuccess;
   return result;
 }
 

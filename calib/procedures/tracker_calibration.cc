@@ -84,6 +84,216 @@ std::string Mm(double m) {
   return os.str();
 }
 
+// Throws InputError for a holdout fraction outside (0, 0.5] or bad engine options.
+void ValidateCalibrationOptions(const TrackerCalibrationOptions& options) {
+  if (!(options.holdout_fraction > 0.0 && options.holdout_fraction <= 0.5)) {
+    throw InputError("holdout fraction", "expected a fraction in (0, 0.5], got " +
+                                             std::to_string(options.holdout_fraction));
+  }
+  ValidateIdentificationOptions(options.engine);
+}
+
+/// The points' pose groups (PoseGroups: repeats of one pose share an index) and their count.
+struct PoseGrouping {
+  std::vector<int> pose_of;  ///< per point, the index of its pose
+  int poses = 0;             ///< number of different poses
+};
+
+// Groups the points by pose.
+PoseGrouping GroupPoses(const std::vector<TrackerPoint>& points) {
+  PoseGrouping g;
+  g.pose_of = PoseGroups(points);
+  const std::vector<int>& pose_of = g.pose_of;
+  g.poses = points.empty() ? 0 : *std::max_element(pose_of.begin(), pose_of.end()) + 1;
+  return g;
+}
+
+// Identifies the delivered model on every point and scores it and the baseline on them all.
+void FitDeliveredModel(const RobotModel& nominal, const RobotModel& start,
+                       const std::vector<TrackerPoint>& points,
+                       const TrackerCalibrationOptions& options,
+                       const IdentificationOptions& baseline, TrackerCalibrationResult* out) {
+  const Solved all = Solve(start, points, options.set, options.engine);
+  const Solved before = Solve(nominal, points, options.set, baseline);
+  out->identified = all.result;
+  out->X_TB = all.X_TB;
+  out->all_after = ScorePoints(all.result.model, all.X_TB, points);
+  out->all_before = ScorePoints(before.result.model, before.X_TB, points);
+}
+
+// The number of points each split holds out: the holdout fraction of them, at least 1.
+int HeldOutCount(const TrackerCalibrationOptions& options,
+                 const std::vector<TrackerPoint>& points) {
+  const int n = static_cast<int>(points.size());
+  return std::max(1, static_cast<int>(std::lround(options.holdout_fraction * n)));
+}
+
+/// What every held-out split shares: the nominal model, the options and the baseline's.
+struct SplitContext {
+  const RobotModel& nominal;
+  const TrackerCalibrationOptions& options;
+  const IdentificationOptions& baseline;  ///< of the "before" fits
+  int held = 0;                           ///< points held out by a split of the given points
+};
+
+/// One held-out split's parts: the points identified on and the points scored.
+struct SplitParts {
+  std::string name;  ///< "random" or "region"
+  std::string rule;  ///< how the held-out points were chosen, for the report
+  const std::vector<TrackerPoint>& train;  ///< the points identified on
+  const std::vector<TrackerPoint>& test;   ///< the held-out points
+  /// The held-out points come from another session (the tracker stood elsewhere), so each
+  /// model's tracker pose is refitted to them (rigid least squares, 6 of their 3 n
+  /// coordinates) before they are scored; the geometry stays as trained.
+  bool refit_pose = false;
+};
+
+// The tracker pose a model's held-out points are scored through: its own, or refitted to
+// them when `refit_pose`.
+Transform PoseForTest(const Solved& m, const std::vector<TrackerPoint>& test, bool refit_pose,
+                      const std::string& source) {
+  if (!refit_pose) return m.X_TB;
+  std::vector<Vector3> predicted, measured;
+  for (const TrackerPoint& p : test) {
+    predicted.push_back(EndPose(m.result.model, p.context).translation());
+    measured.push_back(p.p_T);
+  }
+  Transform X = m.X_TB;
+  if (!FitRigid(predicted, measured, &X)) {
+    throw InputError(source, "the held-out file's points are fewer than 3 or collinear: no "
+                             "tracker pose can be fitted to them");
+  }
+  return X;
+}
+
+// Identifies on the training part, scores before and after on the held-out part and adds
+// the split (and a warning when the calibration is worse there) to `out`.
+void RunSplit(const SplitContext& ctx, const SplitParts& parts, TrackerCalibrationResult* out) {
+  const RobotModel& nominal = ctx.nominal;
+  const TrackerCalibrationOptions& options = ctx.options;
+  const std::string& source = options.set.source;
+  const std::string& name = parts.name;
+  const std::vector<TrackerPoint>& train = parts.train;
+  const std::vector<TrackerPoint>& test = parts.test;
+  HeldOutSplit s;
+  s.name = name;
+  s.rule = parts.rule;
+  s.training = static_cast<int>(train.size());
+  RequireEnoughPoints(nominal, s.training, "the " + name + " split's training part", source);
+  TrackerSetOptions so = options.set;
+  so.source = source + " (" + name + " split, training part)";
+  const Solved after = Solve(WokenStart(nominal, train, so, options.engine), train, so,
+                             options.engine);
+  const Solved before = Solve(nominal, train, so, ctx.baseline);
+  s.after = ScorePoints(after.result.model, PoseForTest(after, test, parts.refit_pose, source),
+                        test);
+  s.before = ScorePoints(before.result.model,
+                         PoseForTest(before, test, parts.refit_pose, source), test);
+  s.training_after = ScorePoints(after.result.model, after.X_TB, train);
+  s.worse = s.after.rms > s.before.rms;
+  if (s.worse) {
+    out->warnings.push_back("held-out " + name + " split: the calibrated model is WORSE than the "
+                            "nominal one on the points it did not see (RMS " + Mm(s.after.rms) +
+                            " after against " + Mm(s.before.rms) + " before)");
+  }
+  out->splits.push_back(s);
+}
+
+// The random split: whole poses, in a seeded shuffle, held out until `held` points are.
+void RunRandomSplit(const SplitContext& ctx, const std::vector<TrackerPoint>& points,
+                    const PoseGrouping& grouping, TrackerCalibrationResult* out) {
+  const TrackerCalibrationOptions& options = ctx.options;
+  const std::vector<int>& pose_of = grouping.pose_of;
+  const int poses = grouping.poses;
+  const int n = static_cast<int>(points.size());
+  const int held = ctx.held;
+  // Whole poses are held out: a repeat of a training pose is no held-out point. Without
+  // repeats this is a shuffle of the points.
+  std::vector<int> pose_order(poses);
+  std::iota(pose_order.begin(), pose_order.end(), 0);
+  std::mt19937_64 rng(options.seed);
+  std::shuffle(pose_order.begin(), pose_order.end(), rng);
+  std::vector<std::vector<int>> members(poses);
+  for (int i = 0; i < n; ++i) members[pose_of[i]].push_back(i);
+  std::vector<int> test, train;
+  for (const int g : pose_order) {
+    std::vector<int>& part = static_cast<int>(test.size()) < held ? test : train;
+    part.insert(part.end(), members[g].begin(), members[g].end());
+  }
+  const std::vector<TrackerPoint> train_points = Pick(points, train);
+  const std::vector<TrackerPoint> test_points = Pick(points, test);
+  RunSplit(ctx,
+           {"random",
+            std::to_string(test.size()) + " of " + std::to_string(n) + " points held out at " +
+                "random" + (poses < n ? " as whole poses (" + std::to_string(n - poses) +
+                                            " rows repeat a pose)"
+                                      : std::string()) +
+                " (seed " + std::to_string(options.seed) + ")",
+            train_points, test_points, false},
+           out);
+}
+
+/// The points farthest along the measured cloud's principal axis, and how they were found.
+struct AxisRegion {
+  Vector3 mean = Vector3::Zero();  ///< the cloud's centre in the tracker frame [m]
+  Vector3 axis = Vector3::Zero();  ///< its principal axis (unit, a fixed sign)
+  std::vector<int> test, train;    ///< indices of the held-out and the training points
+};
+
+// Holds out the `held` points farthest along the cloud's principal axis.
+AxisRegion FarEndAlongPrincipalAxis(const std::vector<TrackerPoint>& points, int held) {
+  const int n = static_cast<int>(points.size());
+  AxisRegion region;
+  Vector3& mean = region.mean;
+  for (const TrackerPoint& p : points) mean += p.p_T;
+  mean /= n;
+  Matrix3 C = Matrix3::Zero();
+  for (const TrackerPoint& p : points) C += (p.p_T - mean) * (p.p_T - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Matrix3> eig(C);
+  Vector3& axis = region.axis;
+  axis = eig.eigenvectors().col(2);  // largest spread
+  if (axis(std::abs(axis(0)) >= std::abs(axis(1)) ? (std::abs(axis(0)) >= std::abs(axis(2)) ? 0 : 2)
+                                                   : (std::abs(axis(1)) >= std::abs(axis(2)) ? 1 : 2)) < 0) {
+    axis = -axis;  // a fixed sign: the far end along the dominant positive direction
+  }
+  std::vector<int> index(n);
+  std::iota(index.begin(), index.end(), 0);
+  std::stable_sort(index.begin(), index.end(), [&](int a, int b) {
+    return axis.dot(points[a].p_T) > axis.dot(points[b].p_T);
+  });
+  region.test.assign(index.begin(), index.begin() + held);
+  region.train.assign(index.begin() + held, index.end());
+  return region;
+}
+
+// The region split: the validation file when there is one, else the far end of the cloud.
+void RunRegionSplit(const SplitContext& ctx, const std::vector<TrackerPoint>& points,
+                    const std::vector<TrackerPoint>& validation, TrackerCalibrationResult* out) {
+  const int n = static_cast<int>(points.size());
+  const int held = ctx.held;
+  if (!validation.empty()) {
+    RunSplit(ctx,
+             {"region",
+              "trained on all " + std::to_string(n) + " points, held out: the " +
+                  std::to_string(validation.size()) + " points of the validation file (its "
+                  "tracker pose refitted to them, the geometry as trained)",
+              points, validation, true},
+             out);
+  } else {
+    const AxisRegion region = FarEndAlongPrincipalAxis(points, held);
+    const Vector3& axis = region.axis;
+    const std::vector<int>& test = region.test;
+    std::ostringstream rule;
+    rule.precision(3);
+    rule << held << " of " << n << " points farthest along the measured cloud's principal axis ("
+         << axis(0) << ", " << axis(1) << ", " << axis(2) << ") in the tracker frame, beyond "
+         << 1e3 * (axis.dot(points[test.back()].p_T - region.mean)) << " mm from its centre";
+    const std::vector<TrackerPoint> train_points = Pick(points, region.train);
+    const std::vector<TrackerPoint> test_points = Pick(points, test);
+    RunSplit(ctx, {"region", rule.str(), train_points, test_points, false}, out);
+  }
+}
+
 }  // namespace
 
 std::vector<std::string> ReflectorParameterNames(const RobotModel& model) {
@@ -114,15 +324,11 @@ TrackerCalibrationResult CalibrateFromTracker(const RobotModel& nominal,
                                               const std::vector<TrackerPoint>& points,
                                               const std::vector<TrackerPoint>& validation,
                                               const TrackerCalibrationOptions& options) {
-  if (!(options.holdout_fraction > 0.0 && options.holdout_fraction <= 0.5)) {
-    throw InputError("holdout fraction", "expected a fraction in (0, 0.5], got " +
-                                             std::to_string(options.holdout_fraction));
-  }
-  ValidateIdentificationOptions(options.engine);
-  const std::string& source = options.set.source;
-  const std::vector<int> pose_of = PoseGroups(points);
-  const int poses = points.empty() ? 0 : *std::max_element(pose_of.begin(), pose_of.end()) + 1;
-  RequireEnoughPoints(nominal, poses, "all points", source);
+  // The holdout fraction and the engine's options.
+  ValidateCalibrationOptions(options);
+  // Repeats of one pose grouped, and enough poses for the unknowns.
+  const PoseGrouping grouping = GroupPoses(points);
+  RequireEnoughPoints(nominal, grouping.poses, "all points", options.set.source);
   TrackerCalibrationResult out;
   const IdentificationOptions baseline = BaselineOptions(nominal, options.engine);
   // The start of the calibrated ("after") fits; the "before" ones hold the terms as given.
@@ -131,115 +337,13 @@ TrackerCalibrationResult CalibrateFromTracker(const RobotModel& nominal,
   const RobotModel start = WokenStart(nominal, points, options.set, options.engine);
 
   // The delivered model: every point.
-  {
-    const Solved all = Solve(start, points, options.set, options.engine);
-    const Solved before = Solve(nominal, points, options.set, baseline);
-    out.identified = all.result;
-    out.X_TB = all.X_TB;
-    out.all_after = ScorePoints(all.result.model, all.X_TB, points);
-    out.all_before = ScorePoints(before.result.model, before.X_TB, points);
-  }
+  FitDeliveredModel(nominal, start, points, options, baseline, &out);
 
-  const int n = static_cast<int>(points.size());
-  const int held = std::max(1, static_cast<int>(std::lround(options.holdout_fraction * n)));
-  // `refit_pose`: the held-out points come from another session (the tracker stood
-  // elsewhere), so each model's tracker pose is refitted to them (rigid least squares, 6 of
-  // their 3 n coordinates) before they are scored; the geometry stays as trained.
-  const auto run_split = [&](const std::string& name, const std::string& rule,
-                             const std::vector<TrackerPoint>& train,
-                             const std::vector<TrackerPoint>& test, bool refit_pose) {
-    HeldOutSplit s;
-    s.name = name;
-    s.rule = rule;
-    s.training = static_cast<int>(train.size());
-    RequireEnoughPoints(nominal, s.training, "the " + name + " split's training part", source);
-    TrackerSetOptions so = options.set;
-    so.source = source + " (" + name + " split, training part)";
-    const Solved after = Solve(WokenStart(nominal, train, so, options.engine), train, so,
-                               options.engine);
-    const Solved before = Solve(nominal, train, so, baseline);
-    const auto pose_for_test = [&](const Solved& m) {
-      if (!refit_pose) return m.X_TB;
-      std::vector<Vector3> predicted, measured;
-      for (const TrackerPoint& p : test) {
-        predicted.push_back(EndPose(m.result.model, p.context).translation());
-        measured.push_back(p.p_T);
-      }
-      Transform X = m.X_TB;
-      if (!FitRigid(predicted, measured, &X)) {
-        throw InputError(source, "the held-out file's points are fewer than 3 or collinear: no "
-                                 "tracker pose can be fitted to them");
-      }
-      return X;
-    };
-    s.after = ScorePoints(after.result.model, pose_for_test(after), test);
-    s.before = ScorePoints(before.result.model, pose_for_test(before), test);
-    s.training_after = ScorePoints(after.result.model, after.X_TB, train);
-    s.worse = s.after.rms > s.before.rms;
-    if (s.worse) {
-      out.warnings.push_back("held-out " + name + " split: the calibrated model is WORSE than the "
-                             "nominal one on the points it did not see (RMS " + Mm(s.after.rms) +
-                             " after against " + Mm(s.before.rms) + " before)");
-    }
-    out.splits.push_back(s);
-  };
-
+  const SplitContext split{nominal, options, baseline, HeldOutCount(options, points)};
   // (a) Random: a seeded shuffle.
-  {
-    // Whole poses are held out: a repeat of a training pose is no held-out point. Without
-    // repeats this is a shuffle of the points.
-    std::vector<int> pose_order(poses);
-    std::iota(pose_order.begin(), pose_order.end(), 0);
-    std::mt19937_64 rng(options.seed);
-    std::shuffle(pose_order.begin(), pose_order.end(), rng);
-    std::vector<std::vector<int>> members(poses);
-    for (int i = 0; i < n; ++i) members[pose_of[i]].push_back(i);
-    std::vector<int> test, train;
-    for (const int g : pose_order) {
-      std::vector<int>& part = static_cast<int>(test.size()) < held ? test : train;
-      part.insert(part.end(), members[g].begin(), members[g].end());
-    }
-    run_split("random",
-              std::to_string(test.size()) + " of " + std::to_string(n) + " points held out at " +
-              "random" + (poses < n ? " as whole poses (" + std::to_string(n - poses) +
-                                          " rows repeat a pose)"
-                                    : std::string()) +
-              " (seed " + std::to_string(options.seed) + ")",
-              Pick(points, train), Pick(points, test), false);
-  }
+  RunRandomSplit(split, points, grouping, &out);
   // (b) Region: a separate file, or the far end along the principal axis of the cloud.
-  if (!validation.empty()) {
-    run_split("region",
-              "trained on all " + std::to_string(n) + " points, held out: the " +
-                  std::to_string(validation.size()) + " points of the validation file (its "
-                  "tracker pose refitted to them, the geometry as trained)",
-              points, validation, true);
-  } else {
-    Vector3 mean = Vector3::Zero();
-    for (const TrackerPoint& p : points) mean += p.p_T;
-    mean /= n;
-    Matrix3 C = Matrix3::Zero();
-    for (const TrackerPoint& p : points) C += (p.p_T - mean) * (p.p_T - mean).transpose();
-    const Eigen::SelfAdjointEigenSolver<Matrix3> eig(C);
-    Vector3 axis = eig.eigenvectors().col(2);  // largest spread
-    if (axis(std::abs(axis(0)) >= std::abs(axis(1)) ? (std::abs(axis(0)) >= std::abs(axis(2)) ? 0 : 2)
-                                                     : (std::abs(axis(1)) >= std::abs(axis(2)) ? 1 : 2)) < 0) {
-      axis = -axis;  // a fixed sign: the far end along the dominant positive direction
-    }
-    std::vector<int> index(n);
-    std::iota(index.begin(), index.end(), 0);
-    std::stable_sort(index.begin(), index.end(), [&](int a, int b) {
-      return axis.dot(points[a].p_T) > axis.dot(points[b].p_T);
-    });
-    const std::vector<int> test(index.begin(), index.begin() + held);
-    const std::vector<int> train(index.begin() + held, index.end());
-    std::ostringstream rule;
-    rule.precision(3);
-    rule << held << " of " << n << " points farthest along the measured cloud's principal axis ("
-         << axis(0) << ", " << axis(1) << ", " << axis(2) << ") in the tracker frame, beyond "
-         << 1e3 * (axis.dot(points[test.back()].p_T - mean)) << " mm from its centre";
-    run_split("region", rule.str(), Pick(points, train), Pick(points, test), false);
-  }
+  RunRegionSplit(split, points, validation, &out);
   return out;
 }
 
