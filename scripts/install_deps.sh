@@ -14,6 +14,8 @@ PACKAGES=(
   libgtest-dev libgmock-dev
   slurmctld slurmd slurm-client munge
   time jq   # jq: scripts/discovery_table.sh
+  ccache           # scripts/build.sh and test_sanitizers.sh compile through it (cmake/Ccache.cmake)
+  universal-ctags  # scripts/function_lengths.sh
 )
 
 missing=()
