@@ -32,6 +32,7 @@
 #include "bench/report/acceptance.h"
 #include "bench/report/diagnosis_report.h"
 #include "bench/report/report_html.h"
+#include "bench/report/scenario_json.h"
 #include "bench/io/scenario.h"
 #include "bench/io/yaml_util.h"
 #include "calib/common/clock.h"
@@ -675,14 +676,6 @@ json TimingJson(Clock::time_point t_start, const OpticalAxisResult& result,
 }
 
 }  // namespace
-
-json ScenarioJson(const Scenario& sc) {
-  return json{{"name", sc.name},
-              {"file", sc.path},
-              {"seed", sc.seeds.truth},
-              {"seeds", {{"truth", sc.seeds.truth}, {"estimator", sc.seeds.estimator}}},
-              {"trial", sc.trial}};
-}
 
 OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, CalibrationConfig config,
                                     const fs::path& staging, bool quiet,

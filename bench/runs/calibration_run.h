@@ -35,10 +35,6 @@ struct RunOptions {
   bool diagnosis = true; ///< model discovery after the calibration (--no-diagnosis)
 };
 
-/// The report's `scenario` key: name, file, seed (the truth seed, as before the split),
-/// seeds.{truth,estimator} and trial.
-nlohmann::json ScenarioJson(const Scenario& scenario);
-
 /// Runs the scenario and writes out_dir/report.json, measurements.csv, servo_*.png and
 /// report.html; prints progress and a summary. Returns the exit code: 0, or 3 when the
 /// scenario's acceptance criteria are missed (bench/report/acceptance.h). Throws InputError for

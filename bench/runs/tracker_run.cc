@@ -24,6 +24,7 @@
 #include "bench/io/diagnosis_config.h"
 #include "bench/report/diagnosis_report.h"
 #include "bench/report/report_units.h"
+#include "bench/report/scenario_json.h"
 #include "bench/scoring/calibration_scoring.h"
 #include "calib/common/errors.h"
 #include "calib/diagnosis/model_discovery.h"

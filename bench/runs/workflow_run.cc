@@ -11,6 +11,7 @@
 #include "bench/io/output_files.h"
 #include "bench/report/acceptance.h"
 #include "bench/report/report_html.h"
+#include "bench/report/scenario_json.h"
 #include "bench/runs/handclasp_run.h"
 #include "calib/common/clock.h"
 #include "calib/common/errors.h"
