@@ -13,7 +13,6 @@
 #include <set>
 #include <sstream>
 
-#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -30,9 +29,7 @@
 #include "bench/io/model_yaml.h"
 #include "bench/io/output_files.h"
 #include "bench/report/acceptance.h"
-#include "bench/report/diagnosis_report.h"
-#include "bench/report/report_html.h"
-#include "bench/report/scenario_json.h"
+#include "bench/report/calibration_report.h"
 #include "bench/io/scenario.h"
 #include "bench/io/yaml_util.h"
 #include "calib/common/clock.h"
@@ -43,48 +40,7 @@
 
 namespace twin {
 namespace fs = std::filesystem;
-using json = nlohmann::json;
 namespace {
-
-// JSON number, or null for NaN / infinity (JSON has neither).
-json Num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-json Mm(double m) { return Num(1000.0 * m); }
-
-double DecreasePercent(double before, double after) {
-  return before > 0.0 ? 100.0 * (before - after) / before
-                      : std::numeric_limits<double>::quiet_NaN();
-}
-
-json Misaligned(const MisalignedSummary& m) {
-  // No samples (e.g. no validation axis aligned): every figure is there, null, so that an
-  // acceptance criterion on it fails as "has no value" instead of naming an unknown figure.
-  if (m.samples == 0) {
-    return json{{"before", nullptr}, {"after", nullptr}, {"decrease_percent", nullptr},
-                {"samples", 0}};
-  }
-  return json{{"before", Mm(m.before)},
-              {"after", Mm(m.after)},
-              {"decrease_percent", Num(DecreasePercent(m.before, m.after))},
-              {"samples", m.samples}};
-}
-
-json Stats(const PositionErrorStats& s) { return json{{"rms", Mm(s.rms)}, {"max", Mm(s.max)}}; }
-
-json Gauges(int configurations, const GaugeErrors& before, const GaugeErrors& after) {
-  json j;
-  j["configurations"] = configurations;
-  j["raw"] = {{"before", Stats(before.raw)}, {"after", Stats(after.raw)}};
-  j["rigid"] = {{"before", Stats(before.rigid)}, {"after", Stats(after.rigid)}};
-  j["similarity"] = {{"before", Stats(before.similarity)}, {"after", Stats(after.similarity)}};
-  return j;
-}
-
-json Gauges(const RobotScore& s) { return Gauges(s.configurations, s.before, s.after); }
-
-json IntrinsicsJson(const PinholeIntrinsics& k, const DistortionCoefficients& d) {
-  return json{{"fx", k.fx}, {"fy", k.fy}, {"cx", k.cx}, {"cy", k.cy}, {"k1", d.k1},
-              {"k2", d.k2}, {"p1", d.p1}, {"p2", d.p2}, {"k3", d.k3}};
-}
 
 // One measurements.csv row per aligned pose (what a hardware cell records).
 void AppendRows(const RobotCalibration& rc, const std::string& robot, const std::string& camera,
@@ -221,33 +177,18 @@ class TimedCell : public Cell {
   Cell& cell_;
 };
 
-// The printed plate Zhang's method saw: the intrinsics target when the cell was told one.
-json PlateJson(const CellKnowledge& k) {
-  const BoardGeometry& p = k.intrinsics_target ? *k.intrinsics_target : k.board;
-  return json{{"squares", {p.squares_x, p.squares_y}},
-              {"square_mm", p.square_m * 1e3},
-              {"dedicated_target", k.intrinsics_target.has_value()}};
-}
-
-
-// Model discovery's outcome per calibrated robot (robot index -> ...).
-struct RobotDiagnoses {
-  std::map<int, DiscoveryResult> results;  ///< robots whose diagnosis ran
-  std::map<int, std::string> skipped;      ///< why a robot's diagnosis was skipped
-  std::map<int, json> declared_terms;      ///< per robot: the declared effects' term labels
-};
-
 // Model discovery per calibrated robot: estimator side (its aligned poses, the nominal board
 // model, the stated noise), before any truth is read. A robot whose poses do not allow it
 // (fewer than 3 axes) is reported as skipped; the calibration stands.
-RobotDiagnoses DiagnoseRobots(const Scenario& sc, const CalibrationConfig& config,
-                              const OpticalAxisResult& result, bool quiet,
-                              Clock::time_point t_start) {
-  RobotDiagnoses out;
+std::map<int, RobotDiagnosisResult> DiagnoseRobots(const Scenario& sc,
+                                                   const CalibrationConfig& config,
+                                                   const OpticalAxisResult& result, bool quiet,
+                                                   Clock::time_point t_start) {
+  std::map<int, RobotDiagnosisResult> out;  // robot index -> its diagnosis
   for (const RobotCalibration& rc : result.robots) {
     const std::string name = sc.robot_names[rc.robot];
     if (!config.diagnosis.enabled) {
-      out.skipped[rc.robot] = config.diagnosis_skip_reason;
+      out[rc.robot].skipped = config.diagnosis_skip_reason;
       continue;
     }
     DiscoveryOptions d = config.discovery;
@@ -270,80 +211,23 @@ RobotDiagnoses DiagnoseRobots(const Scenario& sc, const CalibrationConfig& confi
     // Declared effects (declared: true) are in the model from the start, by type and joint.
     std::vector<std::string> notes;
     const RobotModel start = DeclaredModel(sc, rc.robot, model, &notes);
-    out.declared_terms[rc.robot] = json::array();
-    for (const auto& t : start.terms) out.declared_terms[rc.robot].push_back(TermLabel(t->spec()));
+    RobotDiagnosisResult& r = out[rc.robot];
+    r.declared_terms.clear();
+    for (const auto& t : start.terms) r.declared_terms.push_back(TermLabel(t->spec()));
     try {
-      out.results[rc.robot] = DiscoverOpticalAxisModel(start, rc.samples, d);
+      r.result = DiscoverOpticalAxisModel(start, rc.samples, d);
     } catch (const InputError& e) {
-      out.skipped[rc.robot] = e.what();
+      r.skipped = e.what();
     }
   }
   return out;
 }
 
-// The report's `intrinsics` key: Zhang's estimate against the twin camera's truth, and the plate.
-json IntrinsicsReportJson(const OpticalAxisResult& result, const TwinTruth& truth,
-                          const CellKnowledge& knowledge) {
-  const Intrinsics& ti = truth.camera.intrinsics;
-  const Distortion& td = truth.camera.distortion;
-  const PinholeIntrinsics& ei = result.intrinsics.intrinsics;
-  return json{
-      {"estimated", IntrinsicsJson(ei, result.intrinsics.distortion)},
-      {"true", IntrinsicsJson(PinholeIntrinsics{ti.fx, ti.fy, ti.cx, ti.cy},
-                          DistortionCoefficients{td.k1, td.k2, td.p1, td.p2, td.k3})},
-      {"error_px",
-       {{"fx", ei.fx - ti.fx}, {"fy", ei.fy - ti.fy}, {"cx", ei.cx - ti.cx}, {"cy", ei.cy - ti.cy}}},
-      {"rms_reprojection_px", result.intrinsics.rms_px},
-      {"views_used", result.intrinsics.views_used},
-      {"views_skipped", result.intrinsics.skipped},
-      {"plate", PlateJson(knowledge)}};
-}
-
-// A robot's `planning` key: the pose plan, its PSO runs and the candidates' rejections.
-json PlanningJson(const RobotCalibration& rc, const PosePlannerOptions& planner) {
-  json history = json::array();
-  for (const auto& run : rc.plan.fitness_history) history.push_back(run);
-  const RejectionCounts& rej = rc.plan.rejections;
-  return json{{"axes", rc.plan.axes.size()},
-              {"positions_per_axis", planner.positions_per_axis},
-              {"best_fitness", Num(rc.plan.best_fitness)},
-              {"best_run", rc.plan.best_run},
-              {"select_run", planner.select_run ==
-                                     PosePlannerOptions::RunSelection::kPredictedError
-                                 ? "predicted_error"
-                                 : "best_fitness"},
-              {"run_fitness", rc.plan.run_fitness},
-              {"run_predicted_error_mm", [&] {
-                 json e = json::array();
-                 for (double x : rc.plan.run_predicted_error) e.push_back(Num(1e3 * x));
-                 return e;
-               }()},
-              {"run_predicted_similarity_error_mm", [&] {
-                 json e = json::array();
-                 for (double x : rc.plan.run_predicted_similarity_error) {
-                   e.push_back(Num(1e3 * x));
-                 }
-                 return e;
-               }()},
-              {"evaluations", rc.plan.evaluations},
-              {"fitness_history", history},
-              {"rejections",
-               {{"active_ik", rej.active_ik}, {"passive_ik", rej.passive_ik},
-                {"c1_joint_limits", rej.c1_joint_limits},
-                {"c2_singularity", rej.c2_singularity},
-                {"c3_visibility", rej.c3_visibility},
-                {"c4_min_distance", rej.c4_min_distance},
-                {"c5_max_distance", rej.c5_max_distance}}},
-              {"time_s", rc.plan_compute_s},
-              {"wait_time_s", rc.planning_s},
-              {"from_plan_store", rc.plan_from_store}};
-}
-
 // Writes a robot's servo images into staging (each kept pose before and after the servo,
 // annotated, then each refused board pose magnified) and returns their files and captions.
-json WriteServoImages(const RobotCalibration& rc, const std::string& name,
-                      const PinholeIntrinsics& ei, const fs::path& staging) {
-  json images = json::array();
+std::vector<ReportImage> WriteServoImages(const RobotCalibration& rc, const std::string& name,
+                                          const PinholeIntrinsics& ei, const fs::path& staging) {
+  std::vector<ReportImage> images;
   for (const ServoImages& im : rc.images) {
     for (const bool after : {false, true}) {
       const std::string file = "servo_" + name + "_axis" + std::to_string(im.axis) + "_" +
@@ -355,7 +239,7 @@ json WriteServoImages(const RobotCalibration& rc, const std::string& name,
       caption << name << ", axis " << im.axis << ", position " << im.index << ", "
               << (after ? "after" : "before") << " the visual servo: (du, dv) = (" << e.x
               << ", " << e.y << ") px";
-      images.push_back({{"file", file}, {"caption", caption.str()}});
+      images.push_back({file, caption.str()});
     }
   }
   for (const RefusedPoseImage& im : rc.refused_images) {
@@ -369,203 +253,42 @@ json WriteServoImages(const RobotCalibration& rc, const std::string& name,
             << " px (green: detected corners, red: the pose's reprojection; the board "
             << "magnified " << kRefusedZoom << " times, the offsets a further "
             << kRefusedOffsetGain << " times)";
-    images.push_back({{"file", file}, {"caption", caption.str()}});
+    images.push_back({file, caption.str()});
   }
   return images;
 }
 
-// A robot's `servo` key: aligned and failed poses, frames, final errors; writes its images.
-json ServoJson(const RobotCalibration& rc, const std::string& name, const PinholeIntrinsics& ei,
-               double tolerance_px, const fs::path& staging) {
-  int frames = 0, region_frames = 0, fallbacks = 0;
-  double max_px = 0.0;
+// The visual servo's figures over a robot's aligned poses.
+ServoFigures ServoFiguresOf(const RobotCalibration& rc) {
+  ServoFigures f;
   for (const AlignedPose& p : rc.aligned) {
-    frames += p.frames;
-    region_frames += p.region_frames;
-    fallbacks += p.full_frame_fallbacks;
-    max_px = std::max({max_px, std::abs(p.pixel_error.x), std::abs(p.pixel_error.y)});
+    f.frames += p.frames;
+    f.region_frames += p.region_frames;
+    f.full_frame_fallbacks += p.full_frame_fallbacks;
+    f.max_final_pixel_error_px = std::max({f.max_final_pixel_error_px, std::abs(p.pixel_error.x),
+                                           std::abs(p.pixel_error.y)});
   }
-  json failures = json::array();
-  for (const FailedPose& f : rc.failed) {
-    failures.push_back({{"axis", f.axis}, {"index", f.index}, {"status", f.status},
-                        {"reason", f.reason}, {"frames", f.frames}});
-  }
-  const json images = WriteServoImages(rc, name, ei, staging);
-  const int aligned = static_cast<int>(rc.aligned.size());
-  return json{{"aligned_poses", aligned},
-              {"failed_poses", rc.failed.size()},
-              {"mean_frames_per_pose", aligned > 0 ? json(double(frames) / aligned) : json()},
-              {"max_final_pixel_error_px", max_px},
-              {"region_frames", region_frames},
-              {"full_frame_fallbacks", fallbacks},
-              {"tolerance_px", tolerance_px},
-              {"failures", failures},
-              {"images", images},
-              {"time_s", rc.servoing_s}};
-}
-
-// A robot's `split` key: its calibration and validation axes and how they were chosen.
-json SplitJson(const RobotCalibration& rc) {
-  json split = {{"calibration_axes", rc.calibration_axes},
-                {"validation_axes", rc.validation_axes},
-                {"rule", rc.split_candidates.empty() ? "first" : "best_conditioned"},
-                {"evaluated_at", rc.split_candidates.empty() ? json(nullptr) : json(rc.split_at)}};
-  for (const auto& [axes, sigma] : rc.split_candidates) {
-    split["candidates"].push_back({{"calibration_axes", axes},
-                                   {"smallest_singular_value", sigma}});
-  }
-  return split;
-}
-
-// A robot's `misaligned_error_mm` key: eq. 46 per set and per axis, before and after.
-json MisalignedErrorJson(const RobotCalibration& rc) {
-  json per_axis = json::array();
-  for (size_t k = 0; k < rc.per_axis.size(); ++k) {
-    const int axis = static_cast<int>(k);
-    const bool cal = std::find(rc.calibration_axes.begin(), rc.calibration_axes.end(),
-                               axis) != rc.calibration_axes.end();
-    if (rc.per_axis[k].samples == 0) continue;
-    per_axis.push_back({{"axis", axis}, {"set", cal ? "calibration" : "validation"},
-                        {"before", Mm(rc.per_axis[k].before)},
-                        {"after", Mm(rc.per_axis[k].after)}});
-  }
-  return json{{"calibration", Misaligned(rc.calibration_error)},
-              {"validation", Misaligned(rc.validation_error)},
-              {"per_axis", per_axis}};
+  return f;
 }
 
 // The truth errors over the region the delivered model's poses covered (their joint-space box):
-// what the calibration can vouch for, beside the whole joint space. Sets
-// truth_position_error_mm_covered_region when there are such poses.
-void ScoreCoveredRegion(const RobotCalibration& rc, const KinematicModel& true_model,
-                        const CalibrationConfig& config, json* r) {
+// what the calibration can vouch for, beside the whole joint space. Nothing without such poses.
+std::optional<CoveredRegionScore> ScoreCoveredRegion(const RobotCalibration& rc,
+                                                     const KinematicModel& true_model,
+                                                     const CalibrationConfig& config) {
   std::vector<JointVector> used;
   for (const AlignedPose& p : rc.aligned) {
     const bool cal = std::find(rc.calibration_axes.begin(), rc.calibration_axes.end(),
                                p.axis) != rc.calibration_axes.end();
     if (rc.refit || cal) used.push_back(p.q_passive);
   }
-  if (!used.empty()) {
-    const JointBox box = CoveredJointBox(used);
-    const RegionScore region =
-        ScoreRegion(rc.nominal, rc.identified, true_model, box,
-                    config.scoring_configurations, config.scoring_seed);
-    json joints = json::array();
-    for (int i = 0; i < box.lower.size(); ++i) {
-      joints.push_back({{"joint", i + 1}, {"lower_deg", RadToDeg(box.lower(i))},
-                        {"upper_deg", RadToDeg(box.upper(i))}});
-    }
-    json covered = Gauges(region.configurations, region.before, region.after);
-    covered["poses"] = used.size();
-    covered["joint_box_deg"] = joints;
-    (*r)["truth_position_error_mm_covered_region"] = covered;
-  }
-}
-
-// A robot's `identifiable_combinations` key: the observable combinations against truth, with
-// the identification's covariance.
-json IdentifiableCombinationsJson(const RobotCalibration& rc, const RobotScore& score,
-                                  const ObservabilityReport& obs) {
-  json combos = json::array();
-  const IdentificationCovariance& cov = rc.covariance;
-  for (size_t i = 0; i < score.combination_estimated.size(); ++i) {
-    const bool has_sigma = cov.ok && static_cast<int>(i) < cov.sigma_z.size();
-    combos.push_back({{"index", i}, {"estimated", 1000 * score.combination_estimated[i]},
-                      {"true", 1000 * score.combination_true[i]},
-                      {"sigma", has_sigma ? json(1000 * cov.sigma_z(i)) : json(nullptr)}});
-  }
-  json combinations = {{"count", obs.rank},
-                       {"unit", "mm or mrad (scaled coordinates, 1 m)"},
-                       {"rms_error", 1000 * score.combination_rms_error},
-                       {"max_error", 1000 * score.combination_max_error},
-                       {"items", combos}};
-  combinations["covariance"] = {
-      {"status", cov.ok ? "ok" : "not_estimated"},
-      {"reason", cov.reason},
-      {"residual_sigma_mm", 1000 * cov.residual_sigma},
-      {"redundancy", cov.redundancy}};
-  return combinations;
-}
-
-// A robot's `parameters` key: each parameter estimated against truth, in mm or deg.
-json ParametersJson(const RobotScore& score, const IdentificationCovariance& cov) {
-  json params = json::array();
-  for (size_t k = 0; k < score.parameters.size(); ++k) {
-    const ParameterComparison& p = score.parameters[k];
-    const double f = p.length ? 1000.0 : RadToDeg(1.0);
-    const bool has_sigma = cov.ok && static_cast<int>(k) < cov.sigma_parameters.size();
-    params.push_back({{"name", p.name}, {"unit", p.length ? "mm" : "deg"},
-                      {"estimated", f * p.estimated}, {"true", f * p.truth},
-                      {"sigma", has_sigma ? json(f * cov.sigma_parameters(k)) : json(nullptr)}});
-  }
-  return params;
-}
-
-// A robot's `identification` key: both methods' outcomes, the refit and their difference.
-json IdentificationJson(const RobotCalibration& rc) {
-  const LinearizedIdentificationResult& lin = rc.linearized;
-  const NonlinearIdentificationResult& nl = rc.nonlinear;
-  json eps = json::array();
-  for (double e : lin.eps_history) eps.push_back(1000 * e);
-  return json{
-      {"method", rc.method},
-      {"time_s", rc.identification_s},
-      {"linearized",
-       {{"status", ToString(lin.status)}, {"reason", lin.reason}, {"iterations", lin.iterations},
-        {"rank", lin.observability.rank}, {"eps_history_mm", eps},
-        {"calibration_after_mm", Mm(lin.mean_misaligned_error_after)}}},
-      {"nonlinear",
-       {{"status", ToString(nl.status)}, {"iterations", nl.iterations},
-        {"rank", nl.observability.rank}, {"passes", nl.passes},
-        {"depth_used", nl.depth_used},
-        {"singular_values", nl.observability.singular_values},
-        {"depth_weight", nl.depth_weight},
-        {"rms_distance_before_mm", Mm(nl.rms_distance_before)},
-        {"rms_distance_after_mm", Mm(nl.rms_distance_after)},
-        {"rms_depth_residual_mm", Mm(nl.rms_depth_residual)}}},
-      {"delivered_model", rc.refit ? "all axes (refit after validation)" : "calibration axes"},
-      {"refit_all_axes",
-       rc.refit ? json{{"status", ToString(rc.refit_result.status)},
-                       {"axes", rc.calibration_axes.size() + rc.validation_axes.size()},
-                       {"rank", rc.refit_result.observability.rank},
-                       {"passes", rc.refit_result.passes},
-                       {"rms_distance_after_mm", Mm(rc.refit_result.rms_distance_after)},
-                       {"rms_depth_residual_mm", Mm(rc.refit_result.rms_depth_residual)}}
-                : json(nullptr)},
-      {"linearized_vs_ceres_max_parameter_difference",
-       lin.status == LinearizedIdentificationStatus::kSkipped ? json(nullptr) : json
-       {{"mm", 1000 * [&] {
-           double m = 0;
-           for (int i = 0; i < lin.correction.size(); ++i)
-             if (IsLengthParameter(i))
-               m = std::max(m, std::abs(lin.correction(i) - nl.correction(i)));
-           return m;
-         }()},
-        {"deg", RadToDeg([&] {
-           double m = 0;
-           for (int i = 0; i < lin.correction.size(); ++i)
-             if (!IsLengthParameter(i))
-               m = std::max(m, std::abs(lin.correction(i) - nl.correction(i)));
-           return m;
-         }())}}}};
-}
-
-// The value of `map` at `key`, or a default one where it has none (what operator[] reads).
-template <typename Value>
-Value ValueOrDefault(const std::map<int, Value>& map, int key) {
-  const auto it = map.find(key);
-  return it == map.end() ? Value() : it->second;
-}
-
-// Sets a robot's `diagnosis` key (and `declared_terms` where the diagnosis ran).
-void AddDiagnosisJson(const RobotDiagnoses& diagnoses, int robot, json* r) {
-  if (diagnoses.results.count(robot)) {
-    (*r)["diagnosis"] = DiagnosisJson(diagnoses.results.at(robot));
-    (*r)["declared_terms"] = ValueOrDefault(diagnoses.declared_terms, robot);
-  } else {
-    (*r)["diagnosis"] = {{"verdict", nullptr},
-                         {"skipped", ValueOrDefault(diagnoses.skipped, robot)}};
-  }
+  if (used.empty()) return std::nullopt;
+  CoveredRegionScore covered;
+  covered.poses = used.size();
+  covered.box = CoveredJointBox(used);
+  covered.score = ScoreRegion(rc.nominal, rc.identified, true_model, covered.box,
+                              config.scoring_configurations, config.scoring_seed);
+  return covered;
 }
 
 // What scoring a robot against truth needs besides its calibration.
@@ -574,62 +297,49 @@ struct RobotScoringInputs {
   const CalibrationConfig& config;
   const TwinTruth& truth;           ///< read after the procedure ended
   const PinholeIntrinsics& ei;      ///< estimated intrinsics (the servo images' annotation)
-  const RobotDiagnoses& diagnoses;  ///< model discovery per robot
+  const std::map<int, RobotDiagnosisResult>& diagnoses;  ///< model discovery per robot
   const fs::path& staging;          ///< where the servo images go
 };
 
-// One robot's report entry: planning, servo (its images written into staging), split, errors
-// against truth, identification and diagnosis.
-json RobotReportJson(const RobotCalibration& rc, const RobotScoringInputs& in) {
-  const std::string name = in.sc.robot_names[rc.robot];
-  const std::string camera = in.sc.robot_names[rc.camera_robot];
+// One robot's scores against truth (its servo images written into staging), beside its
+// calibration: the delivered and nominal models, the covered region, the calibration-set
+// model after a refit, and its diagnosis.
+RobotStageResult ScoreRobotStage(const RobotCalibration& rc, const RobotScoringInputs& in) {
+  RobotStageResult s;
+  s.name = in.sc.robot_names[rc.robot];
+  s.camera_robot = in.sc.robot_names[rc.camera_robot];
   const CalibrationConfig& config = in.config;
   const KinematicModel true_model =
       BoardRobotModel(in.truth.models[rc.robot], in.truth.board.X_FT);
-  const ObservabilityReport& obs = rc.refit                    ? rc.refit_result.observability
-                                   : rc.method == "linearized" ? rc.linearized.observability
-                                                               : rc.nonlinear.observability;
-  const RobotScore score = ScoreRobot(rc.nominal, rc.identified, true_model, obs,
-                                      config.scoring_configurations, config.scoring_seed);
-  json r;
-  r["camera_robot"] = camera;
-  r["planning"] = PlanningJson(rc, config.options.planner);
-  r["servo"] = ServoJson(rc, name, in.ei, config.options.servo.tolerance_px, in.staging);
-  if (std::isfinite(rc.temperature_reference_C)) {
-    r["temperature_reference_C"] = rc.temperature_reference_C;
-  }
-  r["split"] = SplitJson(rc);
-  r["misaligned_error_mm"] = MisalignedErrorJson(rc);
-  r["truth_position_error_mm"] = Gauges(score);
-  ScoreCoveredRegion(rc, true_model, config, &r);
+  s.observability = rc.refit                    ? rc.refit_result.observability
+                    : rc.method == "linearized" ? rc.linearized.observability
+                                                : rc.nonlinear.observability;
+  s.score = ScoreRobot(rc.nominal, rc.identified, true_model, s.observability,
+                       config.scoring_configurations, config.scoring_seed);
+  s.servo = ServoFiguresOf(rc);
+  s.images = WriteServoImages(rc, s.name, in.ei, in.staging);
+  s.covered_region = ScoreCoveredRegion(rc, true_model, config);
   if (rc.refit) {
     // The calibration-set model too, so that the refit's gain is visible.
-    const RobotScore held = ScoreRobot(rc.nominal, rc.holdout, true_model, obs,
-                                       config.scoring_configurations, config.scoring_seed);
-    r["truth_position_error_mm_calibration_set_model"] = Gauges(held);
+    s.calibration_set_model = ScoreRobot(rc.nominal, rc.holdout, true_model, s.observability,
+                                         config.scoring_configurations, config.scoring_seed);
   }
-  r["scale"] = {{"estimated", score.scale_estimated}, {"true", score.scale_true},
-                {"identified_length_ratio",
-                 rc.refit ? rc.refit_result.scale : rc.nonlinear.scale}};
-  r["unidentifiable"] = obs.unidentifiable;
-  r["identifiable_combinations"] = IdentifiableCombinationsJson(rc, score, obs);
-  r["parameters"] = ParametersJson(score, rc.covariance);
-  r["identification"] = IdentificationJson(rc);
-  AddDiagnosisJson(in.diagnoses, rc.robot, &r);
-  return r;
+  const auto d = in.diagnoses.find(rc.robot);
+  if (d != in.diagnoses.end()) s.diagnosis = d->second;
+  return s;
 }
 
-// The robots' part of a calibration stage: report entries, measurements.csv, stage times.
-struct RobotsReport {
-  json robots = json::object();  ///< the report's `robots` key
-  std::string csv;               ///< measurements.csv
+// The robots' part of a calibration stage: their scores, measurements.csv, stage times.
+struct ScoredRobots {
+  std::vector<RobotStageResult> robots;  ///< in the procedure's order
+  std::string csv;                       ///< measurements.csv
   double planning = 0, planning_compute = 0, servoing = 0, identification = 0;  ///< sums [s]
 };
 
-// Scores each calibrated robot against truth into its report entry, writing its servo images
-// and identified_<robot>.yaml into staging; collects measurements.csv and the stage times.
-RobotsReport ReportRobots(const OpticalAxisResult& result, const RobotScoringInputs& in) {
-  RobotsReport out;
+// Scores each calibrated robot against truth, writing its servo images and
+// identified_<robot>.yaml into staging; collects measurements.csv and the stage times.
+ScoredRobots ScoreRobots(const OpticalAxisResult& result, const RobotScoringInputs& in) {
+  ScoredRobots out;
   int csv_joints = 0;
   for (const RobotCalibration& rc : result.robots) {
     csv_joints = std::max(csv_joints, rc.nominal.num_joints());
@@ -643,7 +353,7 @@ RobotsReport ReportRobots(const OpticalAxisResult& result, const RobotScoringInp
     out.planning_compute += rc.plan_compute_s;
     out.servoing += rc.servoing_s;
     out.identification += rc.identification_s;
-    out.robots[name] = RobotReportJson(rc, in);
+    out.robots.push_back(ScoreRobotStage(rc, in));
     AppendRows(rc, name, camera, csv_joints, &csv);
     // The identified model, ready to load (tool link = board mount, as identified).
     WriteText(in.staging / ("identified_" + name + ".yaml"), ModelToYaml(rc.identified));
@@ -652,35 +362,52 @@ RobotsReport ReportRobots(const OpticalAxisResult& result, const RobotScoringInp
   return out;
 }
 
-// The report's `timing_s` key: the stages' times and the cell's frames and moves; `total` is
-// the time since t_start, read now.
-json TimingJson(Clock::time_point t_start, const OpticalAxisResult& result,
-                const RobotsReport& robots, double diagnosis_s, double scoring,
-                const TimedCell& timed) {
-  return json{{"total", SecondsSince(t_start)}, {"intrinsics", result.intrinsics_s},
-              {"intrinsics_detection", result.intrinsics.detect_s},
-              {"intrinsics_zhang", result.intrinsics.calibrate_s},
-              {"planning", robots.planning},      {"planning_compute", robots.planning_compute},
-              {"servoing", robots.servoing},
-              {"identification", robots.identification}, {"diagnosis", diagnosis_s},
-              {"scoring", scoring},
-              {"cell",
-               {{"frames", timed.frames},
-                {"region_frames", timed.region_frames},
-                {"region_mean_pixels",
-                 timed.region_frames > 0 ? json(timed.pixels / timed.region_frames)
-                                         : json(nullptr)},
-                {"grab_image", timed.grab_s},
-                {"moves", timed.moves},
-                {"move_to", timed.move_s}}}};
+// The stages' times and the cell's frames and moves; `total` is the time since t_start, read
+// now.
+CalibrationTiming StageTiming(Clock::time_point t_start, const OpticalAxisResult& result,
+                              const ScoredRobots& robots, double diagnosis_s, double scoring,
+                              const TimedCell& timed) {
+  CalibrationTiming t;
+  t.total = SecondsSince(t_start);
+  t.intrinsics = result.intrinsics_s;
+  t.intrinsics_detection = result.intrinsics.detect_s;
+  t.intrinsics_zhang = result.intrinsics.calibrate_s;
+  t.planning = robots.planning;
+  t.planning_compute = robots.planning_compute;
+  t.servoing = robots.servoing;
+  t.identification = robots.identification;
+  t.diagnosis = diagnosis_s;
+  t.scoring = scoring;
+  t.frames = timed.frames;
+  t.region_frames = timed.region_frames;
+  t.region_pixels = timed.pixels;
+  t.grab_image = timed.grab_s;
+  t.moves = timed.moves;
+  t.move_to = timed.move_s;
+  return t;
+}
+
+// What the stage's report shows of the setting: the twin camera's true intrinsics, the plate
+// Zhang's method saw (the intrinsics target when the cell was told one), planner and servo.
+void RecordSetting(const TwinTruth& truth, const CalibrationConfig& config,
+                   CalibrationStageResult* stage) {
+  const Intrinsics& ti = truth.camera.intrinsics;
+  const Distortion& td = truth.camera.distortion;
+  stage->true_intrinsics = PinholeIntrinsics{ti.fx, ti.fy, ti.cx, ti.cy};
+  stage->true_distortion = DistortionCoefficients{td.k1, td.k2, td.p1, td.p2, td.k3};
+  const CellKnowledge& k = config.knowledge;
+  stage->plate = k.intrinsics_target ? *k.intrinsics_target : k.board;
+  stage->dedicated_target = k.intrinsics_target.has_value();
+  stage->planner = config.options.planner;
+  stage->servo_tolerance_px = config.options.servo.tolerance_px;
 }
 
 }  // namespace
 
-OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, CalibrationConfig config,
-                                    const fs::path& staging, bool quiet,
-                                    std::chrono::steady_clock::time_point t_start, json* report,
-                                    std::map<int, DiscoveryResult>* diagnoses) {
+CalibrationStageResult RunCalibrationStage(TwinCell& cell, const Scenario& sc,
+                                           CalibrationConfig config, const fs::path& staging,
+                                           bool quiet,
+                                           std::chrono::steady_clock::time_point t_start) {
   // Progress lines with the time since t_start.
   config.options.progress = [&](const std::string& line) {
     if (quiet) return;
@@ -689,30 +416,30 @@ OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& sc, Calibr
   };
   // The procedure, on a cell that adds up where the time goes.
   TimedCell timed(cell);
-  const OpticalAxisResult result = RunOpticalAxisCalibration(timed, config.knowledge,
-                                                             config.options);
+  CalibrationStageResult stage;
+  stage.procedure = RunOpticalAxisCalibration(timed, config.knowledge, config.options);
+  const OpticalAxisResult& result = stage.procedure;
 
   // Model discovery per calibrated robot, before any truth is read.
   const auto t_diagnosis = Clock::now();
-  RobotDiagnoses diagnosis = DiagnoseRobots(sc, config, result, quiet, t_start);
+  const std::map<int, RobotDiagnosisResult> diagnosis =
+      DiagnoseRobots(sc, config, result, quiet, t_start);
   const double diagnosis_s = SecondsSince(t_diagnosis);
 
   // Scoring: estimates meet truth only here, after the procedure ended.
   const auto t_score = Clock::now();
   const TwinTruth truth = cell.Truth();
-  (*report)["scenario"] = ScenarioJson(sc);
-  (*report)["intrinsics"] = IntrinsicsReportJson(result, truth, config.knowledge);
-  // Each robot's entry, servo images and identified model; then measurements.csv.
+  RecordSetting(truth, config, &stage);
+  // Each robot's scores, servo images and identified model; then measurements.csv.
   const RobotScoringInputs inputs{sc,        config,  truth, result.intrinsics.intrinsics,
                                   diagnosis, staging};
-  const RobotsReport robots = ReportRobots(result, inputs);
-  (*report)["robots"] = robots.robots;
+  ScoredRobots robots = ScoreRobots(result, inputs);
   WriteText(staging / "measurements.csv", robots.csv);
   const double scoring = SecondsSince(t_score);
   // Where the time went.
-  (*report)["timing_s"] = TimingJson(t_start, result, robots, diagnosis_s, scoring, timed);
-  if (diagnoses) *diagnoses = std::move(diagnosis.results);
-  return result;
+  stage.timing = StageTiming(t_start, result, robots, diagnosis_s, scoring, timed);
+  stage.robots = std::move(robots.robots);
+  return stage;
 }
 
 namespace {
@@ -788,15 +515,14 @@ PhysicalMeasurements MeasurePhysicalTruth(const PhysicalTruthSetup& s,
   return m;
 }
 
-// Both models' raw and rigid gauges against the measured truth, with the poses and `rule`.
-json PhysicalGaugesJson(const PhysicalMeasurements& m, const std::string& rule) {
-  const GaugeErrors calibrated = CompareInGauges(m.p_delivered, m.p_true);
-  const GaugeErrors discovered = CompareInGauges(m.p_discovered, m.p_true);
-  return json{
-      {"poses", m.p_true.size()},
-      {"rule", rule},
-      {"calibrated_model", {{"raw", Stats(calibrated.raw)}, {"rigid", Stats(calibrated.rigid)}}},
-      {"discovered_model", {{"raw", Stats(discovered.raw)}, {"rigid", Stats(discovered.rigid)}}}};
+// The physical truth of measured poses: both models' raw and rigid gauges, with `rule`.
+PhysicalTruthScore PhysicalScore(const PhysicalMeasurements& m, const std::string& rule) {
+  PhysicalTruthScore p;
+  p.poses = m.p_true.size();
+  p.rule = rule;
+  p.calibrated = CompareInGauges(m.p_delivered, m.p_true);
+  p.discovered = CompareInGauges(m.p_discovered, m.p_true);
+  return p;
 }
 
 // The whole joint space (the limits less 10 deg): 20 * wanted seeded random configurations.
@@ -817,11 +543,10 @@ std::vector<JointVector> WholeJointSpaceConfigurations(const Scenario& sc,
 }
 
 // One diagnosed robot that holds the board: the physical truth over the whole joint space and
-// over the region its aligned poses covered, into its report entry `r`.
+// over the region its aligned poses covered, into its scores `s`.
 void ScoreRobotPhysicalTruth(TwinCell& cell, const Scenario& sc, const CalibrationConfig& config,
                              const RobotCalibration& rc, const DiscoveryResult& diagnosis,
-                             json* robot_report) {
-  json& r = *robot_report;
+                             RobotStageResult* s) {
   const RobotModel delivered = MakeRobotModel(rc.identified);
   // Nothing added and nothing declared: the discovered model is the delivered one; with
   // declared terms it is the diagnosis' model (the geometry refitted with them).
@@ -833,15 +558,12 @@ void ScoreRobotPhysicalTruth(TwinCell& cell, const Scenario& sc, const Calibrati
   const std::vector<JointVector> anywhere = WholeJointSpaceConfigurations(sc, rc, wanted);
   const PhysicalMeasurements whole = MeasurePhysicalTruth(setup, anywhere);
   if (whole.p_true.size() < 10) {
-    r["truth_position_error_mm_physical"] = {
-        {"skipped", "fewer than 10 random poses settled"}};
+    s->physical_skipped = "fewer than 10 random poses settled";
     return;
   }
-  r["truth_position_error_mm_physical"] = PhysicalGaugesJson(
+  s->physical = PhysicalScore(
       whole, "the board's feature point where the twin's physics puts it (every effect) "
              "at seeded random poses, against each model at the same readings");
-  r["truth_position_error_mm_discovered_model"] =
-      r["truth_position_error_mm_physical"]["discovered_model"];
   // The region the aligned poses covered (their joint box), where the data vouches for the
   // model; beside the whole joint space, which the model reaches only by extrapolation.
   std::vector<JointVector> aligned;
@@ -852,7 +574,7 @@ void ScoreRobotPhysicalTruth(TwinCell& cell, const Scenario& sc, const Calibrati
         setup, RandomJointConfigurationsIn(box, 20 * wanted,
                                            sc.seeds.truth * 7919 + 37 + rc.robot));
     if (covered.p_true.size() >= 10) {
-      r["truth_position_error_mm_physical_covered_region"] = PhysicalGaugesJson(
+      s->physical_covered_region = PhysicalScore(
           covered, "as truth_position_error_mm_physical, at seeded random poses inside "
                    "the joint box of the robot's aligned poses");
     }
@@ -865,19 +587,17 @@ void ScoreRobotPhysicalTruth(TwinCell& cell, const Scenario& sc, const Calibrati
 // and the discovered one at the same readings; raw and rigid gauges as the tracker runs.
 // The robot ends where the last pose left it.
 void ScorePhysicalTruth(TwinCell& cell, const Scenario& sc, const CalibrationConfig& config,
-                        const OpticalAxisResult& result,
-                        const std::map<int, DiscoveryResult>& diagnoses, json* report) {
-  for (const RobotCalibration& rc : result.robots) {
-    const auto d = diagnoses.find(rc.robot);
-    if (d == diagnoses.end()) continue;
-    json& r = (*report)["robots"][sc.robot_names[rc.robot]];
+                        CalibrationStageResult* stage) {
+  for (size_t i = 0; i < stage->robots.size(); ++i) {
+    const RobotCalibration& rc = stage->procedure.robots[i];
+    RobotStageResult& s = stage->robots[i];
+    if (!s.diagnosis.result) continue;
     if (cell.Truth().board.robot != rc.robot) {
-      r["truth_position_error_mm_physical"] = {
-          {"skipped", "the board is on the other robot at the end of the procedure"}};
+      s.physical_skipped = "the board is on the other robot at the end of the procedure";
       continue;
     }
     // The whole joint space and the covered region, measured on the twin.
-    ScoreRobotPhysicalTruth(cell, sc, config, rc, d->second, &r);
+    ScoreRobotPhysicalTruth(cell, sc, config, rc, *s.diagnosis.result, &s);
   }
 }
 
@@ -899,20 +619,22 @@ struct OpticalAxisRun {
   const fs::path& staging;    ///< written first, published as `out` at the end
 };
 
-// Runs the calibration stage and the physical truth, judges the acceptance criteria into
-// `report`, writes report.json (and report.html) and publishes the staging folder. On failure
-// the staging folder is discarded and an InputError names the scenario file.
-AcceptanceVerdict RunAndPublishReport(TwinCell& cell, const OpticalAxisRun& run, json* report) {
+// Runs the calibration stage and the physical truth into `stage`, judges the acceptance
+// criteria on the report, writes report.json (and report.html) and publishes the staging
+// folder. On failure the staging folder is discarded and an InputError names the scenario file.
+AcceptanceVerdict RunAndPublishReport(TwinCell& cell, const OpticalAxisRun& run,
+                                      CalibrationStageResult* stage) {
   AcceptanceVerdict verdict;
   try {
     std::printf("twinbench run: scenario %s (%s)\n", run.sc.name.c_str(), run.sc.path.c_str());
-    std::map<int, DiscoveryResult> diagnoses;
-    const OpticalAxisResult result = RunCalibrationStage(
-        cell, run.sc, run.config, run.staging, run.options.quiet, run.t_start, report, &diagnoses);
-    ScorePhysicalTruth(cell, run.sc, run.config, result, diagnoses, report);
-    verdict = EvaluateAcceptance(run.acceptance, report);
-    WriteText(run.staging / "report.json", report->dump(2) + "\n");
-    if (run.options.images) WriteText(run.staging / "report.html", RenderReportHtml(*report));
+    *stage = RunCalibrationStage(cell, run.sc, run.config, run.staging, run.options.quiet,
+                                 run.t_start);
+    ScorePhysicalTruth(cell, run.sc, run.config, stage);
+    const JudgedReport report =
+        CalibrationReport(run.sc, *stage, run.acceptance, run.options.images);
+    verdict = report.verdict;
+    WriteText(run.staging / "report.json", report.json);
+    if (run.options.images) WriteText(run.staging / "report.html", report.html);
     PublishDirectory(run.staging.string(), run.out.string());
   } catch (const InputError& e) {
     DiscardStaging(run.staging.string());
@@ -924,96 +646,97 @@ AcceptanceVerdict RunAndPublishReport(TwinCell& cell, const OpticalAxisRun& run,
   return verdict;
 }
 
-// Prints one robot's lines of the run summary from its report entry (read with json's
-// non-const operator[], as before the split).
-void PrintRobotSummary(const std::string& name, json* robot_report) {
-  json& r = *robot_report;
-  // A figure the report holds as null, not computed, prints as nan.
-  const auto D = [](const json& v) {
-    return v.is_number() ? v.get<double>() : std::numeric_limits<double>::quiet_NaN();
-  };
-  for (const char* set : {"calibration", "validation"}) {
-    const json& m = r["misaligned_error_mm"][set];
-    if (m["before"].is_null()) continue;
-    std::printf("%-6s %-22s %10.4f %10.4f %8.1f%%\n", name.c_str(),
-                (std::string("misaligned ") + set).c_str(), D(m["before"]),
-                D(m["after"]), D(m["decrease_percent"]));
+// A figure as the summary prints it: what the report holds as null (NaN, infinite: not
+// computed) prints as nan.
+double Figure(double v) { return std::isfinite(v) ? v : std::numeric_limits<double>::quiet_NaN(); }
+// A length in m as the summary prints it [mm].
+double Mm(double m) { return Figure(1000.0 * m); }
+
+// One robot's misaligned-error and truth-error lines of the run summary.
+void PrintRobotErrors(const RobotCalibration& rc, const RobotStageResult& s) {
+  const char* name = s.name.c_str();
+  for (const bool cal : {true, false}) {
+    const MisalignedSummary& m = cal ? rc.calibration_error : rc.validation_error;
+    if (m.samples == 0 || !std::isfinite(1000.0 * m.before)) continue;  // null in the report
+    std::printf("%-6s %-22s %10.4f %10.4f %8.1f%%\n", name,
+                (std::string("misaligned ") + (cal ? "calibration" : "validation")).c_str(),
+                Mm(m.before), Mm(m.after), Figure(DecreasePercent(m.before, m.after)));
   }
-  for (const char* gauge : {"raw", "rigid", "similarity"}) {
-    const json& g = r["truth_position_error_mm"][gauge];
-    std::printf("%-6s %-22s %10.4f %10.4f   (max %.4f -> %.4f)\n", name.c_str(),
-                (std::string("truth RMS ") + gauge).c_str(), D(g["before"]["rms"]),
-                D(g["after"]["rms"]), D(g["before"]["max"]),
-                D(g["after"]["max"]));
+  const GaugeErrors& b = s.score.before;
+  const GaugeErrors& a = s.score.after;
+  const std::pair<const char*, PositionErrorStats GaugeErrors::*> gauges[] = {
+      {"raw", &GaugeErrors::raw}, {"rigid", &GaugeErrors::rigid},
+      {"similarity", &GaugeErrors::similarity}};
+  for (const auto& [gauge, g] : gauges) {
+    std::printf("%-6s %-22s %10.4f %10.4f   (max %.4f -> %.4f)\n", name,
+                (std::string("truth RMS ") + gauge).c_str(), Mm((b.*g).rms), Mm((a.*g).rms),
+                Mm((b.*g).max), Mm((a.*g).max));
   }
-  if (r.contains("truth_position_error_mm_covered_region")) {
-    const json& c = r["truth_position_error_mm_covered_region"];
+  if (s.covered_region) {
+    const RegionScore& c = s.covered_region->score;
     std::printf("%-6s covered region (%d poses' joint box): truth RMS rigid %.4f -> %.4f, "
                 "similarity %.4f -> %.4f\n",
-                name.c_str(), c["poses"].get<int>(), D(c["rigid"]["before"]["rms"]),
-                D(c["rigid"]["after"]["rms"]), D(c["similarity"]["before"]["rms"]),
-                D(c["similarity"]["after"]["rms"]));
+                name, static_cast<int>(s.covered_region->poses), Mm(c.before.rigid.rms),
+                Mm(c.after.rigid.rms), Mm(c.before.similarity.rms), Mm(c.after.similarity.rms));
   }
-  if (r.contains("truth_position_error_mm_calibration_set_model")) {
-    const json& h = r["truth_position_error_mm_calibration_set_model"];
+  if (s.calibration_set_model) {
+    const RobotScore& h = *s.calibration_set_model;
     std::printf("%-6s delivered model refit on all axes; the calibration-set model alone: "
                 "truth RMS rigid %.4f, similarity %.4f\n",
-                name.c_str(), D(h["rigid"]["after"]["rms"]),
-                D(h["similarity"]["after"]["rms"]));
+                name, Mm(h.after.rigid.rms), Mm(h.after.similarity.rms));
   }
-  const json& dg = r["diagnosis"];
-  if (dg["verdict"].is_null()) {
-    std::printf("%-6s diagnosis skipped (%s)\n", name.c_str(),
-                dg.value("skipped", std::string()).c_str());
-  } else {
-    std::printf("%-6s diagnosis: %s: %s\n", name.c_str(),
-                dg["verdict"].get<std::string>().c_str(),
-                dg["reason"].get<std::string>().c_str());
-  }
-  if (r.contains("truth_position_error_mm_physical") &&
-      r["truth_position_error_mm_physical"].contains("poses")) {
-    const json& ph = r["truth_position_error_mm_physical"];
-    std::printf("%-6s physical truth (%d poses, rigid RMS): calibrated %.4f mm, discovered "
-                "%.4f mm\n",
-                name.c_str(), ph["poses"].get<int>(),
-                D(ph["calibrated_model"]["rigid"]["rms"]),
-                D(ph["discovered_model"]["rigid"]["rms"]));
-  }
-  if (r.contains("truth_position_error_mm_physical_covered_region")) {
-    const json& ph = r["truth_position_error_mm_physical_covered_region"];
-    std::printf("%-6s physical truth, covered region (%d poses, rigid RMS): calibrated %.4f "
-                "mm, discovered %.4f mm\n",
-                name.c_str(), ph["poses"].get<int>(),
-                D(ph["calibrated_model"]["rigid"]["rms"]),
-                D(ph["discovered_model"]["rigid"]["rms"]));
-  }
-  std::printf("%-6s scale estimated %.6f, true %.6f; servo %d aligned, %d failed, %.2f "
-              "frames/pose\n",
-              name.c_str(), D(r["scale"]["estimated"]),
-              D(r["scale"]["true"]), r["servo"]["aligned_poses"].get<int>(),
-              r["servo"]["failed_poses"].get<int>(),
-              D(r["servo"]["mean_frames_per_pose"]));
 }
 
-// Prints the run summary read from the report: a table of each robot's figures, the timing and
-// what was written into `out`.
-void PrintRunSummary(json* report_json, const fs::path& out) {
-  json& report = *report_json;
+// One robot's diagnosis, physical-truth, scale and servo lines of the run summary.
+void PrintRobotDiagnosis(const RobotCalibration& rc, const RobotStageResult& s) {
+  const char* name = s.name.c_str();
+  if (!s.diagnosis.result) {
+    std::printf("%-6s diagnosis skipped (%s)\n", name, s.diagnosis.skipped.c_str());
+  } else {
+    std::printf("%-6s diagnosis: %s: %s\n", name, s.diagnosis.result->verdict.c_str(),
+                s.diagnosis.result->reason.c_str());
+  }
+  if (s.physical) {
+    std::printf("%-6s physical truth (%d poses, rigid RMS): calibrated %.4f mm, discovered "
+                "%.4f mm\n",
+                name, static_cast<int>(s.physical->poses), Mm(s.physical->calibrated.rigid.rms),
+                Mm(s.physical->discovered.rigid.rms));
+  }
+  if (s.physical_covered_region) {
+    const PhysicalTruthScore& ph = *s.physical_covered_region;
+    std::printf("%-6s physical truth, covered region (%d poses, rigid RMS): calibrated %.4f "
+                "mm, discovered %.4f mm\n",
+                name, static_cast<int>(ph.poses), Mm(ph.calibrated.rigid.rms),
+                Mm(ph.discovered.rigid.rms));
+  }
+  const int aligned = static_cast<int>(rc.aligned.size());
+  std::printf("%-6s scale estimated %.6f, true %.6f; servo %d aligned, %d failed, %.2f "
+              "frames/pose\n",
+              name, s.score.scale_estimated, s.score.scale_true, aligned,
+              static_cast<int>(rc.failed.size()),
+              aligned > 0 ? double(s.servo.frames) / aligned
+                          : std::numeric_limits<double>::quiet_NaN());
+}
+
+// Prints the run summary: a table of each robot's figures (robots by name, as the report lists
+// them), the timing and what was written into `out`.
+void PrintRunSummary(const CalibrationStageResult& stage, const fs::path& out) {
   std::printf("\n%-6s %-22s %10s %10s %9s\n", "robot", "metric [mm]", "before", "after",
               "decrease");
-  for (const auto& [name, r] : report["robots"].items()) PrintRobotSummary(name, &r);
-  const json& t = report["timing_s"];
+  std::map<std::string, size_t> by_name;
+  for (size_t i = 0; i < stage.robots.size(); ++i) by_name[stage.robots[i].name] = i;
+  for (const auto& [name, i] : by_name) {
+    PrintRobotErrors(stage.procedure.robots[i], stage.robots[i]);
+    PrintRobotDiagnosis(stage.procedure.robots[i], stage.robots[i]);
+  }
+  const CalibrationTiming& t = stage.timing;
   std::printf("timing [s]: total %.1f = intrinsics %.1f + waiting for the plans %.1f + "
               "servoing %.1f + identification %.1f + scoring %.1f (planning %.1f in the "
               "background)\n",
-              t["total"].get<double>(), t["intrinsics"].get<double>(),
-              t["planning"].get<double>(), t["servoing"].get<double>(),
-              t["identification"].get<double>(), t["scoring"].get<double>(),
-              t["planning_compute"].get<double>());
-  const json& cell_t = report["timing_s"]["cell"];
-  std::printf("cell: %d frames in %.1f s (GrabImage), %d moves in %.1f s (MoveTo)\n",
-              cell_t["frames"].get<int>(), cell_t["grab_image"].get<double>(),
-              cell_t["moves"].get<int>(), cell_t["move_to"].get<double>());
+              t.total, t.intrinsics, t.planning, t.servoing, t.identification, t.scoring,
+              t.planning_compute);
+  std::printf("cell: %d frames in %.1f s (GrabImage), %d moves in %.1f s (MoveTo)\n", t.frames,
+              t.grab_image, t.moves, t.move_to);
   std::printf("wrote %s/{report.json, report.html, measurements.csv, servo_*.png}\n",
               out.string().c_str());
 }
@@ -1054,11 +777,11 @@ int RunCalibrationScenario(const RunOptions& o) {
   const fs::path out(o.out_dir);
   const fs::path staging = CreateStagingDirectory(o.out_dir);
   // The calibration, scored and judged, written and published as out_dir.
-  json report;
+  CalibrationStageResult stage;
   const AcceptanceVerdict verdict = RunAndPublishReport(
-      cell, OpticalAxisRun{o, sc, config, acceptance, t_start, out, staging}, &report);
-  // Summary read from the report.
-  PrintRunSummary(&report, out);
+      cell, OpticalAxisRun{o, sc, config, acceptance, t_start, out, staging}, &stage);
+  // Summary of the typed results.
+  PrintRunSummary(stage, out);
   // JUnit file, verdict, exit code.
   if (!o.junit.empty()) WriteJunit(o.junit, sc.name, verdict, SecondsSince(t_start));
   PrintVerdict(verdict);
@@ -1154,37 +877,14 @@ RecordedSamples SamplesFromRows(const MeasurementsFile& file, const KinematicMod
   return out;
 }
 
-// identification.json: the method, eq. 46 errors, unidentifiable parameters, scale and the
-// corrections to the nominal model (mm or deg).
-json IdentificationSummaryJson(const RobotCalibration& rc, const std::string& robot) {
-  json j;
-  j["robot"] = robot;
-  j["method"] = rc.method;
-  j["samples"] = rc.samples.size();
-  j["misaligned_error_mm"] = {{"calibration", Misaligned(rc.calibration_error)},
-                              {"validation", Misaligned(rc.validation_error)}};
-  const NonlinearIdentificationResult& nl = rc.nonlinear;
-  j["unidentifiable"] = (rc.method == "linearized" ? rc.linearized : rc.linearized).observability
-                            .unidentifiable;
-  if (rc.method != "linearized") j["unidentifiable"] = nl.observability.unidentifiable;
-  j["scale"] = {{"identified_length_ratio", nl.scale}, {"depth_used", nl.depth_used}};
-  json corr = json::object();
-  const ParameterVector d = GetParameters(rc.identified) - GetParameters(rc.nominal);
-  for (int i = 0; i < d.size(); ++i) {
-    corr[ParameterName(robot, i)] = IsLengthParameter(i) ? 1000 * d(i) : RadToDeg(d(i));
-  }
-  j["correction_mm_or_deg"] = corr;
-  return j;
-}
-
 // Writes identification.json and identified_<robot>.yaml into a staging folder and publishes it
 // as out_dir (the staging folder discarded on failure).
-void WriteIdentificationFiles(const std::string& out_dir, const json& j,
+void WriteIdentificationFiles(const std::string& out_dir, const std::string& report_text,
                               const RobotCalibration& rc, const std::string& robot) {
   const fs::path out(out_dir);
   const fs::path staging = CreateStagingDirectory(out_dir);
   try {
-    WriteText(staging / "identification.json", j.dump(2) + "\n");
+    WriteText(staging / "identification.json", report_text);
     WriteText(staging / ("identified_" + robot + ".yaml"), ModelToYaml(rc.identified));
     PublishDirectory(staging.string(), out.string());
   } catch (...) {
@@ -1230,9 +930,8 @@ int RunIdentify(const IdentifyOptions& o) {
     throw InputError(o.measurements, e.what());  // refused: name the data that was refused
   }
   // identification.json and the identified model, published as out_dir; then the summary.
-  const json j = IdentificationSummaryJson(rc, robot);
   const fs::path out(o.out_dir);
-  WriteIdentificationFiles(o.out_dir, j, rc, robot);
+  WriteIdentificationFiles(o.out_dir, IdentificationReportText(rc, robot), rc, robot);
   PrintIdentificationSummary(rc, robot, out);
   return 0;
 }

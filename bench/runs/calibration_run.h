@@ -6,15 +6,13 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
-#include <map>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "bench/io/measurements_csv.h"  // the limits of a measurements file
 #include "bench/io/calibration_config.h"
 #include "bench/io/model_loader.h"
 #include "bench/io/scenario.h"
+#include "bench/scoring/calibration_results.h"
 #include "calib/diagnosis/model_discovery.h"
 #include "calib/procedures/optical_axis_procedure.h"
 #include "sim/cell/twin_cell.h"
@@ -46,18 +44,17 @@ int RunCalibrationScenario(const RunOptions& options);
 void ApplyRunOptions(const RunOptions& options, CalibrationConfig* config);
 
 /// One optical-axis stage on an existing cell (also a step of the dual-arm workflow): runs the
-/// procedure with `config`, scores it against the cell's truth, writes servo_*.png,
-/// measurements.csv and identified_<robot>.yaml into `staging` and sets the report keys
-/// scenario, intrinsics, robots and timing_s. Progress lines carry the time since t_start.
-/// With config.diagnosis.enabled, model discovery runs on each calibrated robot's aligned poses
-/// (estimator side, before any truth is read) into robots.<name>.diagnosis; `diagnoses`, when
-/// given, receives them (robot index -> result; robots whose diagnosis was skipped are absent).
-OpticalAxisResult RunCalibrationStage(TwinCell& cell, const Scenario& scenario,
-                                      CalibrationConfig config,
-                                      const std::filesystem::path& staging, bool quiet,
-                                      std::chrono::steady_clock::time_point t_start,
-                                      nlohmann::json* report,
-                                      std::map<int, DiscoveryResult>* diagnoses = nullptr);
+/// procedure with `config`, scores it against the cell's truth and writes servo_*.png,
+/// measurements.csv and identified_<robot>.yaml into `staging`; returns the typed results
+/// (bench/scoring/calibration_results.h; bench/report/calibration_report.h writes them).
+/// Progress lines carry the time since t_start. With config.diagnosis.enabled, model discovery
+/// runs on each calibrated robot's aligned poses (estimator side, before any truth is read)
+/// into robots[i].diagnosis; otherwise that says why it was skipped. The physical truth is
+/// left to the caller (robots[i].physical* stay empty).
+CalibrationStageResult RunCalibrationStage(TwinCell& cell, const Scenario& scenario,
+                                           CalibrationConfig config,
+                                           const std::filesystem::path& staging, bool quiet,
+                                           std::chrono::steady_clock::time_point t_start);
 
 /// Options of RunIdentify.
 struct IdentifyOptions {

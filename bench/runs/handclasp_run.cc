@@ -11,6 +11,7 @@
 #include "bench/io/model_loader.h"
 #include "bench/io/output_files.h"
 #include "bench/report/acceptance.h"
+#include "bench/report/handclasp_report.h"
 #include "bench/scoring/calibration_scoring.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
@@ -51,51 +52,18 @@ const Vector3 kCoupledPath[] = {{0, 0, 0},        {0.05, 0, 0}, {0.05, 0.05, 0},
                                 {0, 0.05, 0.05}, {0, 0, 0.05}};
 constexpr double kCoupledStandoff = 0.05;  // robot 2 approaches from here along its tip [m]
 
-nlohmann::json Xyz(const Vector3& p_m) {
-  return {1e3 * p_m.x(), 1e3 * p_m.y(), 1e3 * p_m.z()};
-}
-
-nlohmann::json Zyz(const Matrix3& R) {
-  const Vector3 a = ZyzFromRotation(R);
-  return {RadToDeg(a(0)), RadToDeg(a(1)), RadToDeg(a(2))};
-}
-
-nlohmann::json PoseJson(const Transform& X) {
-  return {{"xyz_mm", Xyz(X.translation())}, {"zyz_deg", Zyz(X.linear())}};
-}
-
-nlohmann::json Scored(const Transform& estimate, const Transform& truth, double rms_m) {
-  const BaseFrameError e = CompareBaseFrames(estimate, truth);  // eq. 33-34
-  nlohmann::json j = PoseJson(estimate);
-  j["e_tran_mm"] = e.e_tran_mm;
-  j["e_rot_deg"] = e.e_rot_deg;
-  j["rms_residual_mm"] = 1e3 * rms_m;
-  return j;
-}
-
 Transform TrueX_B1B2(const TwinTruth& truth) { return truth.X_WB[0].inverse() * truth.X_WB[1]; }
-
-// The per-robot link-1 offsets of KinematicBaseOffset, for the report.
-nlohmann::json Link1Offsets(const TwinTruth& truth, const std::array<KinematicModel, 2>& models) {
-  nlohmann::json j = nlohmann::json::array();
-  for (int k = 0; k < 2; ++k) {
-    const DhParameters& t = truth.models[k].links[0].dh;
-    const DhParameters& m = models[k].links[0].dh;
-    j.push_back({{"dtheta1_deg", RadToDeg(t.theta_offset - m.theta_offset)},
-                 {"dd1_mm", 1e3 * (t.d - m.d)}});
-  }
-  return j;
-}
 
 // The coupled-motion check (issue item 6, after the paper's cooperative motion): robot 1's tip
 // follows a short path by its pendant IK; robot 2 is commanded through the estimated X_B1B2 to
 // face it, by its pendant IK; the true tip-to-tip distance is measured after each pair of moves.
-nlohmann::json CoupledMotion(TwinCell& cell, const std::array<KinematicModel, 2>& tip_models,
-                             const HandclaspContact& start, const Transform& X_B1B2_estimate) {
-  nlohmann::json out;
+CoupledMotionResult CoupledMotion(TwinCell& cell,
+                                  const std::array<KinematicModel, 2>& tip_models,
+                                  const HandclaspContact& start,
+                                  const Transform& X_B1B2_estimate) {
+  CoupledMotionResult out;
   const auto fail = [&](const std::string& why) {
-    out["status"] = "failed";
-    out["reason"] = why;
+    out.reason = why;
     return out;
   };
   const Transform X_B1Tip1 = EndPose(tip_models[0], start.q1);
@@ -138,10 +106,9 @@ nlohmann::json CoupledMotion(TwinCell& cell, const std::array<KinematicModel, 2>
     deviations.push_back(d);
     worst = std::max(worst, d);
   }
-  out["status"] = "ok";
-  out["estimate"] = "constrained";
-  out["deviation_mm"] = deviations;
-  out["max_deviation_mm"] = worst;
+  out.ok = true;
+  out.deviation_mm = deviations;
+  out.max_deviation_mm = worst;
   return out;
 }
 
@@ -154,8 +121,8 @@ KinematicModel WithTipCorrection(KinematicModel tip_model, const Vector3& dt_F) 
 // Truth-only diagnostic: how far a controller's pendant tip model is from the true tip, in
 // the scoring frame B' (X_BBp), over 200 seeded random joint configurations. The handclasp
 // can be no better than these errors.
-nlohmann::json PendantTipError(const KinematicModel& true_tip, const KinematicModel& tip_model,
-                               const Transform& X_BBp) {
+PendantTipError MeasurePendantTipError(const KinematicModel& true_tip,
+                                      const KinematicModel& tip_model, const Transform& X_BBp) {
   constexpr int kConfigurations = 200;
   double sum2 = 0.0, worst = 0.0;
   for (const JointVector& q :
@@ -166,9 +133,11 @@ nlohmann::json PendantTipError(const KinematicModel& true_tip, const KinematicMo
     sum2 += e * e;
     worst = std::max(worst, e);
   }
-  return {{"rms_mm", std::sqrt(sum2 / kConfigurations)},
-          {"max_mm", worst},
-          {"configurations", kConfigurations}};
+  PendantTipError out;
+  out.rms_mm = std::sqrt(sum2 / kConfigurations);
+  out.max_mm = worst;
+  out.configurations = kConfigurations;
+  return out;
 }
 
 }  // namespace
@@ -379,16 +348,15 @@ Teaching TeachContactPoints(TwinCell& cell, const StageInputs& in) {
   return t;
 }
 
-// report: installation, operator error and taught_points.
-void ReportTeaching(const HandclaspConfig& config, const Teaching& t, nlohmann::json* rep) {
-  (*rep)["installation"] = ToString(config.constraint);
-  (*rep)["operator_error_mm"] = 1e3 * config.operator_error_m;
-  (*rep)["taught_points"] = {{"planned", config.auto_points},
-                             {"cube_side_mm", 1e3 * t.taught.cube_side_m},
-                             {"count", t.taught.points},
-                             {"orientations_per_point", t.teach.orientations_per_point},
-                             {"poses", t.taught.q1.size()},
-                             {"rejected", t.taught.rejected}};
+// The stage's record of the teaching: the section's constraint and operator, the points.
+HandclaspTeaching TeachingRecord(const HandclaspConfig& config, const Teaching& t) {
+  HandclaspTeaching r;
+  r.installation = config.constraint;
+  r.operator_error_m = config.operator_error_m;
+  r.planned = config.auto_points;
+  r.orientations_per_point = t.teach.orientations_per_point;
+  r.taught = t.taught;
+  return r;
 }
 
 // Runs calib's procedure on the taught joint angles with the section's constraint.
@@ -433,45 +401,23 @@ ScoringFrames ComputeScoringFrames(const TwinTruth& twin_truth, const StageInput
   return s;
 }
 
-// report: truth, scoring_frame, physical_truth and pendant_tip_error.
-void ReportScoringFrames(const ScoringFrames& s, const StageInputs& in, nlohmann::json* rep) {
-  (*rep)["truth"] = PoseJson(s.truth);
-  if (in.options.best_fit_frames) {
-    (*rep)["scoring_frame"] = {
-        {"frames", "best fit: X_B1'B2' = X_B1B1'^-1 X_B1B2 X_B2B2', X_BB' the rigid transform "
-                   "taking the pendant model's tip positions (identified tip corrections "
-                   "applied) onto the true ones over 200 random joint configurations"},
-        {"offsets", {PoseJson(s.X_BBp[0]), PoseJson(s.X_BBp[1])}}};
-  } else {
-    (*rep)["scoring_frame"] = {
-        {"frames", "kinematic: X_B1'B2' = X_B1B1'^-1 X_B1B2 X_B2B2', B' = B X_BL0 RotZ(dtheta1) "
-                   "TransZ(dd1) X_BL0^-1 with dtheta1, dd1 = true minus pendant link-1 theta, d "
-                   "(unidentifiable by any kinematic calibration)"},
-        {"link1_offsets", Link1Offsets(s.twin_truth, in.pendant_models_flange)}};
-  }
-  (*rep)["physical_truth"] = PoseJson(s.physical);
-  (*rep)["pendant_tip_error"] = nlohmann::json::array();
+// The frames the estimates are scored in, the link-1 offsets and the pendant tips' errors
+// there (truth only).
+HandclaspScoringFrames ScoringFramesRecord(const ScoringFrames& s, const StageInputs& in) {
+  HandclaspScoringFrames f;
+  f.best_fit = in.options.best_fit_frames;
+  f.truth = s.truth;
+  f.physical = s.physical;
+  f.X_BBp = s.X_BBp;
   for (int k = 0; k < 2; ++k) {
-    (*rep)["pendant_tip_error"].push_back(
-        PendantTipError(s.true_tips[k], WithTipCorrection(in.tip_models[k], s.dt[k]), s.X_BBp[k]));
+    const DhParameters& t = s.twin_truth.models[k].links[0].dh;
+    const DhParameters& m = in.pendant_models_flange[k].links[0].dh;
+    f.dtheta1_rad[k] = t.theta_offset - m.theta_offset;
+    f.dd1_m[k] = t.d - m.d;
+    f.pendant_tip_error[k] = MeasurePendantTipError(
+        s.true_tips[k], WithTipCorrection(in.tip_models[k], s.dt[k]), s.X_BBp[k]);
   }
-}
-
-// report: skipped, warnings and contacts (with residuals when the procedure succeeded).
-void ReportContacts(const HandclaspResult& result, nlohmann::json* rep) {
-  (*rep)["skipped"] = result.skipped;
-  (*rep)["warnings"] = result.calibration.warnings;
-  nlohmann::json contacts = nlohmann::json::array();
-  const BaseCalibrationResult& cal = result.calibration;
-  for (const HandclaspContact& c : result.contacts) {
-    nlohmann::json j = {{"point", c.point}, {"p_B1_mm", Xyz(c.p_B1)}, {"p_B2_mm", Xyz(c.p_B2)}};
-    if (result.ok()) {
-      j["residual_general_mm"] = 1e3 * (c.p_B1 - cal.X_B1B2_general * c.p_B2).norm();
-      j["residual_constrained_mm"] = 1e3 * (c.p_B1 - cal.X_B1B2_constrained * c.p_B2).norm();
-    }
-    contacts.push_back(j);
-  }
-  (*rep)["contacts"] = contacts;
+  return f;
 }
 
 // An estimate scored against the kinematic-frame truth and the physical X_B1B2.
@@ -483,76 +429,50 @@ ScoredBaseFrame ScoreEstimate(const Transform& X, const ScoringFrames& s) {
   return f;
 }
 
-// The errors of one comparison as report JSON.
-nlohmann::json ErrorsJson(const BaseFrameError& e) {
-  return nlohmann::json{{"e_tran_mm", e.e_tran_mm}, {"e_rot_deg", e.e_rot_deg}};
-}
-
-// Marks the stage ok and scores the general and constrained estimates into out and its report.
+// Marks the stage ok and scores the general and constrained estimates into out.
 void ScoreEstimates(const BaseCalibrationResult& cal, const ScoringFrames& s,
                     HandclaspStageResult* out) {
-  nlohmann::json& rep = out->report;
-  out->ok = true;
+  out->status = HandclaspStageStatus::kOk;
   out->X_B1B2_general = cal.X_B1B2_general;
   out->X_B1B2_constrained = cal.X_B1B2_constrained;
-  rep["status"] = "ok";
-  rep["general"] = Scored(cal.X_B1B2_general, s.truth, cal.rms_residual_general_m);
-  rep["constrained"] = Scored(cal.X_B1B2_constrained, s.truth, cal.rms_residual_constrained_m);
   out->general = ScoreEstimate(cal.X_B1B2_general, s);
   out->constrained = ScoreEstimate(cal.X_B1B2_constrained, s);
-  rep["physical_truth"]["general"] = ErrorsJson(out->general.physical);
-  rep["physical_truth"]["constrained"] = ErrorsJson(out->constrained.physical);
 }
 
-// report.tips_identified, and when identified the estimate with the tips scored into out.
-void ReportIdentifiedTips(const TipRefinementResult& tips, const ScoringFrames& s,
-                          HandclaspStageResult* out) {
-  nlohmann::json& rep = out->report;
-  nlohmann::json& t = rep["tips_identified"];
-  t["status"] = tips.ok ? "ok" : "failed";
-  t["relative_singular_value"] = tips.relative_singular_value;
-  if (tips.ok) {
-    t.update(Scored(tips.X_B1B2, s.truth, tips.rms_residual_m));
-    t["rms_residual_before_mm"] = 1e3 * tips.rms_residual_before_m;
-    t["dt_flange_mm"] = {Xyz(tips.dt1_F1), Xyz(tips.dt2_F2)};
-    t["sigma_dt_flange_mm"] = {Xyz(tips.sigma_dt1_F1), Xyz(tips.sigma_dt2_F2)};
-    out->tips = ScoreEstimate(tips.X_B1B2, s);
-    rep["physical_truth"]["tips_identified"] = ErrorsJson(out->tips.physical);
-    out->X_B1B2_tips = tips.X_B1B2;
-  } else {
-    t["reason"] = tips.reason;
-  }
+// When the tips were identified, the estimate with the tips scored into out.
+void ScoreIdentifiedTips(const TipRefinementResult& tips, const ScoringFrames& s,
+                         HandclaspStageResult* out) {
+  if (!tips.ok) return;
+  out->tips = ScoreEstimate(tips.X_B1B2, s);
+  out->X_B1B2_tips = tips.X_B1B2;
 }
 
-// The coupled-motion check with the delivered estimate, into report.coupled_motion.
+// The coupled-motion check with the delivered estimate, into out.
 void RunCoupledMotionCheck(TwinCell& cell, const StageInputs& in, const HandclaspResult& result,
                            const ScoringFrames& s, HandclaspStageResult* out) {
-  nlohmann::json& rep = out->report;
   // With identified tips the controllers use them (the TCP a pendant would store).
   std::array<KinematicModel, 2> used = in.tip_models;
   for (int k = 0; k < 2; ++k) used[k] = WithTipCorrection(in.tip_models[k], s.dt[k]);
-  rep["coupled_motion"] =
+  CoupledMotionResult check =
       CoupledMotion(cell, used, result.contacts.front(),
                     s.tips_ok ? result.tips.X_B1B2 : result.calibration.X_B1B2_constrained);
-  rep["coupled_motion"]["estimate"] = s.tips_ok ? "tips_identified" : "constrained";
-  if (rep["coupled_motion"].value("status", "") == "ok") {
-    out->coupled_motion_max_deviation_mm = rep["coupled_motion"]["max_deviation_mm"];
-  }
+  check.estimate = s.tips_ok ? "tips_identified" : "constrained";
+  if (check.ok) out->coupled_motion_max_deviation_mm = check.max_deviation_mm;
+  out->coupled_motion = std::move(check);
 }
 
-// Marks the report failed because no points could be taught, and prints why.
+// Marks the stage failed because no points could be taught, and prints why.
 void ReportTeachingFailure(const TaughtPoints& taught, std::ostream& progress,
-                           nlohmann::json* rep) {
-  (*rep)["status"] = "failed";
-  (*rep)["reason"] = "teaching: " + taught.reason;
+                           HandclaspStageResult* out) {
+  out->status = HandclaspStageStatus::kTeachingFailed;
+  out->reason = "teaching: " + taught.reason;
   progress << "handclasp: teaching failed: " << taught.reason << "\n";
 }
 
 // Marks the stage failed with the procedure's reason, and prints it.
 void ReportProcedureFailure(const HandclaspResult& result, std::ostream& progress,
                             HandclaspStageResult* out) {
-  out->report["status"] = "failed";
-  out->report["reason"] = result.reason;
+  out->status = HandclaspStageStatus::kProcedureFailed;
   out->reason = result.reason;
   progress << "handclasp: " << result.reason << "\n";
 }
@@ -577,24 +497,25 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
   // The operator's taught points, planned from the told layout.
   const Teaching teaching = TeachContactPoints(cell, in);
   HandclaspStageResult out;
-  ReportTeaching(in.config, teaching, &out.report);
+  out.teaching = TeachingRecord(in.config, teaching);
+  out.tips_attempted = stage_options.identify_tips;
   if (!teaching.taught.ok) {
-    ReportTeachingFailure(teaching.taught, progress, &out.report);
+    ReportTeachingFailure(teaching.taught, progress, &out);
     return out;
   }
   // The contacts and the calibration, through the Cell interface only.
-  const HandclaspResult result = RunProcedure(cell, in, teaching.taught, progress);
+  out.procedure = RunProcedure(cell, in, teaching.taught, progress);
+  const HandclaspResult& result = out.procedure;
   // --- the procedure has ended: scoring against the truth from here on ---
   const ScoringFrames frames = ComputeScoringFrames(cell.Truth(), in, result);
-  ReportScoringFrames(frames, in, &out.report);
-  ReportContacts(result, &out.report);
+  out.frames = ScoringFramesRecord(frames, in);
   if (!result.ok()) {
     ReportProcedureFailure(result, progress, &out);
     return out;
   }
   // The general and constrained estimates (eq. 33-34).
   ScoreEstimates(result.calibration, frames, &out);
-  if (stage_options.identify_tips) ReportIdentifiedTips(result.tips, frames, &out);
+  if (stage_options.identify_tips) ScoreIdentifiedTips(result.tips, frames, &out);
   if (in.config.coupled_motion) RunCoupledMotionCheck(cell, in, result, frames, &out);
   PrintStageSummary(in.config.constraint, out, progress);
   return out;
@@ -621,21 +542,14 @@ HandclaspRunInputs LoadAndValidate(const std::string& scenario_path, const std::
   return {std::move(scenario), std::move(config), std::move(acceptance)};
 }
 
-// The batch's outcomes: each trial's report and typed result.
-struct TrialBatch {
-  nlohmann::json trials = nlohmann::json::array();  ///< each trial's report, in order
-  nlohmann::json first;                              ///< trial 0's report
-  int failures = 0;
-  std::vector<HandclaspStageResult> done;  ///< the trials' typed results, for the batch means
-};
-
 // Runs every trial of the batch on a fresh twin with seed twin.seed + t and the nominal
 // models; throws InputError when a trial's procedure refused.
-TrialBatch RunTrials(const Scenario& scenario, const HandclaspConfig& config,
-                     std::ostream& progress) {
+HandclaspBatchResult RunTrials(const Scenario& scenario, const HandclaspConfig& config,
+                               std::ostream& progress) {
   const std::array<KinematicModel, 2> nominal = {scenario.twin.robots[0].model,
                                                  scenario.twin.robots[1].model};
-  TrialBatch b;
+  HandclaspBatchResult b;
+  b.trials = config.trials;
   for (int t = 0; t < config.trials; ++t) {
     TwinSpec spec = scenario.twin;
     spec.seed = scenario.twin.seed + static_cast<std::uint64_t>(t);
@@ -643,75 +557,27 @@ TrialBatch RunTrials(const Scenario& scenario, const HandclaspConfig& config,
              << ")\n";
     TwinCell cell(spec, scenario.path);
     HandclaspStageResult stage = RunHandclaspStage(cell, scenario, nominal, progress);
-    stage.report["seed"] = spec.seed;
-    if (!stage.ok) {
+    stage.seed = spec.seed;
+    if (!stage.ok()) {
       // A refused procedure is exit 2 with its reason (README, exit codes); nothing is written.
       ++b.failures;
       throw InputError(scenario.path + " scenario.handclasp",
                        "the handclasp procedure refused in trial " + std::to_string(t + 1) + "/" +
                            std::to_string(config.trials) + " (seed " + std::to_string(spec.seed) +
-                           "): " + stage.report.value("reason", std::string("no reason given")));
+                           "): " + stage.reason);
     }
-    if (t == 0) b.first = stage.report;
-    b.trials.push_back(std::move(stage.report));
     b.done.push_back(std::move(stage));
   }
   return b;
 }
 
-// Means over the n trials of one estimate's errors, kinematic or physical.
-nlohmann::json MeanErrors(const std::vector<HandclaspStageResult>& done, int n,
-                          ScoredBaseFrame HandclaspStageResult::*which, bool physical) {
-  double tran = 0, rot = 0;
-  for (const HandclaspStageResult& r : done) {
-    const BaseFrameError& e = physical ? (r.*which).physical : (r.*which).kinematic;
-    tran += e.e_tran_mm;
-    rot += e.e_rot_deg;
-  }
-  return nlohmann::json{{"mean_e_tran_mm", tran / n}, {"mean_e_rot_deg", rot / n}};
-}
-
-// base_frame.batch: counts, the mean errors and each trial's report.
-nlohmann::json BatchSummary(const HandclaspConfig& config, const TrialBatch& b) {
-  const int n = config.trials - b.failures;
-  nlohmann::json batch = {{"trials", config.trials}, {"failed", b.failures}};
-  if (n > 0) {
-    int worse_tran = 0, worse_rot = 0;  // trials where the constrained one was worse
-    for (const HandclaspStageResult& r : b.done) {
-      worse_tran += r.constrained.kinematic.e_tran_mm > r.general.kinematic.e_tran_mm;
-      worse_rot += r.constrained.kinematic.e_rot_deg > r.general.kinematic.e_rot_deg;
-    }
-    batch["general"] = MeanErrors(b.done, n, &HandclaspStageResult::general, false);
-    batch["constrained"] = MeanErrors(b.done, n, &HandclaspStageResult::constrained, false);
-    batch["physical_truth"] = {
-        {"general", MeanErrors(b.done, n, &HandclaspStageResult::general, true)},
-        {"constrained", MeanErrors(b.done, n, &HandclaspStageResult::constrained, true)}};
-    batch["constrained_worse_e_tran_trials"] = worse_tran;
-    batch["constrained_worse_e_rot_trials"] = worse_rot;
-  }
-  batch["trials_detail"] = b.trials;
-  return batch;
-}
-
-// report.json's content before the acceptance verdict: trial 0's base frame and the batch.
-nlohmann::json BuildReport(const Scenario& scenario, const HandclaspConfig& config,
-                           const TrialBatch& b) {
-  nlohmann::json report;
-  report["scenario"] = scenario.name;
-  report["procedure"] = "handclasp base-frame calibration (Gan et al. 2014)";
-  report["status"] = b.failures == 0 ? "ok" : "failed";
-  report["base_frame"] = b.first;  // trial 0: the scenario's own seed
-  if (config.trials > 1) report["base_frame"]["batch"] = BatchSummary(config, b);
-  return report;
-}
-
 // Writes out_dir/report.json through a staging folder renamed onto out_dir when complete.
-void PublishReport(const nlohmann::json& report, const std::string& out_dir) {
+void PublishReport(const std::string& report_text, const std::string& out_dir) {
   const std::string staging = CreateStagingDirectory(out_dir);
   try {
     {
       std::ofstream f(std::filesystem::path(staging) / "report.json");
-      f << report.dump(2) << "\n";
+      f << report_text;
       if (!f) throw InputError(out_dir + "/report.json", "writing the report failed");
     }
     PublishDirectory(staging, out_dir);
@@ -729,9 +595,10 @@ int RunHandclaspScenario(const std::string& scenario_path, const std::string& ou
   // The scenario, its handclasp and acceptance sections and the output paths, all checked.
   const HandclaspRunInputs in = LoadAndValidate(scenario_path, out_dir, trial, junit);
   // Each trial's handclasp stage on its own twin.
-  const TrialBatch batch = RunTrials(in.scenario, in.config, progress);
-  nlohmann::json report = BuildReport(in.scenario, in.config, batch);
-  const AcceptanceVerdict verdict = EvaluateAcceptance(in.acceptance, &report);
+  const HandclaspBatchResult batch = RunTrials(in.scenario, in.config, progress);
+  // report.json with the acceptance criteria judged on it.
+  AcceptanceVerdict verdict;
+  const std::string report = HandclaspReportText(in.scenario, batch, in.acceptance, &verdict);
   PublishReport(report, out_dir);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

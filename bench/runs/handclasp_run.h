@@ -39,9 +39,8 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "bench/io/scenario.h"
+#include "bench/scoring/handclasp_results.h"
 #include "calib/identification/base_calibration.h"
 #include "calib/kinematics/kinematic_model.h"
 #include "sim/cell/twin_cell.h"
@@ -118,40 +117,11 @@ Transform BestFitBaseOffset(const KinematicModel& true_tip_model,
 Transform KinematicFrameTruth(const TwinTruth& truth,
                               const std::array<KinematicModel, 2>& pendant_models);
 
-/// One X_B1B2 estimate scored (eq. 33-34) against the frames the kinematic models use
-/// (KinematicFrameTruth) and against the physical X_B1B2.
-struct ScoredBaseFrame {
-  bool present = false;  ///< the estimate exists (its procedure step succeeded)
-  BaseFrameError kinematic;
-  BaseFrameError physical;
-};
-
-/// Estimates of one handclasp stage, typed, and its report (bench scoring included; written
-/// into report.json by the run, read by nothing).
-struct HandclaspStageResult {
-  bool ok = false;                                       ///< the procedure calibrated
-  std::string reason;                                    ///< why not (ok = false)
-  ScoredBaseFrame general, constrained;                  ///< eq. 3 and 12; the refined one
-  ScoredBaseFrame tips;                                  ///< jointly with the tips, if identified
-  /// Largest tip-to-tip deviation of the coupled-motion check [mm]; NaN when not run or failed.
-  double coupled_motion_max_deviation_mm = std::numeric_limits<double>::quiet_NaN();
-  /// The estimate the stage delivers: with the tips when identified, else the constrained one.
-  const ScoredBaseFrame& delivered() const { return tips.present ? tips : constrained; }
-  const char* delivered_name() const { return tips.present ? "tips_identified" : "constrained"; }
-  Transform X_B1B2_general = Transform::Identity();      ///< general estimate (eq. 3, 12)
-  Transform X_B1B2_constrained = Transform::Identity();  ///< installation-refined estimate
-  /// With HandclaspStageOptions::identify_tips and report.tips_identified.status "ok": the
-  /// estimate refined jointly with the tips.
-  Transform X_B1B2_tips = Transform::Identity();
-  /// base_frame-style object: installation, truth, general, constrained (e_tran_mm, e_rot_deg,
-  /// xyz_mm, zyz_deg, rms_residual_mm), contacts, skipped, warnings, coupled_motion, ...
-  nlohmann::json report;
-};
-
 /// Runs one handclasp stage on `cell` with the section of `scenario` and the controllers'
 /// flange models `pendant_models_flange` (nominal or calibrated; the section's told tips are
-/// added as tools), then scores it against cell.Truth(). Progress lines go to `progress`. Throws
-/// InputError for a bad section; procedure failures are reported (ok = false, report.status).
+/// added as tools), then scores it against cell.Truth() (bench/scoring/handclasp_results.h;
+/// bench/report/handclasp_report.h writes it). Progress lines go to `progress`. Throws
+/// InputError for a bad section; procedure failures are reported (ok() false, status, reason).
 HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
                                        const std::array<KinematicModel, 2>& pendant_models_flange,
                                        std::ostream& progress,

@@ -10,8 +10,7 @@
 #include "bench/io/model_loader.h"
 #include "bench/io/output_files.h"
 #include "bench/report/acceptance.h"
-#include "bench/report/report_html.h"
-#include "bench/report/scenario_json.h"
+#include "bench/report/workflow_report.h"
 #include "bench/runs/handclasp_run.h"
 #include "calib/common/clock.h"
 #include "calib/common/errors.h"
@@ -43,24 +42,6 @@ std::string ReturnToStart(TwinCell& cell, const Scenario& sc) {
   return why;
 }
 
-// The summary of one handclasp stage under base_frame.workflow: the constrained estimate's
-// errors (eq. 33-34) on top, the whole stage report below.
-nlohmann::json StageSummary(const HandclaspStageResult& r, const std::string& kinematics) {
-  nlohmann::json j;
-  j["kinematics"] = kinematics;
-  j["status"] = r.ok ? "ok" : "failed";
-  if (r.ok) {
-    const ScoredBaseFrame& d = r.delivered();
-    j["estimate"] = r.delivered_name();
-    j["e_tran_mm"] = d.kinematic.e_tran_mm;
-    j["e_rot_deg"] = d.kinematic.e_rot_deg;
-    j["physical_truth"] = {{"e_tran_mm", d.physical.e_tran_mm},
-                           {"e_rot_deg", d.physical.e_rot_deg}};
-  }
-  j["stage"] = r.report;
-  return j;
-}
-
 // The workflow's parsed input: the scenario (trial applied) and its sections.
 struct WorkflowInputs {
   Scenario sc;
@@ -78,14 +59,6 @@ struct WorkflowContext {
   bool quiet;                  // --quiet
   Clock::time_point t_start;   // when the run began
   std::ostream& progress;      // progress lines (discarded when quiet)
-};
-
-// What the workflow's stages produce.
-struct WorkflowState {
-  nlohmann::json report;    // report.json (the calibration stage's keys and the workflow's)
-  nlohmann::json workflow;  // base_frame.workflow
-  std::optional<HandclaspStageResult> stage_a, stage_c;  // (a) and (c), typed
-  std::string failure;      // why the workflow stopped; empty while it goes on
 };
 
 // Loads the scenario, applies the trial and parses every section the workflow needs, and
@@ -118,19 +91,18 @@ WorkflowInputs LoadWorkflowInputs(const RunOptions& o) {
 
 // (a) Handclasp with the controllers' nominal kinematics.
 void RunNominalHandclasp(const WorkflowContext& ctx, const std::array<KinematicModel, 2>& nominal,
-                         WorkflowState* state) {
+                         WorkflowResult* state) {
   ctx.progress << "[" << SecondsSince(ctx.t_start) << " s] (a) handclasp with nominal kinematics\n";
   state->stage_a = RunHandclaspStage(ctx.cell, ctx.sc, nominal, ctx.progress);
   const HandclaspStageResult& a = *state->stage_a;
-  state->workflow["nominal_kinematics"] = StageSummary(a, "nominal");
-  if (!a.ok) state->failure = "handclasp with nominal kinematics failed";
+  if (!a.ok()) state->failure = "handclasp with nominal kinematics failed";
 }
 
 // (b) Optical-axis calibration of both robots, told (a)'s constrained estimate. Returns the
 // calibrated models (the nominal ones where it did not run).
 std::array<KinematicModel, 2> RunOpticalAxisCalibration(
     const WorkflowContext& ctx, const std::array<KinematicModel, 2>& nominal,
-    CalibrationConfig* config, WorkflowState* state) {
+    CalibrationConfig* config, WorkflowResult* state) {
   if (state->failure.empty()) {
     const std::string back = ReturnToStart(ctx.cell, ctx.sc);
     if (!back.empty()) state->failure = "before the optical-axis calibration: " + back;
@@ -141,18 +113,16 @@ std::array<KinematicModel, 2> RunOpticalAxisCalibration(
     ctx.progress << "[" << SecondsSince(ctx.t_start)
                  << " s] (b) optical-axis calibration of both robots\n";
     std::fflush(stdout);
-    const OpticalAxisResult b = RunCalibrationStage(ctx.cell, ctx.sc, *config, ctx.staging,
-                                                    ctx.quiet, ctx.t_start, &state->report);
+    state->calibration =
+        RunCalibrationStage(ctx.cell, ctx.sc, *config, ctx.staging, ctx.quiet, ctx.t_start);
     std::array<bool, 2> done = {false, false};
-    for (const RobotCalibration& rc_robot : b.robots) {
+    for (const RobotCalibration& rc_robot : state->calibration->procedure.robots) {
       // The identified model's link 7 is the board mount; WithTipTool (in the stage) puts
       // the tip in its place, keeping X_BL0 and links 1-6 as identified.
       calibrated[rc_robot.robot] = rc_robot.identified;
       done[rc_robot.robot] = true;
     }
     if (!done[0] || !done[1]) state->failure = "the optical-axis calibration left a robot out";
-    state->workflow["calibration_rough_X_B1B2"] =
-        "base_frame.workflow.nominal_kinematics constrained";
   }
   return calibrated;
 }
@@ -163,7 +133,7 @@ std::array<KinematicModel, 2> RunOpticalAxisCalibration(
 // robots, the exchanged tools may touch something).
 void RunCalibratedHandclasp(const WorkflowContext& ctx,
                             const std::array<KinematicModel, 2>& calibrated,
-                            int initial_camera_robot, WorkflowState* state) {
+                            int initial_camera_robot, WorkflowResult* state) {
   if (state->failure.empty()) {
     const std::string back = ReturnToStart(ctx.cell, ctx.sc);
     if (!back.empty()) state->failure = "before the second handclasp: " + back;
@@ -181,40 +151,18 @@ void RunCalibratedHandclasp(const WorkflowContext& ctx,
     stage.identify_tips = ctx.handclasp.calibrated_tip_identification;
     stage.best_fit_frames = true;
     state->stage_c = RunHandclaspStage(ctx.cell, ctx.sc, calibrated, ctx.progress, stage);
-    const HandclaspStageResult& c = *state->stage_c;
-    state->workflow["calibrated_kinematics"] = StageSummary(c, "calibrated (optical-axis)");
-    if (!c.ok) state->failure = "handclasp with calibrated kinematics failed";
-    if (c.report.contains("coupled_motion")) {
-      state->report["base_frame"]["coupled_motion"] = c.report["coupled_motion"];
-    }
-  }
-}
-
-// Completes report.json: the scenario, the procedure, the status and base_frame.
-void CompleteWorkflowReport(const WorkflowContext& ctx, WorkflowState* state) {
-  nlohmann::json& report = state->report;
-  const std::string& failure = state->failure;
-  if (report.is_null() || !report.contains("scenario")) {
-    report["scenario"] = ScenarioJson(ctx.sc);
-  }
-  report["procedure"] = "dual-arm workflow: handclasp (Gan et al. 2014) with nominal "
-                        "kinematics, optical-axis calibration (Zhu et al. 2019), handclasp "
-                        "with calibrated kinematics";
-  report["status"] = failure.empty() ? "ok" : "failed";
-  if (!failure.empty()) report["reason"] = failure;
-  report["base_frame"]["installation"] = ToString(ctx.handclasp.constraint);
-  report["base_frame"]["workflow"] = state->workflow;
-  if (report.contains("timing_s")) {
-    report["timing_s"]["workflow_total"] = SecondsSince(ctx.t_start);
+    if (!state->stage_c->ok()) state->failure = "handclasp with calibrated kinematics failed";
   }
 }
 
 // A refused stage is exit 2 with its reason (README, exit codes); nothing is written.
-void ThrowIfRefused(const Scenario& sc, const WorkflowState& state) {
+void ThrowIfRefused(const Scenario& sc, const WorkflowResult& state) {
   if (state.failure.empty()) return;
   std::string detail;
   for (const std::optional<HandclaspStageResult>* stage : {&state.stage_c, &state.stage_a}) {
-    if (*stage && !(*stage)->ok && !(*stage)->reason.empty()) {
+    // A stage whose procedure refused says why (a failed teaching has no detail here).
+    if (*stage && (*stage)->status == HandclaspStageStatus::kProcedureFailed &&
+        !(*stage)->reason.empty()) {
       detail = ": " + (*stage)->reason;
       break;
     }
@@ -223,22 +171,22 @@ void ThrowIfRefused(const Scenario& sc, const WorkflowState& state) {
 }
 
 // Writes report.json and report.html into the staging folder.
-void WriteWorkflowReport(const fs::path& staging, const nlohmann::json& report) {
+void WriteWorkflowReport(const fs::path& staging, const JudgedReport& report) {
   {
     std::ofstream f(staging / "report.json");
-    f << report.dump(2) << '\n';
+    f << report.json;
     if (!f) throw InputError((staging / "report.json").string(), "writing the report failed");
   }
   {
     std::ofstream f(staging / "report.html");
-    f << RenderReportHtml(report);
+    f << report.html;
     if (!f) throw InputError((staging / "report.html").string(), "writing the report failed");
   }
 }
 
 // One stage's line of the closing summary: its delivered estimate's errors, or "failed".
 void PrintStageLine(const HandclaspStageResult& r, const char* label) {
-  if (!r.ok) {
+  if (!r.ok()) {
     std::printf("%-34s failed\n", label);
     return;
   }
@@ -253,7 +201,7 @@ void PrintStageLine(const HandclaspStageResult& r, const char* label) {
 }
 
 // The closing summary: both handclasp stages' errors and what was written.
-void PrintWorkflowSummary(const WorkflowContext& ctx, const WorkflowState& state,
+void PrintWorkflowSummary(const WorkflowContext& ctx, const WorkflowResult& state,
                           const fs::path& out) {
   std::printf("\nbase frame (%s installation):\n", ToString(ctx.handclasp.constraint));
   PrintStageLine(*state.stage_a, "  handclasp, nominal kinematics");
@@ -269,7 +217,8 @@ AcceptanceVerdict RunWorkflow(const WorkflowContext& ctx, CalibrationConfig* con
   ctx.progress << "twinbench run: dual-arm workflow, scenario " << ctx.sc.name << " ("
                << ctx.sc.path << ")\n";
   const int initial_camera_robot = ctx.cell.CameraRobot();
-  WorkflowState state;
+  WorkflowResult state;
+  state.installation = ctx.handclasp.constraint;
   const std::array<KinematicModel, 2> nominal = {ctx.sc.twin.robots[0].model,
                                                  ctx.sc.twin.robots[1].model};
   // (a) Handclasp with the controllers' nominal kinematics.
@@ -279,18 +228,17 @@ AcceptanceVerdict RunWorkflow(const WorkflowContext& ctx, CalibrationConfig* con
       RunOpticalAxisCalibration(ctx, nominal, config, &state);
   // (c) Handclasp again with the calibrated kinematics.
   RunCalibratedHandclasp(ctx, calibrated, initial_camera_robot, &state);
-  // The report's workflow keys.
-  CompleteWorkflowReport(ctx, &state);
+  state.total_s = SecondsSince(ctx.t_start);
   // A refused stage ends the run here.
   ThrowIfRefused(ctx.sc, state);
-  // The acceptance criteria.
-  const AcceptanceVerdict verdict = EvaluateAcceptance(acceptance, &state.report);
+  // The report, judged by the acceptance criteria.
+  const JudgedReport report = WorkflowReport(ctx.sc, state, acceptance);
   // report.json and report.html, published with the stages' files.
-  WriteWorkflowReport(ctx.staging, state.report);
+  WriteWorkflowReport(ctx.staging, report);
   PublishDirectory(ctx.staging.string(), out.string());
   // The closing summary.
   if (!ctx.quiet) PrintWorkflowSummary(ctx, state, out);
-  return verdict;
+  return report.verdict;
 }
 
 }  // namespace
