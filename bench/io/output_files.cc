@@ -12,8 +12,7 @@
 #include <thread>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
+#include "bench/report/output_mark.h"
 #include "calib/common/errors.h"
 
 namespace twin {
@@ -118,15 +117,7 @@ std::string MarkedVerb(const fs::path& dir) {
   std::string text(4096, '\0');
   in.read(&text[0], static_cast<std::streamsize>(text.size()));
   text.resize(static_cast<std::size_t>(in.gcount()));
-  try {
-    const nlohmann::json j = nlohmann::json::parse(text);
-    if (j.is_object() && j.value("written_by", "") == "twinbench" && j.contains("verb") &&
-        j["verb"].is_string()) {
-      return j["verb"].get<std::string>();
-    }
-  } catch (const std::exception&) {
-  }
-  return "";
+  return OutputMarkVerb(text);
 }
 
 // "a FIFO", "a device", ... for an existing path that is neither a folder nor a regular file.
@@ -223,11 +214,10 @@ void CheckOutputFolder(const std::string& path, const std::string& option,
 }
 
 void WriteMarkFile(const fs::path& dir, const std::string& verb) {
-  const nlohmann::json j = {{"written_by", "twinbench"}, {"verb", verb}};
   const fs::path tmp = dir / (std::string(kOutputMarker) + ".partial");
   {
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    f << j.dump() << "\n";
+    f << OutputMarkText(verb);
     f.flush();
     if (!f) throw InputError(dir.string(), "cannot write the output mark " + tmp.string());
   }

@@ -1,5 +1,5 @@
 // The statistics of a Monte Carlo study: summary.json from the records of trials.jsonl
-// (bench/runs/trial_record.h). Keys of the summary:
+// (bench/report/trial_record.h). Keys of the summary:
 //   scenario.{names,hashes}     what was studied (one of each unless shards were mixed)
 //   trials.{recorded,ok,failed,first,last,failures[]}   failures: {trial, reason}
 //   figures.<key>               over the ok trials, for every figure of the records:

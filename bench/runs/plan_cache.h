@@ -1,10 +1,10 @@
 // The plan cache of studies: a PlanStore (calib/planning/plan_store.h) on files in a folder,
 // one `<hash>.json` per planner input (hash: FNV-1a of PlanInputsText), holding that text and
-// the plan with every number written exactly. Processes share it safely: the first one to miss
-// takes an exclusive lock (flock on `<hash>.lock`) and plans, the others wait in Find and then
-// read its plan, so concurrent trials with the same inputs plan once. A lock dies with its
-// process (a killed trial leaves no stale lock); a file is written to a temporary name and
-// renamed into place.
+// the plan with every number written exactly (the file format: bench/report/plan_file.h).
+// Processes share it safely: the first one to miss takes an exclusive lock (flock on
+// `<hash>.lock`) and plans, the others wait in Find and then read its plan, so concurrent
+// trials with the same inputs plan once. A lock dies with its process (a killed trial leaves
+// no stale lock); a file is written to a temporary name and renamed into place.
 #pragma once
 
 #include <atomic>
@@ -12,16 +12,9 @@
 #include <mutex>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
 #include "calib/planning/plan_store.h"
 
 namespace twin {
-
-/// A plan as JSON (doubles as C99 hex-float strings, so that a plan read back is bit-equal).
-nlohmann::json PlanToJson(const PosePlanResult& plan);
-/// The inverse of PlanToJson; throws InputError (naming `where`) for a malformed document.
-PosePlanResult PlanFromJson(const nlohmann::json& j, const std::string& where);
 
 class FilePlanStore : public PlanStore {
  public:

@@ -5,23 +5,19 @@
 #include <filesystem>
 #include <map>
 
-#include <nlohmann/json.hpp>
-
 #include "bench/io/model_loader.h"
-#include "bench/report/study_summary.h"
-#include "bench/report/study_summary_html.h"
-#include "bench/runs/trial_record.h"
-#include "bench/runs/trials_file.h"
+#include "bench/report/study_summary_files.h"
+#include "bench/report/trial_record.h"
+#include "bench/report/trial_records_file.h"
 #include "calib/common/errors.h"
 
 namespace twin {
 namespace fs = std::filesystem;
-using json = nlohmann::json;
 
 int RunStudyMerge(const StudyMergeOptions& o) {
   if (o.dirs.empty()) throw InputError("study-merge", "expected one or more study folders");
   if (o.out_dir.empty()) throw InputError("--out", "expected a folder");
-  std::map<int, json> by_trial;
+  std::map<int, TrialRecord> by_trial;
   std::string hash, hash_from;
   int duplicates = 0, conflicts = 0, read = 0;
   for (const std::string& dir : o.dirs) {
@@ -37,40 +33,37 @@ int RunStudyMerge(const StudyMergeOptions& o) {
       throw InputError(dir, "not a study folder (no trials.jsonl or study.json)");
     }
     TrialsFileContent content = ReadTrialsFile(path);
-    for (json& r : content.records) {
+    for (TrialRecord& r : content.records) {
       ++read;
-      const std::string h = r.value("scenario_hash", std::string());
+      const std::string h = r.scenario_hash().value_or("");
       if (hash.empty()) {
         hash = h;
         hash_from = dir;
       } else if (h != hash) {
-        throw InputError(path, "trial " + r["trial"].dump() + " is of scenario hash " + h +
+        throw InputError(path, "trial " + std::to_string(r.trial()) + " is of scenario hash " + h +
                                    ", but " + hash_from + " holds " + hash +
                                    ": shards of different scenarios cannot be merged");
       }
-      const int t = r["trial"].get<int>();
+      const int t = r.trial();
       const auto it = by_trial.find(t);
       if (it == by_trial.end()) {
         by_trial.emplace(t, std::move(r));
         continue;
       }
       ++duplicates;
-      if (ComparablePart(it->second) != ComparablePart(r)) {
+      if (!it->second.SameResultAs(r)) {
         ++conflicts;
         std::fprintf(stderr, "study-merge: trial %d differs between two folders (kept the "
                      "first; second in %s)\n", t, dir.c_str());
       }
     }
   }
-  std::vector<json> records;
+  std::vector<TrialRecord> records;
   for (auto& [t, r] : by_trial) records.push_back(std::move(r));
   const std::string staging = CreateStagingDirectory(o.out_dir);
   try {
     WriteTrialsFile((fs::path(staging) / "trials.jsonl").string(), records);
-    const json summary = SummarizeStudy(records);
-    WriteFileAtomically((fs::path(staging) / "summary.json").string(), summary.dump(2) + "\n");
-    WriteFileAtomically((fs::path(staging) / "summary.html").string(),
-                        RenderStudySummaryHtml(summary, records));
+    WriteStudySummaryFiles(staging, records);
     PublishDirectory(staging, o.out_dir);
   } catch (...) {
     std::error_code ec;

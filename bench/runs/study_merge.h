@@ -3,8 +3,8 @@
 // OUT/summary.json and OUT/summary.html (bench/report/study_summary.h). Refuses shards of
 // different scenarios (their records' scenario hashes differ); a trial recorded in more than
 // one folder is kept once (the first folder's record) and counted; if the copies differ in
-// more than how they ran (trial_record.h, ComparablePart), that is reported. OUT is written
-// to OUT.partial and renamed into place when complete.
+// more than how they ran (bench/report/trial_record.h, ComparablePart), that is reported. OUT
+// is written to OUT.partial and renamed into place when complete.
 #pragma once
 
 #include <string>

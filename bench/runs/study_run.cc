@@ -17,32 +17,30 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <mutex>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "bench/io/calibration_config.h"
 #include "bench/io/content_hash.h"
 #include "bench/io/model_loader.h"
 #include "bench/io/output_files.h"
 #include "bench/io/scenario.h"
-#include "bench/report/study_summary.h"
-#include "bench/report/study_summary_html.h"
+#include "bench/report/study_file.h"
+#include "bench/report/study_summary_files.h"
+#include "bench/report/trial_record.h"
+#include "bench/report/trial_records_file.h"
 #include "bench/runs/handclasp_run.h"
 #include "bench/runs/tracker_run.h"
-#include "bench/runs/trial_record.h"
-#include "bench/runs/trials_file.h"
 #include "calib/common/clock.h"
 #include "calib/common/cpus.h"
 #include "calib/common/errors.h"
 
 namespace twin {
 namespace fs = std::filesystem;
-using json = nlohmann::json;
 namespace {
 
 // The signal that interrupted the study (0: none); set by the interrupt handler of RunStudy.
@@ -186,30 +184,20 @@ class Progress {
 };
 
 // Refuses a folder that holds another scenario's or another shard's study; writes study.json.
-void CheckStudyFile(const fs::path& path, const json& wanted) {
-  std::ifstream in(path);
-  if (in) {
-    json have;
-    try {
-      have = json::parse(in);
-    } catch (const std::exception& e) {
-      throw InputError(path.string(), std::string("not a study file: ") + e.what());
-    }
-    if (have.value("scenario_hash", "") != wanted["scenario_hash"]) {
+void CheckStudyFile(const fs::path& path, const StudyFile& wanted) {
+  if (const std::optional<StudyFileIdentity> have = ReadStudyFile(path.string())) {
+    if (have->scenario_hash.value_or("") != wanted.scenario_hash) {
       throw InputError(path.string(),
                        "the folder holds a study of another scenario (hash " +
-                           have.value("scenario_hash", std::string("?")) + ", this one " +
-                           wanted["scenario_hash"].get<std::string>() +
-                           "); choose another --out");
+                           have->scenario_hash.value_or("?") + ", this one " +
+                           wanted.scenario_hash + "); choose another --out");
     }
-    if (have.value("shard", "") != wanted["shard"]) {
-      throw InputError(path.string(), "the folder holds shard " +
-                                          have.value("shard", std::string("?")) + ", not " +
-                                          wanted["shard"].get<std::string>() +
-                                          "; choose another --out");
+    if (have->shard.value_or("") != wanted.shard) {
+      throw InputError(path.string(), "the folder holds shard " + have->shard.value_or("?") +
+                                          ", not " + wanted.shard + "; choose another --out");
     }
   }
-  WriteFileAtomically(path.string(), wanted.dump(2) + "\n");
+  WriteFileAtomically(path.string(), StudyFileText(wanted));
 }
 
 }  // namespace
@@ -350,11 +338,8 @@ StudyFolder ClaimStudyFolder(const StudyOptions& o, const StudyInputs& in) {
   }
   folder.lock_fd = lock_fd;
   folder.shard = std::to_string(o.shard_index) + "/" + std::to_string(o.shard_count);
-  CheckStudyFile(out / "study.json", json{{"scenario_file", in.scenario_path},
-                                          {"scenario", in.sc.name},
-                                          {"scenario_hash", in.hash},
-                                          {"trials", o.trials},
-                                          {"shard", folder.shard}});
+  CheckStudyFile(out / "study.json", {in.scenario_path, in.sc.name, in.hash, o.trials,
+                                      folder.shard});
   return folder;
 }
 
@@ -367,14 +352,14 @@ std::set<int> ReadRecordedTrials(const std::string& trials_path, const std::stri
     TruncateTrialsFile(trials_path, content.valid_bytes);
   }
   std::set<int> recorded;
-  for (const json& r : content.records) {
-    if (r.value("scenario_hash", "") != hash) {
-      throw InputError(trials_path, "trial " + r["trial"].dump() +
+  for (const TrialRecord& r : content.records) {
+    if (r.scenario_hash().value_or("") != hash) {
+      throw InputError(trials_path, "trial " + std::to_string(r.trial()) +
                                         " was recorded for another scenario (hash " +
-                                        r.value("scenario_hash", std::string("?")) +
-                                        ", this one " + hash + "); choose another --out");
+                                        r.scenario_hash().value_or("?") + ", this one " + hash +
+                                        "); choose another --out");
     }
-    recorded.insert(r["trial"].get<int>());
+    recorded.insert(r.trial());
   }
   return recorded;
 }
@@ -503,33 +488,23 @@ void StartTrials(const StudyParts& s, TrialChildren* children, Progress* progres
   }
 }
 
-// The outcome of a finished trial process: its exit status, its report.json (parsed into
+// The outcome of a finished trial process: its exit status, its report.json (read into
 // *report, which the outcome points to) and, when it failed, the reason.
-TrialOutcome JudgeTrial(const Running& r, int status, json* report) {
+TrialOutcome JudgeTrial(const Running& r, int status, std::optional<TrialReport>* report) {
   TrialOutcome outcome;
   outcome.wall_s = SecondsSince(r.start);
   outcome.exit_code = WIFEXITED(status) ? WEXITSTATUS(status)
                                         : 128 + (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-  {
-    std::ifstream in(r.out + "/report.json");
-    if (in) {
-      try {
-        *report = json::parse(in);
-        outcome.report = report;
-      } catch (const std::exception&) {
-      }
-    }
-  }
+  *report = ReadTrialReport(r.out + "/report.json");
+  if (*report) outcome.report = &**report;
   if (outcome.exit_code == 0 && outcome.report) {
-    outcome.status = report->value("status", std::string("ok")) == "failed" ? "failed" : "ok";
+    outcome.status = outcome.report->failed ? "failed" : "ok";
   } else {
     outcome.status = "failed";
   }
   if (outcome.status == "failed") {
-    outcome.reason =
-        report->is_object() && report->contains("reason") && (*report)["reason"].is_string()
-            ? (*report)["reason"].get<std::string>()
-            : ReasonFromLog(r.log);
+    outcome.reason = outcome.report && outcome.report->reason ? *outcome.report->reason
+                                                              : ReasonFromLog(r.log);
     if (WIFSIGNALED(status)) {
       outcome.reason = "killed by signal " + std::to_string(WTERMSIG(status)) +
                        (outcome.reason.empty() ? "" : ": " + outcome.reason);
@@ -583,7 +558,7 @@ TrialLoop RunTrials(const StudyParts& s, TrialChildren* children, Progress* prog
     }
     const Running r = it->second;
     loop.running.erase(it);
-    json report;
+    std::optional<TrialReport> report;
     const TrialOutcome outcome = JudgeTrial(r, status, &report);
     RecordTrial(s, r, outcome);
     progress->Finished(r.trial, outcome.status, outcome.wall_s,
@@ -613,14 +588,12 @@ TrialLoop RunTrials(const StudyParts& s, TrialChildren* children, Progress* prog
 void WriteStudySummary(const StudyFolder& folder, const ShardTrials& trials,
                        const TrialLoop& loop) {
   const fs::path& out = folder.out;
-  const std::vector<json> records = ReadTrialsFile(trials.trials_path).records;
-  const json summary = SummarizeStudy(records);
-  WriteFileAtomically((out / "summary.json").string(), summary.dump(2) + "\n");
-  WriteFileAtomically((out / "summary.html").string(), RenderStudySummaryHtml(summary, records));
+  const StudySummaryCounts counts =
+      WriteStudySummaryFiles(out.string(), ReadTrialsFile(trials.trials_path).records);
   std::printf("study: %d trials of shard %s recorded (%d failed); this run: %d trials in %.1f "
               "s, mean trial wall time %.2f s; wrote %s/{trials.jsonl, summary.json, "
               "summary.html}\n",
-              trials.in_shard, folder.shard.c_str(), summary["trials"]["failed"].get<int>(),
+              trials.in_shard, folder.shard.c_str(), counts.failed,
               loop.finished, SecondsSince(loop.start),
               loop.finished > 0 ? loop.wall_sum / loop.finished : 0.0, out.string().c_str());
 }

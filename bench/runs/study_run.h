@@ -2,8 +2,8 @@
 // SCENARIO --trial t` (the truth drawn from seeds.truth + t, the estimator's own randomness
 // from seeds.estimator + t; bench/io/scenario.h) in its own process (OSMesa contexts and
 // MuJoCo's global handlers make the process the safe unit), `jobs` at a time. Each finished
-// trial is appended to OUT/trials.jsonl as one complete line and flushed (bench/runs/
-// trial_record.h, trials_file.h). Killed at any moment, the study loses only the trials in
+// trial is appended to OUT/trials.jsonl as one complete line and flushed (bench/report/
+// trial_record.h, trial_records_file.h). Killed at any moment, the study loses only the trials in
 // flight (their processes die with it: PR_SET_PDEATHSIG); run again with the same command it
 // skips the recorded trials and never records one twice. A failed trial is recorded with its
 // reason and the study goes on. A shard (--shard I/N) runs trials I, I+N, I+2N, ... < trials.

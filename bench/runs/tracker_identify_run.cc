@@ -7,16 +7,13 @@
 #include <fstream>
 #include <iostream>
 
-#include <nlohmann/json.hpp>
-
 #include "bench/io/model_loader.h"
 #include "bench/io/model_yaml.h"
 #include "bench/io/output_files.h"
 #include "bench/io/term_spec_text.h"
 #include "bench/io/tracker_file.h"
 #include "bench/report/diagnosis_report.h"
-#include "bench/report/report_html.h"
-#include "bench/report/report_units.h"
+#include "bench/report/tracker_identify_report.h"
 #include "calib/common/errors.h"
 #include "calib/diagnosis/model_discovery.h"
 #include "calib/model/robot_model.h"
@@ -24,7 +21,6 @@
 
 namespace twin {
 namespace fs = std::filesystem;
-using nlohmann::json;
 
 namespace {
 
@@ -157,84 +153,30 @@ std::vector<std::string> RankCauses(const KinematicModel& chain, const TrackerFi
   return rank_causes;
 }
 
-// The report: the file and its columns, the held-out splits, the parameters, the tracker
-// pose, the declared terms, the diagnosis and the warnings.
-json IdentifyReportJson(const TrackerIdentifyOptions& o, const IdentifyInputs& in,
-                        const IdentifyOutcome& outcome) {
-  const KinematicModel& chain = in.chain;
-  const TrackerFile& file = in.file;
-  const TrackerCalibrationResult& r = outcome.calibration;
-  const IdentificationResult& id = r.identified;
-  json j;
-  j["file"] = o.measurements;
-  j["model"] = o.model;
-  j["robot"] = chain.name;
-  j["points"] = file.points.size();
-  j["distinct_poses"] = file.distinct_poses;
-  j["rank_causes"] = outcome.rank_causes;
-  j["columns"] = {{"joints", file.joint_columns},
-                  {"sigma", file.has_sigma},
-                  {"time", file.has_time},
-                  {"temperature", file.has_temperature}};
-  j["columns"]["ignored"] = json::array();
-  for (const TrackerFileColumn& c : file.ignored) {
-    j["columns"]["ignored"].push_back({{"name", c.name}, {"min", c.min}, {"max", c.max}});
-  }
-  for (const HeldOutSplit& s : r.splits) {
-    j["heldout"][s.name] = {{"rule", s.rule},
-                            {"training_poses", s.training},
-                            {"before", PointErrorsJson(s.before)},
-                            {"after", PointErrorsJson(s.after)},
-                            {"training_after", PointErrorsJson(s.training_after)},
-                            {"worse", s.worse}};
-  }
-  j["all_points"] = {{"before", PointErrorsJson(r.all_before)}, {"after", PointErrorsJson(r.all_after)}};
-  j["parameters"] = json::array();
-  for (const IdentifiedParameter& p : id.parameters) {
-    const double est = ReportValue(p.estimated, p.unit), start = ReportValue(p.start, p.unit);
-    const double sigma = ReportValue(p.sigma, p.unit);
-    const std::string unit = ReportUnit(p.unit);
-    j["parameters"].push_back({{"name", p.name}, {"unit", unit}, {"nominal", start},
-                               {"estimated", est}, {"correction", est - start},
-                               {"sigma", sigma}});
-  }
-  j["unidentifiable"] = id.observability.unidentifiable;
-  j["condition_number"] = id.condition_number();
-  j["rank"] = id.observability.rank;
-  j["sigma0"] = id.sigma0;
-  j["correlations"] = json::array();
-  for (const ParameterCorrelation& c : id.correlations) {
-    j["correlations"].push_back({{"a", c.a}, {"b", c.b}, {"rho", c.rho}});
-  }
-  const Eigen::AngleAxisd aa(r.X_TB.linear());
-  j["tracker_pose"] = {{"xyz_mm", {1e3 * r.X_TB.translation().x(), 1e3 * r.X_TB.translation().y(),
-                                   1e3 * r.X_TB.translation().z()}},
-                       {"rotation_deg", aa.angle() * 180.0 / 3.14159265358979323846},
-                       {"rotation_axis", {aa.axis().x(), aa.axis().y(), aa.axis().z()}}};
-  j["declared_terms"] = json::array();
-  for (const auto& t : in.nominal.terms) j["declared_terms"].push_back(TermLabel(t->spec()));
-  if (o.diagnosis) {
-    j["diagnosis"] = DiagnosisJson(outcome.diagnosis);
-  } else {
-    j["diagnosis"] = {{"verdict", nullptr}, {"skipped", "--no-diagnosis"}};
-  }
-  j["warnings"] = r.warnings;
-  return j;
+// The identification's typed result, as its report reads it.
+TrackerIdentifyResult MakeIdentifyResult(const TrackerIdentifyOptions& o, const IdentifyInputs& in,
+                                         const IdentifyOutcome& outcome) {
+  TrackerIdentifyResult r;
+  r.file = o.measurements;
+  r.model = o.model;
+  r.robot = in.chain.name;
+  r.measurements = &in.file;
+  r.rank_causes = outcome.rank_causes;
+  r.calibration = &outcome.calibration;
+  for (const auto& t : in.nominal.terms) r.declared_terms.push_back(TermLabel(t->spec()));
+  if (o.diagnosis) r.diagnosis = &outcome.diagnosis;
+  return r;
 }
 
 // Writes report.json, report.html and identified_<robot>.yaml into a staging folder and
 // publishes it as the output folder (nothing is left behind on an error).
 void WriteIdentifyOutputs(const TrackerIdentifyOptions& o, const KinematicModel& chain,
-                          const json& j, const IdentificationResult& id) {
+                          const TrackerIdentifyReport& report, const IdentificationResult& id) {
   const fs::path out(o.out_dir);
   const std::string staging = CreateStagingDirectory(o.out_dir);
   try {
-    WriteFile(fs::path(staging) / "report.json", j.dump(2) + "\n");
-    WriteFile(fs::path(staging) / "report.html",
-              "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>identify " + chain.name +
-                  "</title><style>body{font-family:sans-serif}td,th{padding:2px 8px;"
-                  "text-align:right}</style></head><body><h1>Tracker identification: " +
-                  HtmlEscape(o.measurements) + "</h1>" + DiagnosisHtml(j["diagnosis"]) + "</body></html>\n");
+    WriteFile(fs::path(staging) / "report.json", report.json_text);
+    WriteFile(fs::path(staging) / "report.html", report.html);
     WriteFile(fs::path(staging) / ("identified_" + chain.name + ".yaml"),
               ModelToYaml(id.model.chain));
     PublishDirectory(staging, out.string());
@@ -289,8 +231,9 @@ int RunTrackerIdentify(const TrackerIdentifyOptions& o) {
   // What lowers the rank, named.
   outcome.rank_causes = RankCauses(in.chain, in.file, outcome.calibration.identified);
   // The report, written only once complete.
-  const json j = IdentifyReportJson(o, in, outcome);
-  WriteIdentifyOutputs(o, in.chain, j, outcome.calibration.identified);
+  const TrackerIdentifyReport report =
+      MakeTrackerIdentifyReport(MakeIdentifyResult(o, in, outcome));
+  WriteIdentifyOutputs(o, in.chain, report, outcome.calibration.identified);
   // The summary on the terminal.
   PrintIdentifySummary(o, in, outcome);
   return 0;

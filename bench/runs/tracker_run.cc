@@ -11,7 +11,6 @@
 #include <utility>
 
 #include <Eigen/Cholesky>
-#include <nlohmann/json.hpp>
 
 #include "bench/io/model_loader.h"
 #include "bench/io/model_yaml.h"
@@ -23,8 +22,7 @@
 #include "bench/io/declared_terms.h"
 #include "bench/io/diagnosis_config.h"
 #include "bench/report/diagnosis_report.h"
-#include "bench/report/report_units.h"
-#include "bench/report/scenario_json.h"
+#include "bench/report/tracker_report.h"
 #include "bench/scoring/calibration_scoring.h"
 #include "calib/common/errors.h"
 #include "calib/diagnosis/model_discovery.h"
@@ -37,7 +35,6 @@
 
 namespace twin {
 namespace fs = std::filesystem;
-using nlohmann::json;
 
 namespace {
 
@@ -128,46 +125,7 @@ TrackerRunConfig ParseTrackerRunConfig(const Scenario& sc) {
   return c;
 }
 
-json Stats(const PositionErrorStats& s) { return {{"rms", 1e3 * s.rms}, {"max", 1e3 * s.max}}; }
-
 void WriteFile(const fs::path& path, const std::string& text) { WriteTextFile(path.string(), text); }
-
-std::string Html(const json& j) {
-  std::ostringstream os;
-  os << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>tracker calibration "
-     << j["scenario"]["name"].get<std::string>() << "</title><style>body{font-family:sans-serif}"
-     << "td,th{padding:2px 8px;text-align:right}</style></head><body><h1>Laser-tracker "
-        "calibration: "
-     << j["scenario"]["name"].get<std::string>() << "</h1>";
-  os << "<h2>Truth position error (200 random configurations) [mm]</h2><table><tr><th>gauge"
-        "</th><th>before RMS</th><th>after RMS</th><th>after max</th></tr>";
-  for (const char* g : {"raw", "rigid"}) {
-    const json& t = j["truth_position_error_mm"][g];
-    os << "<tr><td>" << g << "</td><td>" << t["before"]["rms"] << "</td><td>" << t["after"]["rms"]
-       << "</td><td>" << t["after"]["max"] << "</td></tr>";
-  }
-  os << "</table><h2>Held-out points [mm]</h2><table><tr><th>split</th><th>poses</th><th>"
-        "before RMS</th><th>after RMS</th><th>after max</th><th></th></tr>";
-  for (const auto& [name, s] : j["heldout"].items()) {
-    os << "<tr><td>" << name << "</td><td>" << s["after"]["poses"] << "</td><td>"
-       << s["before"]["rms_mm"] << "</td><td>" << s["after"]["rms_mm"] << "</td><td>"
-       << s["after"]["max_mm"] << "</td><td>" << (s["worse"].get<bool>() ? "WORSE" : "")
-       << "</td></tr>";
-  }
-  os << "</table><h2>Parameters (deviation from nominal)</h2><table><tr><th>name</th><th>unit"
-        "</th><th>estimated</th><th>true</th><th>sigma</th></tr>";
-  for (const json& p : j["parameters"]) {
-    os << "<tr><td>" << p["name"].get<std::string>() << "</td><td>" << p["unit"].get<std::string>()
-       << "</td><td>" << p["estimated"] << "</td><td>" << p["true"] << "</td><td>" << p["sigma"]
-       << "</td></tr>";
-  }
-  os << "</table><h2>Unidentifiable</h2><ul>";
-  for (const json& u : j["unidentifiable"]) os << "<li>" << u.get<std::string>() << "</li>";
-  os << "</ul>";
-  if (j.contains("diagnosis")) os << DiagnosisHtml(j["diagnosis"]);
-  os << "</body></html>\n";
-  return os.str();
-}
 
 /// The scenario of a run (as the trial), its tracker section and acceptance criteria, checked.
 struct TrackerRunSetup {
@@ -335,19 +293,12 @@ Eigen::VectorXd TrueCombinations(const TwinTruth& truth, int robot,
   return z_true;
 }
 
-/// The scores against the true geometry with the true reflector.
-struct TruthScores {
-  GaugeErrors before, after;       ///< nominal and identified, 200 random configurations
-  Eigen::VectorXd phi0, phi_true;  ///< the nominal and the true geometric parameters
-  int within3 = 0;                 ///< identifiable combinations within 3 sigma of the truth
-  json items;                      ///< each combination: estimated, true, sigma
-};
-
 // Scoring against the truth (bench only): the true geometry with the true reflector.
-TruthScores ScoreAgainstTruth(const TwinTruth& truth, int robot, const KinematicModel& nominal,
-                              const TrackerProcedureResult& result) {
+TrackerTruthScores ScoreAgainstTruth(const TwinTruth& truth, int robot,
+                                     const KinematicModel& nominal,
+                                     const TrackerProcedureResult& result) {
   const IdentificationResult& id = result.calibration.identified;
-  TruthScores scores;
+  TrackerTruthScores scores;
   const KinematicModel true_model = WithReflector(truth.models[robot], truth.tracker.p_FR);
   const std::vector<JointVector> configs =
       RandomJointConfigurations(nominal, 200, 1, DegToRad(10.0));
@@ -363,141 +314,56 @@ TruthScores ScoreAgainstTruth(const TwinTruth& truth, int robot, const Kinematic
   scores.phi0 = GetParameters(nominal);
   scores.phi_true = GetParameters(true_model);
   const Eigen::VectorXd z_true = TrueCombinations(truth, robot, true_model, nominal, result);
-  int& within3 = scores.within3;
-  json& items = scores.items;
-  items = json::array();
   for (int k = 0; k < id.z.size(); ++k) {
     const double sigma = std::sqrt(std::max(0.0, id.covariance_z(k, k)));
     const bool ok = std::abs(id.z(k) - z_true(k)) <= 3.0 * sigma;
-    within3 += ok;
-    items.push_back({{"index", k}, {"estimated", id.z(k)}, {"true", z_true(k)}, {"sigma", sigma},
-                     {"within_3_sigma", ok}});
+    scores.within3 += ok;
+    scores.combinations.push_back({k, id.z(k), z_true(k), sigma, ok});
   }
   return scores;
 }
 
-/// Everything a tracker run's report, files and summary are made from.
+/// Everything a tracker run's files and summary are made from.
 struct TrackerRunRecord {
   const RunOptions& options;
   const TrackerRunSetup& setup;
-  const KinematicModel& nominal;      ///< told
   const ProcedureOutcome& procedure;
-  const TrackerDiagnosis& diagnosis;
-  const PhysicalTruth& physical;
-  const TwinTruth& truth;             ///< after the physical-truth poses
-  const TruthScores& scores;
+  const TrackerRunResult& result;  ///< the typed result the report is made of
 };
 
-// The report's head: the scenario, the procedure, the tracker's points and skips, the
-// held-out splits and the truth position errors.
-json ReportHead(const TrackerRunRecord& r) {
-  const Scenario& sc = r.setup.sc;
-  const TrackerProcedureResult& result = r.procedure.result;
-  json j;
-  j["scenario"] = ScenarioJson(sc);
-  j["procedure"] = "laser-tracker calibration (geometry, tracker pose, reflector offset)";
-  j["robot"] = sc.robot_names[r.setup.config.robot];
-  j["tracker"] = {{"poses", result.points.size()}, {"attempts", result.attempts},
-                  {"sigma_mm", 1e3 * r.truth.tracker.sigma_m}};
-  // The robot's temperature sensor (the points carry their change from this first reading).
-  j["tracker"]["temperature_reference_C"] =
-      std::isfinite(result.temperature_reference_C) ? json(result.temperature_reference_C)
-                                                    : json(nullptr);
-  j["tracker"]["skipped"] = json::array();
-  for (const TrackerSkip& s : result.skipped) {
-    j["tracker"]["skipped"].push_back({{"attempt", s.attempt}, {"reason", s.reason}});
-  }
-  for (const HeldOutSplit& s : result.calibration.splits) {
-    j["heldout"][s.name] = {{"rule", s.rule}, {"training_poses", s.training},
-                            {"before", PointErrorsJson(s.before)}, {"after", PointErrorsJson(s.after)},
-                            {"worse", s.worse}};
-  }
-  const GaugeErrors& before = r.scores.before;
-  const GaugeErrors& after = r.scores.after;
-  j["truth_position_error_mm"] = {
-      {"raw", {{"before", Stats(before.raw)}, {"after", Stats(after.raw)}}},
-      {"rigid", {{"before", Stats(before.rigid)}, {"after", Stats(after.rigid)}}}};
-  return j;
+// The physical truth's errors of the calibrated (and the discovered) model, when the twin
+// reached some of its poses.
+TrackerPhysicalTruthScores ScorePhysicalTruth(const PhysicalTruth& physical, bool diagnosed) {
+  TrackerPhysicalTruthScores scores;
+  if (physical.true_points.empty()) return scores;
+  scores.poses = static_cast<int>(physical.true_points.size());
+  scores.calibrated = CompareInGauges(physical.calibrated, physical.true_points);
+  if (diagnosed) scores.discovered = CompareInGauges(physical.discovered, physical.true_points);
+  return scores;
 }
 
-// Adds the parameters against their true values, the declared terms' parameters, the
-// identifiable combinations and the identification's figures to the report.
-void AddParameterReport(const TrackerRunRecord& r, json* report) {
-  json& j = *report;
-  const IdentificationResult& id = r.procedure.result.calibration.identified;
-  const Eigen::VectorXd& phi0 = r.scores.phi0;
-  const Eigen::VectorXd& phi_true = r.scores.phi_true;
-  j["parameters"] = json::array();
-  const ParameterLayout layout(MakeRobotModel(r.nominal));
-  for (int i = 0; i < phi0.size(); ++i) {
-    const IdentifiedParameter& p = id.parameters[i];
-    j["parameters"].push_back({{"name", p.name},
-                               {"unit", ReportUnit(p.unit)},
-                               {"estimated", ReportValue(p.estimated - phi0(i), p.unit)},
-                               {"true", ReportValue(phi_true(i) - phi0(i), p.unit)},
-                               {"sigma", ReportValue(p.sigma, p.unit)}});
-  }
-  // The declared terms' parameters as identified (no truth beside them: a term's parameters
-  // are the estimator's, the twin's effect need not have the same ones).
-  j["declared_term_parameters"] = json::array();
-  for (std::size_t i = phi0.size(); i < id.parameters.size(); ++i) {
-    const IdentifiedParameter& p = id.parameters[i];
-    j["declared_term_parameters"].push_back({{"name", p.name},
-                                             {"unit", ReportUnit(p.unit)},
-                                             {"estimated", ReportValue(p.estimated, p.unit)},
-                                             {"sigma", ReportValue(p.sigma, p.unit)}});
-  }
-  j["identifiable_combinations"] = {{"count", id.z.size()}, {"within_3_sigma", r.scores.within3},
-                                    {"items", r.scores.items}};
-  j["unidentifiable"] = id.observability.unidentifiable;
-  j["condition_number"] = id.condition_number();
-  j["sigma0"] = id.sigma0;
-  j["declared_terms"] = json::array();
-  for (const auto& t : r.procedure.start.terms) j["declared_terms"].push_back(TermLabel(t->spec()));
-}
-
-// Adds the physical truth's errors of the calibrated (and the discovered) model, when the
-// twin reached some of its poses.
-void AddPhysicalTruthReport(const TrackerRunRecord& r, json* report) {
-  json& j = *report;
-  const PhysicalTruth& physical = r.physical;
-  if (!physical.true_points.empty()) {
-    const GaugeErrors calibrated = CompareInGauges(physical.calibrated, physical.true_points);
-    j["truth_position_error_mm_physical"] = {
-        {"poses", physical.true_points.size()},
-        {"rule", "the reflector where the twin's physics puts it (every effect) at seeded random "
-                 "poses, against each model at the same readings"},
-        {"calibrated_model",
-         {{"raw", Stats(calibrated.raw)}, {"rigid", Stats(calibrated.rigid)}}}};
-    if (r.diagnosis.ran) {
-      const GaugeErrors discovered = CompareInGauges(physical.discovered, physical.true_points);
-      j["truth_position_error_mm_physical"]["discovered_model"] = {
-          {"raw", Stats(discovered.raw)}, {"rigid", Stats(discovered.rigid)}};
-      j["truth_position_error_mm_discovered_model"] = {{"raw", Stats(discovered.raw)},
-                                                       {"rigid", Stats(discovered.rigid)}};
-    }
-  }
-}
-
-// The whole report.json (before the acceptance verdict): head, parameters, physical truth,
-// diagnosis, warnings and the time since `t_start`.
-json TrackerReportJson(const TrackerRunRecord& r,
-                       const std::chrono::steady_clock::time_point& t_start) {
-  json j = ReportHead(r);
-  AddParameterReport(r, &j);
-  AddPhysicalTruthReport(r, &j);
-  if (r.diagnosis.ran) {
-    j["diagnosis"] = DiagnosisJson(r.diagnosis.result);
+// The run's typed result (before the acceptance verdict): what the stages found and the
+// scores against the truth; `total_s`: the time since the run began.
+TrackerRunResult MakeTrackerResult(const RunOptions& o, const TrackerRunSetup& setup,
+                                   const ProcedureOutcome& procedure,
+                                   const TrackerDiagnosis& diagnosis, const PhysicalTruth& physical,
+                                   const TwinTruth& truth, TrackerTruthScores scores) {
+  TrackerRunResult r;
+  r.scenario = &setup.sc;
+  r.robot = setup.sc.robot_names[setup.config.robot];
+  r.procedure = &procedure.result;
+  for (const auto& t : procedure.start.terms) r.declared_terms.push_back(TermLabel(t->spec()));
+  r.notes = procedure.notes;
+  r.tracker_sigma_m = truth.tracker.sigma_m;
+  r.truth = std::move(scores);
+  r.physical = ScorePhysicalTruth(physical, diagnosis.ran);
+  if (diagnosis.ran) {
+    r.diagnosis = &diagnosis.result;
   } else {
-    j["diagnosis"] = {{"verdict", nullptr},
-                      {"skipped", r.options.diagnosis ? "tracker_calibration.diagnosis.enabled: false"
-                                                      : "--no-diagnosis"}};
+    r.diagnosis_skipped =
+        o.diagnosis ? "tracker_calibration.diagnosis.enabled: false" : "--no-diagnosis";
   }
-  j["warnings"] = r.procedure.result.calibration.warnings;
-  for (const std::string& n : r.procedure.notes) j["warnings"].push_back(n);
-  j["timing_s"] = {{"total", std::chrono::duration<double>(std::chrono::steady_clock::now() -
-                                                           t_start).count()}};
-  return j;
+  return r;
 }
 
 // measurements.csv: the tracker file format, which `twinbench identify` reads back.
@@ -521,15 +387,16 @@ std::string MeasurementsCsv(const KinematicModel& nominal, const TrackerProcedur
 
 // Writes report.json, report.html (unless images are off), measurements.csv and
 // identified_<robot>.yaml into a staging folder and publishes it as the output folder.
-void WriteTrackerOutputs(const TrackerRunRecord& r, const json& j, const std::string& csv) {
+void WriteTrackerOutputs(const TrackerRunRecord& r, const TrackerReport& report,
+                         const std::string& csv) {
   const RunOptions& o = r.options;
   const std::string name = r.setup.sc.robot_names[r.setup.config.robot];
   const IdentificationResult& id = r.procedure.result.calibration.identified;
   const fs::path out(o.out_dir);
   const std::string staging = CreateStagingDirectory(o.out_dir);
   try {
-    WriteFile(fs::path(staging) / "report.json", j.dump(2) + "\n");
-    if (o.images) WriteFile(fs::path(staging) / "report.html", Html(j));
+    WriteFile(fs::path(staging) / "report.json", report.json_text);
+    if (o.images) WriteFile(fs::path(staging) / "report.html", report.html);
     WriteFile(fs::path(staging) / "measurements.csv", csv);
     WriteFile(fs::path(staging) / ("identified_" + name + ".yaml"), ModelToYaml(id.model.chain));
     PublishDirectory(staging, out.string());
@@ -541,17 +408,17 @@ void WriteTrackerOutputs(const TrackerRunRecord& r, const json& j, const std::st
 
 // Prints the summary: poses, combinations within 3 sigma of the truth, the truth and held-out
 // RMS, the diagnosis with its physical truth, and what was written.
-void PrintTrackerSummary(const TrackerRunRecord& r, const json& j) {
+void PrintTrackerSummary(const TrackerRunRecord& r) {
   const std::string name = r.setup.sc.robot_names[r.setup.config.robot];
   const TrackerProcedureResult& result = r.procedure.result;
   const IdentificationResult& id = result.calibration.identified;
-  const GaugeErrors& before = r.scores.before;
-  const GaugeErrors& after = r.scores.after;
+  const GaugeErrors& before = r.result.truth.before;
+  const GaugeErrors& after = r.result.truth.after;
   const fs::path out(r.options.out_dir);
   std::printf("%s: %zu poses measured (%zu skipped), %d identifiable combinations, %d within 3 "
               "sigma of the truth\n",
               name.c_str(), result.points.size(), result.skipped.size(),
-              static_cast<int>(id.z.size()), r.scores.within3);
+              static_cast<int>(id.z.size()), r.result.truth.within3);
   std::printf("truth RMS (200 configurations): raw %.4f -> %.4f mm, rigid %.4f -> %.4f mm\n",
               1e3 * before.raw.rms, 1e3 * after.raw.rms, 1e3 * before.rigid.rms,
               1e3 * after.rigid.rms);
@@ -559,13 +426,12 @@ void PrintTrackerSummary(const TrackerRunRecord& r, const json& j) {
     std::printf("held-out %-6s %3d poses: %.4f -> %.4f mm%s\n", s.name.c_str(), s.after.poses,
                 1e3 * s.before.rms, 1e3 * s.after.rms, s.worse ? "  WORSE" : "");
   }
-  if (r.diagnosis.ran) {
-    std::printf("%s", DiagnosisSummary(r.diagnosis.result).c_str());
-    if (j.contains("truth_position_error_mm_physical")) {
-      const json& ph = j["truth_position_error_mm_physical"];
+  if (r.result.diagnosis) {
+    std::printf("%s", DiagnosisSummary(*r.result.diagnosis).c_str());
+    const TrackerPhysicalTruthScores& ph = r.result.physical;
+    if (ph.poses > 0 && ph.discovered) {
       std::printf("physical truth (%d poses, rigid RMS): calibrated %.4f mm, discovered %.4f mm\n",
-                  ph["poses"].get<int>(), ph["calibrated_model"]["rigid"]["rms"].get<double>(),
-                  ph["discovered_model"]["rigid"]["rms"].get<double>());
+                  ph.poses, 1e3 * ph.calibrated.rigid.rms, 1e3 * ph.discovered->rigid.rms);
     }
   }
   std::printf("wrote %s/{report.json, report.html, measurements.csv, identified_%s.yaml}\n",
@@ -609,17 +475,21 @@ int RunTrackerScenario(const RunOptions& o) {
   const PhysicalTruth physical = MeasurePhysicalTruth(setup, nominal, procedure, diagnosis, &cell);
   // Scoring against the truth (bench only): the true geometry with the true reflector.
   const TwinTruth truth = cell.Truth();
-  const TruthScores scores = ScoreAgainstTruth(truth, setup.config.robot, nominal, procedure.result);
-  const TrackerRunRecord record{o, setup, nominal, procedure, diagnosis, physical, truth, scores};
+  TrackerRunResult result =
+      MakeTrackerResult(o, setup, procedure, diagnosis, physical, truth,
+                        ScoreAgainstTruth(truth, setup.config.robot, nominal, procedure.result));
+  result.total_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  const TrackerRunRecord record{o, setup, procedure, result};
   // The report and its acceptance verdict.
-  json j = TrackerReportJson(record, t_start);
-  const AcceptanceVerdict verdict = EvaluateAcceptance(setup.acceptance, &j);
+  const TrackerReport report = MakeTrackerReport(result, setup.acceptance);
+  const AcceptanceVerdict& verdict = report.verdict;
   // measurements.csv: the tracker file format, which `twinbench identify` reads back.
   const std::string csv = MeasurementsCsv(nominal, procedure.result, setup.config.told_sigma_m);
   // The output folder, written in full or not at all.
-  WriteTrackerOutputs(record, j, csv);
+  WriteTrackerOutputs(record, report, csv);
   // The summary on the terminal.
-  if (!o.quiet) PrintTrackerSummary(record, j);
+  if (!o.quiet) PrintTrackerSummary(record);
   if (!o.junit.empty()) {
     WriteJunit(o.junit, setup.sc.name, verdict,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count());

@@ -1,4 +1,5 @@
 #include "bench/runs/plan_cache.h"
+#include "bench/report/plan_file.h"
 
 #include <sys/wait.h>
 #include <unistd.h>

@@ -21,8 +21,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "bench/runs/trial_record.h"
-#include "bench/runs/trials_file.h"
+#include "bench/report/trial_record.h"
+#include "bench/report/trial_records_file.h"
 #include "calib/common/errors.h"
 #include "tests/bench/text_edit.h"
 
@@ -42,7 +42,11 @@ std::string Folder(const std::string& name) {
 }
 
 std::vector<json> Records(const std::string& dir) {
-  return ReadTrialsFile(dir + "/trials.jsonl").records;
+  std::vector<json> records;
+  for (const TrialRecord& r : ReadTrialsFile(dir + "/trials.jsonl").records) {
+    records.push_back(r.document());
+  }
+  return records;
 }
 
 std::map<int, json> ByTrial(const std::vector<json>& records) {
@@ -123,9 +127,9 @@ TEST(StudyCli, MergeRefusesDifferentScenariosAndDropsDuplicates) {
   r1["trial"] = 1;
   json r0_again = r0;
   r0_again["run"]["wall_s"] = 7.0;  // the same trial run again elsewhere
-  AppendTrialRecord(a + "/trials.jsonl", r0);
-  AppendTrialRecord(b + "/trials.jsonl", r1);
-  AppendTrialRecord(b + "/trials.jsonl", r0_again);
+  AppendTrialRecord(a + "/trials.jsonl", TrialRecord(r0));
+  AppendTrialRecord(b + "/trials.jsonl", TrialRecord(r1));
+  AppendTrialRecord(b + "/trials.jsonl", TrialRecord(r0_again));
   const CliRun ok = Twinbench("study-merge " + a + " " + b + " --out " + out);
   ASSERT_EQ(ok.code, 0) << ok.output;
   EXPECT_NE(ok.output.find("2 trials (1 duplicates dropped, 0 of them different)"),
@@ -141,7 +145,7 @@ TEST(StudyCli, MergeRefusesDifferentScenariosAndDropsDuplicates) {
   json other = r1;
   other["trial"] = 2;
   other["scenario_hash"] = "bbbb";
-  AppendTrialRecord(b + "/trials.jsonl", other);
+  AppendTrialRecord(b + "/trials.jsonl", TrialRecord(other));
   const CliRun bad = Twinbench("study-merge " + a + " " + b + " --out " + out + "_2");
   EXPECT_EQ(bad.code, 2) << bad.output;
   EXPECT_NE(bad.output.find("different scenarios"), std::string::npos) << bad.output;

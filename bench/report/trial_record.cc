@@ -1,5 +1,7 @@
-#include "bench/runs/trial_record.h"
+#include "bench/report/trial_record.h"
 
+#include <exception>
+#include <fstream>
 #include <set>
 
 namespace twin {
@@ -49,8 +51,25 @@ FlatReport FlattenReport(const json& report) {
   return out;
 }
 
-json MakeTrialRecord(const std::string& scenario_hash, const Scenario& sc,
-                     const TrialOutcome& o) {
+std::optional<TrialReport> ReadTrialReport(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) return std::nullopt;
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const std::exception&) {
+    return std::nullopt;  // torn or foreign: no report
+  }
+  if (!j.is_object()) return std::nullopt;
+  TrialReport report;
+  report.failed = j.contains("status") && j["status"].is_string() && j["status"] == "failed";
+  if (j.contains("reason") && j["reason"].is_string()) report.reason = j["reason"];
+  report.flat = FlattenReport(j);
+  return report;
+}
+
+TrialRecord MakeTrialRecord(const std::string& scenario_hash, const Scenario& sc,
+                            const TrialOutcome& o) {
   json r;
   r["scenario_hash"] = scenario_hash;
   r["scenario"] = sc.name;
@@ -60,19 +79,30 @@ json MakeTrialRecord(const std::string& scenario_hash, const Scenario& sc,
   r["reason"] = o.reason;
   r["exit_code"] = o.exit_code;
   FlatReport flat;
-  if (o.report) flat = FlattenReport(*o.report);
+  if (o.report) flat = o.report->flat;
   r["figures"] = std::move(flat.figures);
   r["labels"] = std::move(flat.labels);
   json run = {{"wall_s", o.wall_s}};
   run["timing"] = std::move(flat.timing);
   r["run"] = std::move(run);
-  return r;
+  return TrialRecord(std::move(r));
 }
 
 json ComparablePart(const json& record) {
   json c = record;
   c.erase("run");
   return c;
+}
+
+int TrialRecord::trial() const { return document_.at("trial").get<int>(); }
+
+std::optional<std::string> TrialRecord::scenario_hash() const {
+  if (!document_.contains("scenario_hash")) return std::nullopt;
+  return document_["scenario_hash"].get<std::string>();
+}
+
+bool TrialRecord::SameResultAs(const TrialRecord& other) const {
+  return ComparablePart(document_) == ComparablePart(other.document_);
 }
 
 }  // namespace twin

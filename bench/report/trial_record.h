@@ -14,7 +14,9 @@
 //                   and *time_s keys, from_plan_store flags; comparisons of studies leave it out
 #pragma once
 
+#include <optional>
 #include <string>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -32,18 +34,48 @@ struct FlatReport {
 /// Flattens a report.json document (the top-level `scenario` key is left out).
 FlatReport FlattenReport(const nlohmann::json& report);
 
+/// A trial's report.json as the study reads it (another process' output).
+struct TrialReport {
+  bool failed = false;                ///< its "status" is "failed" (a run that reports failure)
+  std::optional<std::string> reason;  ///< its "reason", when a string
+  FlatReport flat;                    ///< its figures, labels and timing
+};
+
+/// Reads the report.json at `path`; nullopt when it is missing or not a JSON object.
+std::optional<TrialReport> ReadTrialReport(const std::string& path);
+
 /// What the study knows about one finished trial process.
 struct TrialOutcome {
   std::string status;          ///< "ok" or "failed"
   std::string reason;          ///< why it failed; empty when ok
   int exit_code = 0;           ///< the process' exit code, or 128 + signal
-  const nlohmann::json* report = nullptr;  ///< its report.json, when it wrote one
+  const TrialReport* report = nullptr;  ///< its report.json, when it wrote one
   double wall_s = 0.0;         ///< wall time of the process [s]
 };
 
+/// One line of trials.jsonl (see above), with what the study and the merge read of it typed.
+class TrialRecord {
+ public:
+  TrialRecord() = default;
+  /// A record as read or made; its "trial" must be an integer (ReadTrialsFile checks).
+  explicit TrialRecord(nlohmann::json document) : document_(std::move(document)) {}
+
+  /// The trial number.
+  int trial() const;
+  /// The scenario hash; nullopt when the record has none.
+  std::optional<std::string> scenario_hash() const;
+  /// True when the records are equal but for how they ran (ComparablePart).
+  bool SameResultAs(const TrialRecord& other) const;
+  /// The whole record (the study summary reads it).
+  const nlohmann::json& document() const { return document_; }
+
+ private:
+  nlohmann::json document_;
+};
+
 /// The trials.jsonl line of trial `scenario.trial` (ApplyTrial already applied).
-nlohmann::json MakeTrialRecord(const std::string& scenario_hash, const Scenario& scenario,
-                               const TrialOutcome& outcome);
+TrialRecord MakeTrialRecord(const std::string& scenario_hash, const Scenario& scenario,
+                            const TrialOutcome& outcome);
 
 /// The record without `run`: what must be equal when the same trial runs twice.
 nlohmann::json ComparablePart(const nlohmann::json& record);

@@ -1,9 +1,10 @@
-#include "bench/runs/trials_file.h"
+#include "bench/report/trial_records_file.h"
 
 #include <filesystem>
 #include <fstream>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "calib/common/errors.h"
 
@@ -16,22 +17,24 @@ std::string Temp(const std::string& name) {
   return p;
 }
 
+TrialRecord Record(nlohmann::json j) { return TrialRecord(std::move(j)); }
+
 TEST(TrialsFileTest, AppendsCompleteLinesAndReadsThemBack) {
   const std::string path = Temp("append");
   EXPECT_TRUE(ReadTrialsFile(path).records.empty());  // missing: empty
-  AppendTrialRecord(path, {{"trial", 3}, {"status", "ok"}});
-  AppendTrialRecord(path, {{"trial", 1}, {"status", "failed"}, {"reason", "x\ny"}});
+  AppendTrialRecord(path, Record({{"trial", 3}, {"status", "ok"}}));
+  AppendTrialRecord(path, Record({{"trial", 1}, {"status", "failed"}, {"reason", "x\ny"}}));
   const TrialsFileContent c = ReadTrialsFile(path);
   ASSERT_EQ(c.records.size(), 2u);
-  EXPECT_EQ(c.records[0]["trial"], 3);
-  EXPECT_EQ(c.records[1]["reason"], "x\ny");  // a newline inside a string stays escaped
+  EXPECT_EQ(c.records[0].trial(), 3);
+  EXPECT_EQ(c.records[1].document()["reason"], "x\ny");  // a newline in it stays escaped
   EXPECT_FALSE(c.torn_tail);
   EXPECT_EQ(c.valid_bytes, std::filesystem::file_size(path));
 }
 
 TEST(TrialsFileTest, ATornLastLineIsDroppedAndCutOff) {
   const std::string path = Temp("torn");
-  AppendTrialRecord(path, {{"trial", 0}});
+  AppendTrialRecord(path, Record({{"trial", 0}}));
   const std::size_t good = std::filesystem::file_size(path);
   std::ofstream(path, std::ios::app) << "{\"trial\": 1, \"figu";  // killed mid-line
   const TrialsFileContent c = ReadTrialsFile(path);
@@ -39,11 +42,11 @@ TEST(TrialsFileTest, ATornLastLineIsDroppedAndCutOff) {
   ASSERT_EQ(c.records.size(), 1u);
   EXPECT_EQ(c.valid_bytes, good);
   TruncateTrialsFile(path, c.valid_bytes);
-  AppendTrialRecord(path, {{"trial", 1}});
+  AppendTrialRecord(path, Record({{"trial", 1}}));
   const TrialsFileContent d = ReadTrialsFile(path);
   EXPECT_FALSE(d.torn_tail);
   ASSERT_EQ(d.records.size(), 2u);
-  EXPECT_EQ(d.records[1]["trial"], 1);
+  EXPECT_EQ(d.records[1].trial(), 1);
 }
 
 TEST(TrialsFileTest, ABrokenLineInsideTheFileIsAnErrorNamingItsLine) {

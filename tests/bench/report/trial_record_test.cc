@@ -1,4 +1,7 @@
-#include "bench/runs/trial_record.h"
+#include "bench/report/trial_record.h"
+
+#include <filesystem>
+#include <fstream>
 
 #include <gtest/gtest.h>
 
@@ -65,12 +68,17 @@ TEST(TrialRecordTest, RecordCarriesIdentitySeedsStatusAndFigures) {
   sc.name = "study_small";
   sc.seeds = {100, 200};
   ApplyTrial(4, &sc);
-  const json report = Report();
+  json report = Report();
+  TrialReport read;
+  read.flat = FlattenReport(report);
   TrialOutcome o;
   o.status = "ok";
-  o.report = &report;
+  o.report = &read;
   o.wall_s = 3.25;
-  const json r = MakeTrialRecord("0123456789abcdef", sc, o);
+  const TrialRecord record = MakeTrialRecord("0123456789abcdef", sc, o);
+  EXPECT_EQ(record.trial(), 4);
+  EXPECT_EQ(record.scenario_hash(), "0123456789abcdef");
+  const json& r = record.document();
   EXPECT_EQ(r["scenario_hash"], "0123456789abcdef");
   EXPECT_EQ(r["scenario"], "study_small");
   EXPECT_EQ(r["trial"], 4);
@@ -87,12 +95,16 @@ TEST(TrialRecordTest, RecordCarriesIdentitySeedsStatusAndFigures) {
   json report2 = report;
   report2["timing_s"]["total"] = 1.0;
   report2["robots"]["r2"]["planning"]["from_plan_store"] = false;
-  o2.report = &report2;
-  const json r2 = MakeTrialRecord("0123456789abcdef", sc, o2);
-  EXPECT_NE(r, r2);
-  EXPECT_EQ(ComparablePart(r), ComparablePart(r2));
+  TrialReport read2;
+  read2.flat = FlattenReport(report2);
+  o2.report = &read2;
+  const TrialRecord r2 = MakeTrialRecord("0123456789abcdef", sc, o2);
+  EXPECT_NE(r, r2.document());
+  EXPECT_EQ(ComparablePart(r), ComparablePart(r2.document()));
+  EXPECT_TRUE(record.SameResultAs(r2));
   report2["intrinsics"]["error_px"]["fx"] = 0.26;
-  EXPECT_NE(ComparablePart(r), ComparablePart(MakeTrialRecord("0123456789abcdef", sc, o2)));
+  read2.flat = FlattenReport(report2);
+  EXPECT_FALSE(record.SameResultAs(MakeTrialRecord("0123456789abcdef", sc, o2)));
 }
 
 TEST(TrialRecordTest, AFailedTrialWithoutAReportKeepsItsReason) {
@@ -102,11 +114,41 @@ TEST(TrialRecordTest, AFailedTrialWithoutAReportKeepsItsReason) {
   o.status = "failed";
   o.reason = "r2 planning: no feasible pose";
   o.exit_code = 2;
-  const json r = MakeTrialRecord("h", sc, o);
+  const TrialRecord record = MakeTrialRecord("h", sc, o);
+  EXPECT_EQ(record.trial(), 0);
+  const json& r = record.document();
   EXPECT_EQ(r["status"], "failed");
   EXPECT_EQ(r["reason"], "r2 planning: no feasible pose");
   EXPECT_EQ(r["exit_code"], 2);
   EXPECT_TRUE(r["figures"].empty());
+}
+
+// The study's reader of a trial's report.json (another process' output): the status and
+// reason it reports, its flattened figures; a missing, torn or non-object file is no report.
+TEST(TrialRecordTest, ReadsATrialsReportAndRefusesWhatIsNone) {
+  const std::string dir = ::testing::TempDir() + "/trial_report";
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/report.json";
+  std::filesystem::remove(path);
+  EXPECT_FALSE(ReadTrialReport(path));
+  json report = Report();
+  report["status"] = "failed";
+  report["reason"] = "r2 servo: lost the spot";
+  std::ofstream(path) << report.dump(2);
+  const std::optional<TrialReport> read = ReadTrialReport(path);
+  ASSERT_TRUE(read);
+  EXPECT_TRUE(read->failed);
+  EXPECT_EQ(read->reason, "r2 servo: lost the spot");
+  EXPECT_EQ(read->flat.figures["intrinsics.error_px.fx"], 0.25);
+  std::ofstream(path) << R"({"intrinsics": {"views_used": 3}})";
+  const std::optional<TrialReport> ok = ReadTrialReport(path);
+  ASSERT_TRUE(ok);
+  EXPECT_FALSE(ok->failed);  // no status: a report of a run that went through
+  EXPECT_FALSE(ok->reason);
+  std::ofstream(path) << R"({"intrinsics": {"views)";  // torn
+  EXPECT_FALSE(ReadTrialReport(path));
+  std::ofstream(path) << "[1, 2]";
+  EXPECT_FALSE(ReadTrialReport(path));
 }
 
 }  // namespace

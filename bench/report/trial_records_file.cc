@@ -1,4 +1,4 @@
-#include "bench/runs/trials_file.h"
+#include "bench/report/trial_records_file.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+
+#include <nlohmann/json.hpp>
 
 #include "bench/io/model_loader.h"
 #include "bench/io/output_files.h"
@@ -97,7 +99,7 @@ TrialsFileContent ReadTrialsFile(const std::string& path) {
                        "not a trial record (a JSON object with an integer \"trial\")");
     }
     CheckRecordTypes(j, path + ":" + std::to_string(line));
-    out.records.push_back(std::move(j));
+    out.records.emplace_back(std::move(j));
     start = end + 1;
     out.valid_bytes = start;
   }
@@ -110,8 +112,8 @@ void TruncateTrialsFile(const std::string& path, std::size_t size) {
   }
 }
 
-void AppendTrialRecord(const std::string& path, const nlohmann::json& record) {
-  const std::string line = record.dump() + "\n";
+void AppendTrialRecord(const std::string& path, const TrialRecord& record) {
+  const std::string line = record.document().dump() + "\n";
   const int fd = open(path.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
   if (fd < 0) throw InputError(path, std::string("cannot open: ") + std::strerror(errno));
   if (!WriteAll(fd, line)) {
@@ -127,9 +129,9 @@ void AppendTrialRecord(const std::string& path, const nlohmann::json& record) {
   close(fd);
 }
 
-void WriteTrialsFile(const std::string& path, const std::vector<nlohmann::json>& records) {
+void WriteTrialsFile(const std::string& path, const std::vector<TrialRecord>& records) {
   std::string text;
-  for (const nlohmann::json& r : records) text += r.dump() + "\n";
+  for (const TrialRecord& r : records) text += r.document().dump() + "\n";
   WriteFileAtomically(path, text);
 }
 
