@@ -5,7 +5,7 @@
 # dependent job; then runs the same study locally (twinbench study --jobs 2) and checks that
 # the merged records equal the local ones: study-merge of the local folder with the four shards
 # must find every trial twice and no pair different in what it found (only in how it ran:
-# bench/runs/trial_record.h), and the merged summary.json must be byte-equal to the local one.
+# bench/report/trial_record.h), and the merged summary.json must be byte-equal to the local one.
 # The cluster is always stopped (trap EXIT) and no daemon or job of it may be left.
 #   tests/slurm/slurm_study_test.sh TWINBENCH
 # Exit 77 (skipped) when not root or when munge / slurmctld / slurmd / slurm-client are missing.
