@@ -53,11 +53,11 @@
 //    step starts from the extended model, until none passes, the residual test of the
 //    extended model finds it consistent with the noise (nothing left to explain), or
 //    max_effects are in.
-// 4. Verdict (DiscoveryVerdict): "consistent_with_noise" (step 2 passes: nothing searched; every candidate is
-//    still fitted on all the data and reported, DiscoveryResult::screened), "effects_added", or
-//    "unexplained" (systematic and no candidate passes), with the residual's strongest
-//    correlations (joint angles, gravity torques, time, temperature, acquisition order) and
-//    binned residual maps as evidence.
+// 4. Verdict (DiscoveryVerdict): "consistent_with_noise" (step 2 passes: nothing searched;
+//    every candidate is still fitted on all the data and reported, DiscoveryResult::screened),
+//    "effects_added", or "unexplained" (systematic and no candidate passes), with the
+//    residual's strongest correlations (joint angles, gravity torques, time, temperature,
+//    acquisition order) and binned residual maps as evidence.
 //
 // Optical axes (DiscoverOpticalAxisModel). A unit of data is one aligned pose (AxisSample).
 // - Noise floor: each sample's own sigmas where it states them (AxisSample::sigma_offset,
