@@ -68,22 +68,16 @@ json CandidateJson(const CandidateScore& c, int step) {
           {"note", c.note}};
 }
 
-std::string Mm(double m) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4f mm", 1e3 * m);
-  return buf;
-}
-
 }  // namespace
 
 json DiagnosisJson(const DiscoveryResult& r) {
   json j;
-  j["verdict"] = r.verdict;
+  j["verdict"] = ToString(r.verdict);
   j["reason"] = r.reason;
-  j["data"] = r.data;
+  j["data"] = ToString(r.data);
   if (!r.data_note.empty()) j["data_note"] = r.data_note;
   j["noise_floor_mm"] = 1e3 * r.noise.sigma_m;
-  const bool optical = r.data == "optical_axes";
+  const bool optical = r.data == DiscoveryData::kOpticalAxes;
   j["noise_floor"] = {{"sigma_mm", 1e3 * r.noise.sigma_m},
                       {optical ? "perpendicular_sigma_mm" : "tracker_sigma_mm",
                        1e3 * r.noise.tracker_sigma_m},
@@ -263,60 +257,6 @@ std::string DiagnosisHtml(const json& d) {
   return os.str();
 }
 
-std::string DiagnosisSummary(const DiscoveryResult& r) {
-  std::ostringstream os;
-  os << "diagnosis: " << r.verdict << ": " << r.reason << "\n";
-  os << "  noise floor " << Mm(r.noise.sigma_m) << " per coordinate (" << r.noise.source << ")";
-  if (r.noise.repeat_sigma_m >= 0) {
-    os << "; repeated poses (" << r.noise.repeated_groups << " groups) spread "
-       << Mm(r.noise.repeat_sigma_m);
-  }
-  os << "\n  residual test (" << (r.data == "optical_axes" ? "in sample, global" : "held out")
-     << "): RMS " << Mm(r.test_before.rms_m) << ", p = "
-     << r.test_before.p_value << " (" << (r.test_before.systematic ? "systematic" : "noise")
-     << ")\n";
-  for (const DiscoveryStep& s : r.steps) {
-    int tested = 0;
-    for (const CandidateScore& c : s.candidates) tested += c.tested ? 1 : 0;
-    os << "  step " << s.index << ": " << tested << " of " << s.candidates.size()
-       << " candidates tested; ";
-    const CandidateScore* best = nullptr;
-    for (const CandidateScore& c : s.candidates) {
-      if (c.tested && (!best || c.gain_percent > best->gain_percent)) best = &c;
-    }
-    if (best) {
-      char buf[160];
-      std::snprintf(buf, sizeof buf, "best %s, held-out gain %.1f %%, Holm p = %.3g: %s",
-                    best->label.c_str(), best->gain_percent, best->p_adjusted,
-                    best->accepted ? "ACCEPTED" : "rejected");
-      os << buf;
-    } else {
-      os << "none testable";
-    }
-    os << "; region held-out RMS " << Mm(s.heldout_rms_before_m) << " -> "
-       << Mm(s.heldout_rms_after_m) << "\n";
-  }
-  if (!r.screened.empty()) {
-    std::string unseen;
-    for (const CandidateScore& c : r.screened) {
-      if (c.applicable && !c.identifiable) unseen += (unseen.empty() ? "" : ", ") + c.label;
-    }
-    os << "  screened " << r.screened.size() << " candidates on all the data (none tested)"
-       << (unseen.empty() ? std::string("; every applicable one identifiable")
-                          : "; unidentifiable from the data: " + unseen)
-       << "\n";
-  }
-  if (r.verdict == "unexplained" && !r.evidence.empty()) {
-    os << "  strongest residual correlations:";
-    for (std::size_t k = 0; k < r.evidence.size() && k < 4; ++k) {
-      char buf[64];
-      std::snprintf(buf, sizeof buf, " %s/%s r = %.2f", r.evidence[k].quantity.c_str(),
-                    r.evidence[k].component.c_str(), r.evidence[k].r);
-      os << (k ? "," : "") << buf;
-    }
-    os << "\n";
-  }
-  return os.str();
-}
+std::string DiagnosisSummary(const DiscoveryResult& r) { return r.BriefReport(); }
 
 }  // namespace twin

@@ -21,7 +21,8 @@ nlohmann::json DiagnosisJson(const DiscoveryResult& r);
 /// maps as small inline SVG charts. `d` without a verdict (skipped) gives a one-line note.
 std::string DiagnosisHtml(const nlohmann::json& d);
 
-/// Lines for the terminal: the verdict and the decision chain, one step a line.
+/// Lines for the terminal: the verdict and the decision chain, one step a line
+/// (DiscoveryResult::BriefReport, the one text of them).
 std::string DiagnosisSummary(const DiscoveryResult& r);
 
 }  // namespace twin

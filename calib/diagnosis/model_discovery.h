@@ -6,6 +6,12 @@
 // only: the measurements, their stated noise and the nominal model; never a true value.
 //
 // The steps below are written for tracker points; what differs for optical axes is at the end.
+// The implementation, one concept a file (internal headers, namespace twin::discovery): the
+// data and its noise floor (discovery_data.h), the folds (discovery_folds.h), the
+// cross-validation and residual test (cross_validation.h), a candidate's scores
+// (candidate_scoring.h), the selection policy with its one acceptability rule, Judge
+// (selection.h), the evidence (evidence.h) and the verdict (discovery_result.h); the
+// dormant-term restart is calib/identification/dormant_restart.h.
 //
 // 1. Noise floor: the points' stated sigmas (the file's sigma column), else the set's default,
 //    plus the joint readings' noise when the engineer states it (joint_sigma_rad, an encoder's
@@ -47,11 +53,11 @@
 //    step starts from the extended model, until none passes, the residual test of the
 //    extended model finds it consistent with the noise (nothing left to explain), or
 //    max_effects are in.
-// 4. Verdict: "consistent_with_noise" (step 2 passes: nothing searched; every candidate is
-//    still fitted on all the data and reported, DiscoveryResult::screened), "effects_added", or
-//    "unexplained" (systematic and no candidate passes), with the residual's strongest
-//    correlations (joint angles, gravity torques, time, temperature, acquisition order) and
-//    binned residual maps as evidence.
+// 4. Verdict (DiscoveryVerdict): "consistent_with_noise" (step 2 passes: nothing searched;
+//    every candidate is still fitted on all the data and reported, DiscoveryResult::screened),
+//    "effects_added", or "unexplained" (systematic and no candidate passes), with the
+//    residual's strongest correlations (joint angles, gravity torques, time, temperature,
+//    acquisition order) and binned residual maps as evidence.
 //
 // Optical axes (DiscoverOpticalAxisModel). A unit of data is one aligned pose (AxisSample).
 // - Noise floor: each sample's own sigmas where it states them (AxisSample::sigma_offset,
@@ -236,10 +242,29 @@ struct ResidualMap {
   std::vector<int> count;
 };
 
+/// The diagnosis's verdict (header, step 4).
+enum class DiscoveryVerdict {
+  kConsistentWithNoise,  ///< the residual test passes: nothing searched
+  kEffectsAdded,         ///< one or more terms accepted
+  kUnexplained,          ///< systematic, and no candidate passes
+};
+
+/// "consistent_with_noise", "effects_added", "unexplained" (the report's words).
+const char* ToString(DiscoveryVerdict verdict);
+
+/// The kind of data diagnosed.
+enum class DiscoveryData {
+  kTrackerPoints,  ///< DiscoverTrackerModel
+  kOpticalAxes,    ///< DiscoverOpticalAxisModel
+};
+
+/// "tracker_points", "optical_axes" (the report's words).
+const char* ToString(DiscoveryData data);
+
 struct DiscoveryResult {
-  std::string data;               ///< "tracker_points" or "optical_axes"
+  DiscoveryData data = DiscoveryData::kTrackerPoints;
   std::string data_note;          ///< units of data left out and why; empty: none
-  std::string verdict;            ///< consistent_with_noise | effects_added | unexplained
+  DiscoveryVerdict verdict = DiscoveryVerdict::kConsistentWithNoise;
   std::string reason;             ///< one sentence for the report
   NoiseFloor noise;
   ResidualTest test_before;       ///< of the starting model
@@ -257,6 +282,15 @@ struct DiscoveryResult {
   Transform X_TB = Transform::Identity();  ///< tracker points: the tracker pose
   std::vector<ResidualCorrelation> evidence;  ///< strongest |r| first (at most 8)
   std::vector<ResidualMap> maps;  ///< residual vs each joint angle, gravity torque, order
+
+  /// A few lines for the terminal (as Ceres' Solver::Summary::BriefReport): the verdict and
+  /// reason, the noise floor, the residual test, one line per step (its best tested candidate
+  /// and whether it was accepted), the screened candidates the data cannot see, and for an
+  /// unexplained residual its strongest correlations. Lengths in mm.
+  std::string BriefReport() const;
+  /// BriefReport, then every candidate of every step (and every screened one) with its
+  /// scores and note, the effects added with their parameters, and the evidence.
+  std::string FullReport() const;
 };
 
 /// Runs the diagnosis from `start` (the geometric model plus any declared terms). Throws

@@ -5,9 +5,11 @@
 #include <cstdint>
 #include <limits>
 #include <numeric>
-#include <stdexcept>
+#include <string>
 
 #include <Eigen/Eigenvalues>
+
+#include "calib/common/errors.h"
 
 namespace twin::stats {
 namespace {
@@ -49,21 +51,23 @@ double UpperFraction(double a, double x) {
 }  // namespace
 
 double UpperIncompleteGammaRatio(double a, double x) {
-  if (!(a > 0.0) || !(x >= 0.0)) throw std::invalid_argument("UpperIncompleteGammaRatio domain");
+  TWIN_REQUIRE(a > 0.0 && x >= 0.0, "UpperIncompleteGammaRatio: a = " + std::to_string(a) +
+                                        ", x = " + std::to_string(x));
   if (x == 0.0) return 1.0;
   if (x < a + 1.0) return std::clamp(1.0 - LowerSeries(a, x), 0.0, 1.0);
   return std::clamp(UpperFraction(a, x), 0.0, 1.0);
 }
 
 double ChiSquareUpperTail(double x, double dof) {
-  if (!(dof > 0.0)) throw std::invalid_argument("ChiSquareUpperTail: dof must be > 0");
+  TWIN_REQUIRE(dof > 0.0, "ChiSquareUpperTail: dof " + std::to_string(dof));
   return UpperIncompleteGammaRatio(0.5 * dof, std::max(0.0, 0.5 * x));
 }
 
 WaldTest WaldTestZero(const Eigen::VectorXd& a, const Eigen::MatrixXd& C) {
-  if (C.rows() != a.size() || C.cols() != a.size()) {
-    throw std::invalid_argument("WaldTestZero: the covariance must be square of the estimate's size");
-  }
+  TWIN_REQUIRE(C.rows() == a.size() && C.cols() == a.size(),
+               "WaldTestZero: a covariance of " + std::to_string(C.rows()) + " x " +
+                   std::to_string(C.cols()) + " for an estimate of " +
+                   std::to_string(a.size()));
   WaldTest t;
   if (a.size() == 0) return t;
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(0.5 * (C + C.transpose()));

@@ -9,6 +9,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "calib/common/errors.h"
+#include "calib/identification/dormant_restart.h"
 #include "calib/model/parameter_layout.h"
 #include "calib/model/robot_model.h"
 
@@ -34,17 +35,15 @@ Solved Solve(const RobotModel& start, const std::vector<TrackerPoint>& points,
 
 // A term whose dormant parameters sleep at the start (a declared warm-up: its time constant
 // has no gradient while its growth is zero) is fitted once on `points`, and the calibration's
-// fits start from that solution's values of it if that identifies more and fits no worse, as
-// model discovery restarts such a candidate (model_discovery.cc, ScoreCandidate).
+// fits start from that solution's values of it where KeepRestart says so (the one dormant-term
+// restart, calib/identification/dormant_restart.h, as model discovery's).
 RobotModel WokenStart(const RobotModel& start, const std::vector<TrackerPoint>& points,
                       const TrackerSetOptions& set_options, const IdentificationOptions& options) {
   if (!HasDormantTermsAtZero(start)) return start;
-  const Solved first = Solve(start, points, set_options, options);
-  RobotModel woken = WithDormantTermsFrom(start, first.result.model);
-  const Solved again = Solve(woken, points, set_options, options);
-  const bool better = again.result.observability.rank > first.result.observability.rank &&
-                      again.result.cost_after <= (1.0 + 1e-6) * first.result.cost_after;
-  return better ? woken : start;
+  const auto fit = [&](const RobotModel& model, bool) {
+    return Solve(model, points, set_options, options);
+  };
+  return FitWithDormantRestart<Solved>(start, fit, WithDormantTermsWoken).model;
 }
 
 // Everything held but the reflector offset: the "before" of held-out scoring.

@@ -69,7 +69,7 @@ TEST(ModelDiscovery, AGeometricTruthIsConsistentWithNoiseAndNothingIsAdded) {
   const auto points = SyntheticTrackerPoints(c.truth, 150, 3, kSigma);
   const DiscoveryResult r =
       DiscoverTrackerModel(c.nominal, points, Options({kCompliance2, kTransmission1}));
-  EXPECT_EQ(r.verdict, "consistent_with_noise") << r.reason;
+  EXPECT_EQ(r.verdict, DiscoveryVerdict::kConsistentWithNoise) << r.reason;
   EXPECT_FALSE(r.test_before.systematic);
   EXPECT_TRUE(r.effects_added.empty());
   EXPECT_TRUE(r.steps.empty());
@@ -83,7 +83,7 @@ TEST(ModelDiscovery, OneUndeclaredEffectIsNamedAndTheHeldOutErrorFallsToTheNoise
   const auto points = SyntheticTrackerPoints(c.truth, 150, 4, kSigma);
   const DiscoveryResult r = DiscoverTrackerModel(
       c.nominal, points, Options({kCompliance3, kCompliance2, kTransmission1, kThermalDrift}));
-  ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+  ASSERT_EQ(r.verdict, DiscoveryVerdict::kEffectsAdded) << r.reason;
   EXPECT_TRUE(r.test_before.systematic);
   ASSERT_EQ(r.effects_added.size(), 1u);
   EXPECT_EQ(r.effects_added[0].spec.type, "joint_compliance");
@@ -113,7 +113,7 @@ TEST(ModelDiscovery, TwoEffectsAreAddedInTwoSteps) {
   const auto points = SyntheticTrackerPoints(c.truth, 180, 5, kSigma);
   const DiscoveryResult r = DiscoverTrackerModel(
       c.nominal, points, Options({kCompliance2, kTransmission1, kTransmission4, kThermalGrowth}));
-  ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+  ASSERT_EQ(r.verdict, DiscoveryVerdict::kEffectsAdded) << r.reason;
   ASSERT_EQ(r.effects_added.size(), 2u);
   std::vector<std::string> added{TermLabel(r.effects_added[0].spec),
                                  TermLabel(r.effects_added[1].spec)};
@@ -130,7 +130,7 @@ TEST(ModelDiscovery, ASystematicResidualThatNoCandidateExplainsIsUnexplainedAndP
   const auto points = SyntheticTrackerPoints(c.truth, 150, 6, kSigma);
   const DiscoveryResult r =
       DiscoverTrackerModel(c.nominal, points, Options({kThermalGrowth, kThermalDrift}));
-  EXPECT_EQ(r.verdict, "unexplained") << r.reason;
+  EXPECT_EQ(r.verdict, DiscoveryVerdict::kUnexplained) << r.reason;
   EXPECT_TRUE(r.test_before.systematic);
   EXPECT_TRUE(r.effects_added.empty());
   ASSERT_EQ(r.steps.size(), 1u);
@@ -174,7 +174,7 @@ TEST(ModelDiscovery, AWarmUpIsAddedWithItsTimeConstantEstimated) {
   const TermSpec warmup40{"thermal_warmup", -1, {40}}, warmup80{"thermal_warmup", -1, {80}};
   const DiscoveryResult r =
       DiscoverTrackerModel(c.nominal, points, Options({kCompliance2, warmup40, warmup80}));
-  ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+  ASSERT_EQ(r.verdict, DiscoveryVerdict::kEffectsAdded) << r.reason;
   ASSERT_EQ(r.effects_added.size(), 1u);
   const CandidateScore& w = r.effects_added[0];
   EXPECT_EQ(w.spec.type, "thermal_warmup");
@@ -223,7 +223,7 @@ TEST(ModelDiscovery, AMeasuredDriverIsPreferredToTheClockWhereTheHeldOutDataCann
     }
     const DiscoveryResult r = DiscoverTrackerModel(
         c.nominal, points, Options({kCompliance2, kThermalDrift, kThermalGrowth}));
-    ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+    ASSERT_EQ(r.verdict, DiscoveryVerdict::kEffectsAdded) << r.reason;
     ASSERT_EQ(r.effects_added.size(), 1u);
     // A second step may search on (the sensor's noise leaves the growth a little residual);
     // it adds nothing.
@@ -286,7 +286,7 @@ TEST(ModelDiscovery, AWarmUpThatLevelsOffIsPreferredToADriftWithoutBoundWhereThe
     const auto points = SyntheticTrackerPoints(c.truth, 150, seed, kSigma);
     const DiscoveryResult r =
         DiscoverTrackerModel(c.nominal, points, Options({kCompliance2, kThermalDrift, warmup80}));
-    ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+    ASSERT_EQ(r.verdict, DiscoveryVerdict::kEffectsAdded) << r.reason;
     ASSERT_GE(r.effects_added.size(), 1u);
     ASSERT_GE(r.steps.size(), 1u);
     const std::vector<CandidateScore>& s = r.steps[0].candidates;
@@ -336,7 +336,7 @@ TEST(ModelDiscovery, AWarmUpWithItsTimeConstantEstimatedIsPreferredToOneHeldAtIt
     SCOPED_TRACE("seed " + std::to_string(seed));
     const DiscoveryResult r =
         DiscoverTrackerModel(c.nominal, SyntheticTrackerPoints(c.truth, 100, seed, kSigma), o);
-    ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+    ASSERT_EQ(r.verdict, DiscoveryVerdict::kEffectsAdded) << r.reason;
     const std::vector<CandidateScore>& s = r.steps.at(0).candidates;
     ASSERT_EQ(s.size(), 3u);
     const int a = r.steps[0].accepted;
@@ -395,7 +395,7 @@ TEST(ModelDiscovery, AClockDrivenLeaderIsKeptWhereNoMeasuredDriverMatchesIt) {
   const auto points = SyntheticTrackerPoints(c.truth, 150, 11, kSigma);
   const DiscoveryResult r =
       DiscoverTrackerModel(c.nominal, points, Options({kCompliance2, kThermalDrift, kThermalGrowth}));
-  ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+  ASSERT_EQ(r.verdict, DiscoveryVerdict::kEffectsAdded) << r.reason;
   ASSERT_EQ(r.effects_added.size(), 1u);
   EXPECT_EQ(r.effects_added[0].spec.type, "thermal_drift");
   EXPECT_TRUE(r.effects_added[0].preferred_over.empty());

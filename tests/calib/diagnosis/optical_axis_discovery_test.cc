@@ -67,8 +67,8 @@ TEST(OpticalAxisDiscovery, AGeometricTruthIsConsistentWithNoise) {
   const Data d = MakeData(21, {});
   const DiscoveryResult r =
       DiscoverOpticalAxisModel(d.nominal, d.samples, Options({kCompliance2, kTransmission3}));
-  EXPECT_EQ(r.data, "optical_axes");
-  EXPECT_EQ(r.verdict, "consistent_with_noise") << r.reason;
+  EXPECT_EQ(r.data, DiscoveryData::kOpticalAxes);
+  EXPECT_EQ(r.verdict, DiscoveryVerdict::kConsistentWithNoise) << r.reason;
   EXPECT_TRUE(r.effects_added.empty());
   EXPECT_DOUBLE_EQ(r.noise.tracker_sigma_m, kPerp);
   EXPECT_DOUBLE_EQ(r.noise.depth_sigma_m, kDepth);
@@ -85,7 +85,7 @@ TEST(OpticalAxisDiscovery, WithTheNoiseEveryCandidateIsScreenedAndTheInvisibleOn
   const Data d = MakeData(21, {});
   const std::vector<TermSpec> specs = {kCompliance1, kCompliance2, kTransmission3};
   const DiscoveryResult r = DiscoverOpticalAxisModel(d.nominal, d.samples, Options(specs));
-  ASSERT_EQ(r.verdict, "consistent_with_noise") << r.reason;
+  ASSERT_EQ(r.verdict, DiscoveryVerdict::kConsistentWithNoise) << r.reason;
   EXPECT_TRUE(r.steps.empty());
   EXPECT_TRUE(r.effects_added.empty());
   ASSERT_EQ(r.screened.size(), specs.size());
@@ -119,7 +119,7 @@ TEST(OpticalAxisDiscovery, AnUndeclaredComplianceIsNamed) {
   const Data d = MakeData(22, {{kCompliance2, {1e-4}}});
   const DiscoveryResult r = DiscoverOpticalAxisModel(
       d.nominal, d.samples, Options({kCompliance1, kCompliance2, kTransmission3}));
-  ASSERT_EQ(r.verdict, "effects_added") << r.reason;
+  ASSERT_EQ(r.verdict, DiscoveryVerdict::kEffectsAdded) << r.reason;
   ASSERT_EQ(r.effects_added.size(), 1u);
   EXPECT_EQ(TermLabel(r.effects_added[0].spec), TermLabel(kCompliance2));
   EXPECT_LT(r.heldout_rms_discovered_m, 0.5 * r.heldout_rms_start_m);
@@ -160,7 +160,7 @@ TEST(OpticalAxisDiscovery, ASystematicResidualNoCandidateExplainsIsUnexplainedAn
   }
   const DiscoveryResult r = DiscoverOpticalAxisModel(
       d.nominal, d.samples, Options({kCompliance1, kThermalGrowth, kThermalDrift}));
-  EXPECT_EQ(r.verdict, "unexplained") << r.reason;
+  EXPECT_EQ(r.verdict, DiscoveryVerdict::kUnexplained) << r.reason;
   EXPECT_TRUE(r.effects_added.empty());
   EXPECT_FALSE(r.evidence.empty());
   ASSERT_EQ(r.steps.size(), 1u);
@@ -181,7 +181,7 @@ TEST(OpticalAxisDiscovery, EachSamplesOwnSigmasAreItsNoiseFloor) {
     s.sigma_depth = 3e-4;
   }
   const DiscoveryResult r = DiscoverOpticalAxisModel(d.nominal, d.samples, Options({kCompliance2}));
-  EXPECT_EQ(r.verdict, "consistent_with_noise") << r.reason;
+  EXPECT_EQ(r.verdict, DiscoveryVerdict::kConsistentWithNoise) << r.reason;
   EXPECT_NEAR(r.noise.tracker_sigma_m, 5e-6, 1e-15);  // an RMS of equal sigmas, to rounding
   EXPECT_NEAR(r.noise.depth_sigma_m, 3e-4, 1e-15);
   EXPECT_NE(r.noise.source.find("each sample's own"), std::string::npos) << r.noise.source;
@@ -213,7 +213,7 @@ TEST(OpticalAxisDiscovery, AnAxisOfTwoSamplesIsLeftOutAndNamed) {
   const DiscoveryResult r =
       DiscoverOpticalAxisModel(d.nominal, samples, Options({kCompliance2}));
   EXPECT_EQ(r.data_note, "left out, fewer than 3 samples: axis 3 (2 samples)");
-  EXPECT_FALSE(r.verdict.empty());
+  EXPECT_FALSE(r.reason.empty());  // it ran to a verdict
   const DiscoveryResult all = DiscoverOpticalAxisModel(d.nominal, d.samples, Options({kCompliance2}));
   EXPECT_TRUE(all.data_note.empty()) << all.data_note;
 }

@@ -2,10 +2,11 @@
 
 #include <cmath>
 #include <random>
-#include <stdexcept>
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "calib/common/errors.h"
 
 namespace twin::stats {
 namespace {
@@ -58,7 +59,7 @@ TEST(Statistics, WaldTestZeroIsTheChiSquareOfTheEstimateOverTheDirectionsWithVar
   EXPECT_EQ(w.dof, 0);
   EXPECT_EQ(w.p_value, 1.0);
   EXPECT_EQ(WaldTestZero(Eigen::VectorXd(), Eigen::MatrixXd()).p_value, 1.0);
-  EXPECT_THROW(WaldTestZero(a, Eigen::Matrix3d::Identity()), std::invalid_argument);
+  EXPECT_THROW(WaldTestZero(a, Eigen::Matrix3d::Identity()), PreconditionError);
 }
 
 // Holm by hand: sorted 0.01, 0.03, 0.04 times 3, 2, 1 = 0.03, 0.06, 0.04 -> running maximum

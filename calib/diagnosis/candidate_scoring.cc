@@ -1,0 +1,218 @@
+#include "calib/diagnosis/candidate_scoring.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "calib/common/errors.h"
+#include "calib/diagnosis/cross_validation.h"
+#include "calib/diagnosis/statistics.h"
+#include "calib/identification/dormant_restart.h"
+#include "calib/model/parameter_layout.h"
+
+namespace twin::discovery {
+
+void SizeTest(const IdentificationResult& fit, int first, const ErrorTerm& term, double session_s,
+              CandidateScore* c) {
+  const int n = static_cast<int>(term.parameters().size());
+  if (n <= 0 || fit.covariance.rows() < first + n) return;
+  Eigen::VectorXd p(n);
+  for (int k = 0; k < n; ++k) p(k) = fit.parameters[first + k].estimated;
+  Eigen::MatrixXd J;
+  const Eigen::VectorXd size = term.SizeMeasures(p.data(), session_s, &J);
+  const stats::WaldTest w =
+      stats::WaldTestZero(size, J * fit.covariance.block(first, first, n, n) * J.transpose());
+  c->size_statistic = w.statistic;
+  c->size_dof = w.dof;
+  c->size_p_value = w.p_value;
+}
+
+bool HasDormantParameters(const TermSpec& spec, const RobotModel& start) {
+  return MakeErrorTerm(spec, start.chain, start.name())->has_dormant_parameters();
+}
+
+bool BuildCandidateModel(const Data& data, const RobotModel& base, const TermSpec& spec,
+                         RobotModel* model, CandidateScore* c) {
+  try {
+    *model = WithTerm(base, MakeErrorTerm(spec, base.chain, base.name(), "candidate " + c->label));
+  } catch (const InputError& e) {
+    c->applicable = false;
+    c->note = e.what();
+    return false;
+  }
+  for (int i = 0; i < data.size(); ++i) {
+    const std::string missing = MissingContext(*model, data.context(i));
+    if (!missing.empty()) {
+      c->applicable = false;
+      c->note = "not applicable: " + missing + " (" + data.Where(i) + ")";
+      return false;
+    }
+  }
+  return true;
+}
+
+CandidateFit FitCandidate(const Data& data, RobotModel model, int base_rank, CandidateScore* c) {
+  CandidateFit f;
+  f.added = static_cast<int>(model.terms.back()->parameters().size());
+  f.first = model.num_parameters() - f.added;
+  c->driver = model.terms.back()->driver();
+  const bool dormant = model.terms.back()->has_dormant_parameters();
+  const int added = f.added;
+  const auto fit = [&](const RobotModel& m, bool restart) {
+    return data.FitOn(m, {},
+                      "candidate " + c->label + ", all data" + (restart ? ", restarted" : ""));
+  };
+  // Some parameters only have a gradient once the term acts (a time constant while the
+  // amplitude is zero): where the rank rose but not by the term's parameters, start again
+  // from the first solution's term values, and keep that start (for the cross-validation too)
+  // where KeepRestart says so.
+  const auto wake = [&](const RobotModel& m,
+                        const IdentificationResult& first) -> std::optional<RobotModel> {
+    const int rank = first.observability.rank;
+    if (!dormant || rank <= base_rank || rank >= base_rank + added) return std::nullopt;
+    RobotModel restart = m;
+    restart.term_values.tail(added) = first.model.term_values.tail(added);
+    return restart;
+  };
+  DormantRestart<Fit> kept = FitWithDormantRestart<Fit>(model, fit, wake);
+  f.model = std::move(kept.model);
+  f.all = std::move(kept.fit);
+  f.rank = f.all.result.observability.rank;
+  c->restarted = kept.restarted;
+  return f;
+}
+
+void RecordParametersAndSize(const Data& data, const CandidateFit& f, CandidateScore* c) {
+  for (int k = 0; k < f.added; ++k) {
+    const IdentifiedParameter& ip = f.all.result.parameters[f.first + k];
+    c->parameters.push_back({ip.name, ip.unit, ip.estimated, ip.sigma});
+  }
+  double session_s = std::numeric_limits<double>::quiet_NaN();
+  for (int i = 0; i < data.size(); ++i) {
+    const MeasurementContext& x = data.context(i);
+    if (x.has_time() && (std::isnan(session_s) || x.time_s > session_s)) session_s = x.time_s;
+  }
+  SizeTest(f.all.result, f.first, *f.model.terms.back(), session_s, c);
+}
+
+bool RaisesRank(const Data& data, const CandidateFit& f, int base_rank, CandidateScore* c) {
+  if (f.rank <= base_rank) {
+    c->identifiable = false;
+    c->note = "unidentifiable from " + data.Measured() + ": the rank does not rise with its " +
+              std::to_string(f.added) + " parameter(s) (the measurements cannot tell it from "
+              "the geometry, or it has nothing to act on)";
+    return false;
+  }
+  if (f.rank < base_rank + f.added) {
+    // Partly identifiable (e.g. a mount deflection along the flange axis is the tool length's):
+    // the engine identifies only the combinations the data sees, the rest stay at zero.
+    c->note = "partly identifiable: the rank rises by " + std::to_string(f.rank - base_rank) +
+              " of its " + std::to_string(f.added) + " parameters";
+  }
+  return true;
+}
+
+void MeasureGeometryDisguise(const CandidateFit& f, int base_rank, CandidateScore* c) {
+  const std::string block = ParameterLayout(f.model).blocks().back().name;
+  for (const TermGeometryDependence& d : f.all.result.term_dependence) {
+    if (d.block != block) continue;
+    const int rise = f.rank - base_rank;
+    const int skip = std::max(0, static_cast<int>(d.canonical_correlations.size()) - rise);
+    if (skip < static_cast<int>(d.canonical_correlations.size())) {
+      c->max_geometry_correlation = d.canonical_correlations[skip];
+      c->correlated_with = d.nearest_geometric[skip];
+    }
+  }
+}
+
+void TestHeldOut(const Data& data, const RobotModel& model, const std::vector<int>& region,
+                 int folds, const CrossValidation& base_cv, CandidateScore* c) {
+  const CrossValidation cv = CrossValidate(data, model, region, folds, "candidate " + c->label);
+  c->heldout_rms_m = cv.Rms();
+  const double base_sse = base_cv.Sse();
+  c->gain_percent = base_sse > 0 ? 100.0 * (1.0 - cv.Sse() / base_sse) : 0.0;
+  std::vector<double> d(cv.loss.size());
+  for (std::size_t i = 0; i < d.size(); ++i) d[i] = base_cv.loss[i] - cv.loss[i];
+  c->p_value = stats::WilcoxonSignedRankGreater(d).p_value;
+  c->heldout_loss = cv.loss;
+  c->tested = true;
+}
+
+CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base_rank,
+                              const TermSpec& spec, const std::vector<int>& region, int folds,
+                              const CrossValidation& base_cv, bool cross_validate) {
+  CandidateScore c;
+  c.spec = spec;
+  c.label = TermLabel(spec);
+  // The base with the term, where it applies to the data.
+  RobotModel model;
+  if (!BuildCandidateModel(data, base, spec, &model, &c)) return c;
+  // Its fit on all the data, restarted where dormant parameters need it.
+  const CandidateFit fit = FitCandidate(data, std::move(model), base_rank, &c);
+  // Its parameters and whether its size is told from zero.
+  RecordParametersAndSize(data, fit, &c);
+  // Identifiable at all (the rank rises)?
+  if (!RaisesRank(data, fit, base_rank, &c)) return c;
+  // How nearly it is the geometry in disguise.
+  MeasureGeometryDisguise(fit, base_rank, &c);
+  if (!cross_validate) {
+    c.note = (c.note.empty() ? "" : c.note + "; ") +
+             "fitted on all the data, not tested: the residual is consistent with the noise";
+    return c;
+  }
+  // Held out in the region folds against the base.
+  TestHeldOut(data, fit.model, region, folds, base_cv, &c);
+  return c;
+}
+
+std::vector<CandidateScore> ScoreAll(const Data& data, const RobotModel& current, int base_rank,
+                                     const std::vector<TermSpec>& specs,
+                                     const std::vector<int>& region, int folds,
+                                     const CrossValidation& base_cv, bool cross_validate,
+                                     int jobs,
+                                     const std::function<void(const std::string&)>& say,
+                                     const std::string& what) {
+  TWIN_REQUIRE(jobs >= 1, "ScoreAll: " + std::to_string(jobs) + " jobs");
+  std::vector<CandidateScore> out(specs.size());
+  std::atomic<int> next{0}, done{0};
+  std::mutex mutex;
+  // The first bug (anything but a refusal of the data) of any worker, rethrown after the join:
+  // a bug is never turned into a candidate's note.
+  std::exception_ptr bug;
+  const auto worker = [&]() {
+    for (int k = next++; k < static_cast<int>(specs.size()); k = next++) {
+      try {
+        out[k] = ScoreCandidate(data, current, base_rank, specs[k], region, folds, base_cv,
+                                cross_validate);
+      } catch (const InputError& e) {
+        out[k].spec = specs[k];
+        out[k].label = TermLabel(specs[k]);
+        out[k].identifiable = false;
+        out[k].note = std::string("its identification failed: ") + e.what();
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(mutex);
+        if (!bug) bug = std::current_exception();
+        next = static_cast<int>(specs.size());  // no further candidates
+        return;
+      }
+      const int d = ++done;
+      std::lock_guard<std::mutex> lock(mutex);
+      say("diagnosis: " + what + ", candidate " + std::to_string(d) + " of " +
+          std::to_string(specs.size()) + " (" + out[k].label + ")");
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < std::min<int>(jobs, static_cast<int>(specs.size())); ++t) {
+    pool.emplace_back(worker);
+  }
+  for (std::thread& t : pool) t.join();
+  if (bug) std::rethrow_exception(bug);
+  return out;
+}
+
+}  // namespace twin::discovery

@@ -1,0 +1,27 @@
+// The verdict of model discovery and its reason (internal to calib/diagnosis;
+// model_discovery.h, step 4). DiscoveryResult's ToString, BriefReport and FullReport are
+// defined beside them (discovery_result.cc).
+#pragma once
+
+#include <string>
+
+#include "calib/diagnosis/model_discovery.h"
+
+namespace twin::discovery {
+
+/// "0.01234 mm": a length for a reason sentence (4 significant digits) [m in].
+std::string Mm(double m);
+
+/// The verdict without a search: consistent with the noise (r->test_before passed, p >=
+/// alpha); the discovered model is the start (test_after, heldout_rms_discovered_m).
+void StateNoiseVerdict(const DiscoveryOptions& o, DiscoveryResult* r);
+
+/// Appends to r->reason how many screened candidates the data could see and how many are
+/// unidentifiable (Judge: applicable, and identifiable or not).
+void AddScreeningSummary(const DiscoveryOptions& o, DiscoveryResult* r);
+
+/// The verdict after a search: effects_added, or unexplained where none was added (then
+/// test_after is test_before); `heldout_rms_discovered_m` of the discovered model [m].
+void StateSearchVerdict(double heldout_rms_discovered_m, DiscoveryResult* r);
+
+}  // namespace twin::discovery

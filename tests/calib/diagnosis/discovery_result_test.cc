@@ -1,0 +1,74 @@
+#include "calib/diagnosis/discovery_result.h"
+
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace twin {
+namespace {
+
+TEST(DiscoveryResult, VerdictsAndDataKindsHaveTheReportsWords) {
+  EXPECT_STREQ(ToString(DiscoveryVerdict::kConsistentWithNoise), "consistent_with_noise");
+  EXPECT_STREQ(ToString(DiscoveryVerdict::kEffectsAdded), "effects_added");
+  EXPECT_STREQ(ToString(DiscoveryVerdict::kUnexplained), "unexplained");
+  EXPECT_STREQ(ToString(DiscoveryData::kTrackerPoints), "tracker_points");
+  EXPECT_STREQ(ToString(DiscoveryData::kOpticalAxes), "optical_axes");
+}
+
+// A search that added one effect, by hand.
+DiscoveryResult OneEffect() {
+  DiscoveryResult r;
+  r.test_before.rms_m = 0.5e-3;
+  r.test_before.p_value = 1e-6;
+  r.test_before.systematic = true;
+  r.test_after.p_value = 0.4;
+  r.noise.sigma_m = 1e-5;
+  r.noise.source = "stated";
+  r.heldout_rms_start_m = 0.5e-3;
+  DiscoveryStep s;
+  s.heldout_rms_before_m = 0.5e-3;
+  s.heldout_rms_after_m = 0.02e-3;
+  CandidateScore c;
+  c.label = "compliance q2";
+  c.tested = true;
+  c.gain_percent = 99.5;
+  c.p_adjusted = 1e-5;
+  c.accepted = true;
+  s.candidates = {c};
+  s.accepted = 0;
+  r.steps = {s};
+  r.effects_added = {c};
+  return r;
+}
+
+TEST(DiscoveryResult, TheSearchVerdictAndItsReason) {
+  DiscoveryResult r = OneEffect();
+  discovery::StateSearchVerdict(0.02e-3, &r);
+  EXPECT_EQ(r.verdict, DiscoveryVerdict::kEffectsAdded);
+  EXPECT_EQ(r.reason,
+            "1 effect(s) added; region-disjoint held-out RMS 0.5 mm -> 0.02 mm; the residual is "
+            "then consistent with noise (p = 0.4)");
+  r.effects_added.clear();
+  discovery::StateSearchVerdict(0.5e-3, &r);
+  EXPECT_EQ(r.verdict, DiscoveryVerdict::kUnexplained);
+  EXPECT_EQ(r.test_after.p_value, r.test_before.p_value);  // nothing added: the start's test
+}
+
+TEST(DiscoveryResult, BriefReportHasTheVerdictNoiseTestAndOneLineAStep) {
+  DiscoveryResult r = OneEffect();
+  discovery::StateSearchVerdict(0.02e-3, &r);
+  EXPECT_EQ(r.BriefReport(),
+            "diagnosis: effects_added: " + r.reason +
+                "\n"
+                "  noise floor 0.0100 mm per coordinate (stated)\n"
+                "  residual test (held out): RMS 0.5000 mm, p = 1e-06 (systematic)\n"
+                "  step 1: 1 of 1 candidates tested; best compliance q2, held-out gain 99.5 %, "
+                "Holm p = 1e-05: ACCEPTED; region held-out RMS 0.5000 mm -> 0.0200 mm\n");
+  const std::string full = r.FullReport();
+  EXPECT_EQ(full.rfind(r.BriefReport(), 0), 0u);
+  EXPECT_NE(full.find("    compliance q2: held-out RMS"), std::string::npos) << full;
+  EXPECT_NE(full.find("[accepted]"), std::string::npos) << full;
+}
+
+}  // namespace
+}  // namespace twin

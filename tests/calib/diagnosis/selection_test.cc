@@ -1,0 +1,140 @@
+#include "calib/diagnosis/selection.h"
+
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "calib/common/errors.h"
+#include "test_models.h"
+
+namespace twin::discovery {
+namespace {
+
+// A tested candidate that every rule accepts under the default options (alpha 0.05, gain
+// 5 %, correlation limit 0.99999).
+CandidateScore Acceptable(const std::string& label, double gain) {
+  CandidateScore c;
+  c.label = label;
+  c.tested = true;
+  c.size_p_value = 0.001;
+  c.p_value = c.p_adjusted = 0.001;
+  c.gain_percent = gain;
+  c.max_geometry_correlation = 0.5;
+  return c;
+}
+
+TEST(Selection, JudgeNamesEachRefusalInItsOrder) {
+  const DiscoveryOptions o;
+  CandidateScore c = Acceptable("a", 20.0);
+  EXPECT_EQ(Judge(c, o), Refusal::kNone);
+  c.max_geometry_correlation = 0.99999;  // the limit itself refuses (>=)
+  EXPECT_EQ(Judge(c, o), Refusal::kGeometryDisguise);
+  c.gain_percent = 4.9;
+  EXPECT_EQ(Judge(c, o), Refusal::kGainTooSmall);
+  c.p_adjusted = 0.05;
+  EXPECT_EQ(Judge(c, o), Refusal::kNotSignificant);
+  c.size_p_value = 0.2;
+  EXPECT_EQ(Judge(c, o), Refusal::kSizeNotShown);
+  c.tested = false;
+  EXPECT_EQ(Judge(c, o), Refusal::kNotTested);
+  c.identifiable = false;
+  EXPECT_EQ(Judge(c, o), Refusal::kNotIdentifiable);
+  c.applicable = false;
+  EXPECT_EQ(Judge(c, o), Refusal::kNotApplicable);
+  EXPECT_STREQ(ToString(Refusal::kGainTooSmall), "gain_too_small");
+}
+
+TEST(Selection, RefusalTextGivesTheDecidingFigures) {
+  DiscoveryOptions o;
+  CandidateScore c = Acceptable("a", 3.5);
+  c.p_adjusted = 0.25;
+  c.correlated_with = "r1.link2.a";
+  c.max_geometry_correlation = 0.999995;
+  EXPECT_EQ(RefusalText(Refusal::kNone, c, o, 4), "");
+  EXPECT_EQ(RefusalText(Refusal::kNotSignificant, c, o, 4),
+            "not significant: Holm-adjusted p = 0.25 >= 0.05 over 4 candidates");
+  EXPECT_EQ(RefusalText(Refusal::kGainTooSmall, c, o, 4), "3.5 % < the 5 % worth a term");
+  EXPECT_EQ(RefusalText(Refusal::kGeometryDisguise, c, o, 4),
+            "a disguise of the geometry: |rho| = 0.999995 with r1.link2.a");
+  c.size_statistic = 1.5;
+  c.size_dof = 2;
+  c.size_p_value = 0.5;
+  EXPECT_EQ(RefusalText(Refusal::kSizeNotShown, c, o, 4),
+            "its size is not told from zero: Wald chi-square 1.5 on 2 dof, p = 0.5 >= 0.05");
+}
+
+TEST(Selection, TheLargestGainWithASizeIsChosenAndHolmCorrectsOverTheTested) {
+  const DiscoveryOptions o;
+  DiscoveryStep s;
+  s.candidates = {Acceptable("small", 10.0), Acceptable("sizeless", 50.0),
+                  Acceptable("large", 30.0), CandidateScore{}};
+  s.candidates[1].size_p_value = 0.3;  // its size not told from zero: not eligible
+  s.candidates[3].tested = false;      // not in Holm's family
+  s.candidates[0].p_value = 0.01;
+  s.candidates[1].p_value = 0.02;
+  s.candidates[2].p_value = 0.04;
+  const Selection sel = SelectLargestGain(o, &s);
+  EXPECT_EQ(sel.tested, (std::vector<int>{0, 1, 2}));
+  EXPECT_EQ(sel.best, 2);
+  // Holm over 3: 3 * 0.01, max(0.03, 2 * 0.02), max(0.04, 1 * 0.04).
+  EXPECT_DOUBLE_EQ(s.candidates[0].p_adjusted, 0.03);
+  EXPECT_DOUBLE_EQ(s.candidates[1].p_adjusted, 0.04);
+  EXPECT_DOUBLE_EQ(s.candidates[2].p_adjusted, 0.04);
+  EXPECT_NE(s.candidates[1].note.find("its size is not told from zero"), std::string::npos);
+  // The choice is accepted: nothing refuses it.
+  DecideOnChoice(o, sel.tested, sel.best, "", &s);
+  EXPECT_TRUE(s.candidates[2].accepted);
+  EXPECT_FALSE(s.candidates[0].accepted);
+  EXPECT_EQ(s.candidates[2].note.rfind("accepted: largest held-out gain (30 %)", 0), 0u)
+      << s.candidates[2].note;
+}
+
+TEST(Selection, ARefusedChoiceIsNotAcceptedAndItsNoteSaysWhy) {
+  const DiscoveryOptions o;
+  DiscoveryStep s;
+  s.candidates = {Acceptable("only", 2.0)};
+  const Selection sel = SelectLargestGain(o, &s);
+  ASSERT_EQ(sel.best, 0);
+  DecideOnChoice(o, sel.tested, sel.best, "", &s);
+  EXPECT_FALSE(s.candidates[0].accepted);
+  EXPECT_EQ(s.candidates[0].note, "largest held-out gain, but 2 % < the 5 % worth a term");
+}
+
+TEST(Selection, FoldSignFlipSumsTheLossDifferencesPerFold) {
+  // Two folds; c loses to `better` by 1 in each: differences (2, 2) summed per fold, both
+  // positive, so p = 1/4 (of the 4 sign assignments only (+, +) reaches the sum).
+  CandidateScore c, better;
+  c.heldout_loss = {2, 2, 2, 2};
+  better.heldout_loss = {1, 1, 1, 1};
+  const std::vector<int> region{0, 0, 1, 1};
+  EXPECT_DOUBLE_EQ(FoldSignFlipP(c, better, region, 2), 0.25);
+  better.heldout_loss.pop_back();
+  EXPECT_THROW(FoldSignFlipP(c, better, region, 2), PreconditionError);
+}
+
+TEST(Selection, AClockDrivenLeaderGivesWayToAMeasuredDriverTheFoldsCannotTellApart) {
+  const DiscoveryOptions o;
+  DiscoveryStep s;
+  s.candidates = {Acceptable("drift", 40.0), Acceptable("thermal", 38.0)};
+  s.candidates[0].spec = {"thermal_drift", -1, {}};
+  s.candidates[0].driver = TermDriver::kClockUnbounded;
+  s.candidates[1].spec = {"thermal_growth", -1, {}};  // no dormant shape: the shape rule passes
+  s.candidates[1].driver = TermDriver::kMeasured;
+  // Per fold the leader is better in one, worse in the other: no evidence (p >= alpha).
+  s.candidates[0].heldout_loss = {1.0, 1.0, 2.0, 2.0};
+  s.candidates[1].heldout_loss = {1.5, 1.5, 1.5, 1.5};
+  const std::vector<int> region{0, 0, 1, 1};
+  const RobotModel start = MakeRobotModel(testing::ReinovoLikeModel(1));
+  const SelectionContext x{o, region, 2, start};
+  const int best = ChooseCandidate(x, &s);
+  EXPECT_EQ(best, 1);
+  EXPECT_TRUE(s.candidates[1].accepted);
+  EXPECT_EQ(s.candidates[1].preferred_over, "drift");
+  EXPECT_FALSE(s.candidates[0].accepted);
+  // Sign-flip over the fold sums (1, -1): 3 of 4 assignments reach 0.
+  EXPECT_DOUBLE_EQ(s.candidates[1].versus_leader_p_value, 0.75);
+}
+
+}  // namespace
+}  // namespace twin::discovery
