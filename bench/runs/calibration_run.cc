@@ -693,7 +693,7 @@ void PrintRobotDiagnosis(const RobotCalibration& rc, const RobotStageResult& s) 
   if (!s.diagnosis.result) {
     std::printf("%-6s diagnosis skipped (%s)\n", name, s.diagnosis.skipped.c_str());
   } else {
-    std::printf("%-6s diagnosis: %s: %s\n", name, s.diagnosis.result->verdict.c_str(),
+    std::printf("%-6s diagnosis: %s: %s\n", name, ToString(s.diagnosis.result->verdict),
                 s.diagnosis.result->reason.c_str());
   }
   if (s.physical) {
