@@ -188,13 +188,15 @@ std::string SingularValuesText(const Vector3& sv) {
   return "(" + Fmt(sv(0)) + ", " + Fmt(sv(1)) + ", " + Fmt(sv(2)) + ") m";
 }
 
+// The contacts are forward kinematics of encoder readings through validated models, never a
+// user's numbers: a non-finite one is our bug.
 void CheckFinite(const std::vector<Vector3>& p, const char* name) {
   for (size_t i = 0; i < p.size(); ++i) {
     if (!p[i].allFinite()) {
       std::ostringstream os;
-      os << "contact coordinates must be finite, got (" << p[i].transpose() << ")";
-      throw InputError(std::string("CalibrateBaseFrame ") + name + "[" + std::to_string(i) + "]",
-                       os.str());
+      os << name << "[" << i << "] = (" << p[i].transpose() << "): contact coordinates must be "
+         << "finite";
+      FailPrecondition("finite contacts", os.str(), __FILE__, __LINE__);
     }
   }
 }
@@ -241,10 +243,13 @@ const char* ToString(BaseCalibrationResult::Status status) {
 }
 
 void BaseCalibrationOptions::Validate() const {
+  // No user sets these (the handclasp section reaches none of them): a bad value is our bug.
   const auto check = [](bool ok, const char* field, double value, const char* expected) {
     if (!ok) {
-      throw InputError(std::string("BaseCalibrationOptions.") + field,
-                       "must be " + std::string(expected) + ", got " + Fmt(value));
+      FailPrecondition("valid BaseCalibrationOptions",
+                       std::string("BaseCalibrationOptions.") + field + " must be " + expected +
+                           ", got " + Fmt(value),
+                       __FILE__, __LINE__);
     }
   };
   check(std::isfinite(collinear_ratio_min) && collinear_ratio_min > 0 && collinear_ratio_min < 1,
@@ -305,12 +310,9 @@ BaseCalibrationResult CalibrateBaseFrame(const std::vector<Vector3>& p_B1,
                                          BaseConstraint constraint,
                                          const BaseCalibrationOptions& options) {
   options.Validate();
-  if (p_B1.size() != p_B2.size()) {
-    throw InputError("CalibrateBaseFrame",
-                     "p_B1 and p_B2 must hold the same contacts, got " +
-                         std::to_string(p_B1.size()) + " and " + std::to_string(p_B2.size()) +
-                         " points");
-  }
+  TWIN_REQUIRE(p_B1.size() == p_B2.size(),
+               "p_B1 and p_B2 must hold the same contacts, got " + std::to_string(p_B1.size()) +
+                   " and " + std::to_string(p_B2.size()) + " points");
   CheckFinite(p_B1, "p_B1");
   CheckFinite(p_B2, "p_B2");
 

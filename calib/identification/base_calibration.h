@@ -9,9 +9,11 @@
 // Accuracy is scored as in section 4: e_tran (eq. 34) and e_rot on ZYZ Euler angles (eq. 31-33).
 //
 // Error policy: malformed input (p_B1 and p_B2 of different lengths, non-finite coordinates,
-// invalid options) throws InputError; well-formed input that cannot give a calibration (fewer
-// than 4 contacts, a degenerate contact set) or a solver failure is reported by the result's
-// status and reason, so that a procedure can ask the operator to teach more or better points.
+// invalid options) is a caller's bug (the contacts are forward kinematics of encoder readings,
+// no user sets the options) and throws PreconditionError; well-formed input that cannot give
+// a calibration (fewer than 4 contacts, a degenerate contact set) or a solver failure is
+// reported by the result's status and reason, so that a procedure can ask the operator to
+// teach more or better points.
 #pragma once
 
 #include <string>
@@ -58,7 +60,7 @@ struct BaseCalibrationOptions {
   /// Ceres parameter tolerance for the floor-wall refinement (relative step).
   double lm_parameter_tolerance = 1e-12;
 
-  /// Throws InputError naming the bad field and its value.
+  /// Throws PreconditionError naming the bad field and its value (no user sets these).
   void Validate() const;
 };
 
@@ -88,7 +90,8 @@ struct BaseCalibrationResult {
 const char* ToString(BaseCalibrationResult::Status status);
 
 /// Estimates X_B1B2 from contacts p_B1[i] = X_B1B2 p_B2[i] (metres) under `constraint`.
-/// Throws InputError if the vectors differ in length, hold non-finite values or options are bad.
+/// Throws PreconditionError if the vectors differ in length, hold non-finite values or options
+/// are bad.
 BaseCalibrationResult CalibrateBaseFrame(const std::vector<Vector3>& p_B1,
                                          const std::vector<Vector3>& p_B2,
                                          BaseConstraint constraint,

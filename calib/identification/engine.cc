@@ -213,9 +213,9 @@ std::vector<TermGeometryDependence> TermDependence(const Eigen::MatrixXd& Jp, in
 }
 
 void Validate(const RobotModel& model, const std::vector<MeasurementSet*>& sets) {
-  if (sets.empty()) throw InputError("Identify", "no measurement sets");
+  TWIN_REQUIRE(!sets.empty(), "Identify needs at least one measurement set, got none");
   for (const MeasurementSet* s : sets) {
-    if (!s) throw InputError("Identify", "a measurement set is null");
+    TWIN_REQUIRE(s != nullptr, "Identify got a null measurement set");
     s->Validate(model);
   }
 }
@@ -290,9 +290,12 @@ std::vector<Eigen::VectorXd> GeometryNullSpaceWithTermsOff(
 }  // namespace
 
 void ValidateIdentificationOptions(const IdentificationOptions& o) {
+  // No user sets these (the scenario and CLI reach none of them): a bad value is our bug.
   auto fail = [](const char* field, double v, const char* expected) {
-    throw InputError(std::string("IdentificationOptions.") + field,
-                     std::string(expected) + ", got " + std::to_string(v));
+    FailPrecondition("valid IdentificationOptions",
+                     std::string("IdentificationOptions.") + field + " " + expected + ", got " +
+                         std::to_string(v),
+                     __FILE__, __LINE__);
   };
   if (o.max_iterations < 1) fail("max_iterations", o.max_iterations, "must be >= 1");
   if (!(o.function_tolerance > 0.0 && o.function_tolerance < 1.0)) {

@@ -58,7 +58,7 @@ struct IdentificationOptions {
   int max_correlations = 20;           ///< at most this many correlations reported
 };
 
-/// Throws InputError naming the bad field and value.
+/// Throws PreconditionError naming the bad field and value (no user input sets these options).
 void ValidateIdentificationOptions(const IdentificationOptions& options);
 
 enum class IdentificationStatus {
@@ -154,8 +154,9 @@ struct IdentificationResult {
 };
 
 /// Identifies `start` (its free parameters) from the measurement sets, which are initialised
-/// here and hold the identified nuisance parameters afterwards. Throws InputError for bad
-/// options, sets that do not fit the model (MeasurementSet::Validate), or no sets.
+/// here and hold the identified nuisance parameters afterwards. Throws InputError for sets
+/// that do not fit the model (MeasurementSet::Validate), PreconditionError for bad options, no
+/// sets or a null set.
 IdentificationResult Identify(const RobotModel& start, const std::vector<MeasurementSet*>& sets,
                               const IdentificationOptions& options = {});
 

@@ -47,9 +47,12 @@ double Eps(const KinematicModel& model, const std::vector<AxisSample>& samples) 
 }  // namespace
 
 void ValidateLinearizedIdentificationOptions(const LinearizedIdentificationOptions& o) {
+  // No user sets these (the scenario and CLI reach none of them): a bad value is our bug.
   auto fail = [](const char* field, double v, const char* expected) {
-    throw InputError(std::string("LinearizedIdentificationOptions.") + field,
-                     std::string(expected) + ", got " + std::to_string(v));
+    FailPrecondition("valid LinearizedIdentificationOptions",
+                     std::string("LinearizedIdentificationOptions.") + field + " " + expected +
+                         ", got " + std::to_string(v),
+                     __FILE__, __LINE__);
   };
   if (o.max_iterations < 1) fail("max_iterations", o.max_iterations, "must be >= 1");
   if (!(std::isfinite(o.initial_lambda) && o.initial_lambda > 0.0)) {

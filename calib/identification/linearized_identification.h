@@ -27,7 +27,7 @@ struct LinearizedIdentificationOptions {
   bool profile_axis_directions = true;
 };
 
-/// Throws InputError naming the bad field and value.
+/// Throws PreconditionError naming the bad field and value (no user input sets these options).
 void ValidateLinearizedIdentificationOptions(const LinearizedIdentificationOptions& options);
 
 enum class LinearizedIdentificationStatus {

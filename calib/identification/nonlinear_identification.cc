@@ -15,9 +15,12 @@
 namespace twin {
 
 void ValidateNonlinearIdentificationOptions(const NonlinearIdentificationOptions& o) {
+  // No user sets these (the scenario and CLI reach none of them): a bad value is our bug.
   auto fail = [](const char* field, double v, const char* expected) {
-    throw InputError(std::string("NonlinearIdentificationOptions.") + field,
-                     std::string(expected) + ", got " + std::to_string(v));
+    FailPrecondition("valid NonlinearIdentificationOptions",
+                     std::string("NonlinearIdentificationOptions.") + field + " " + expected +
+                         ", got " + std::to_string(v),
+                     __FILE__, __LINE__);
   };
   if (o.max_iterations < 1) fail("max_iterations", o.max_iterations, "must be >= 1");
   if (o.relinearize_passes < 0) fail("relinearize_passes", o.relinearize_passes, "must be >= 0");

@@ -68,7 +68,7 @@ struct NonlinearIdentificationOptions {
   bool use_sample_sigmas = true;
 };
 
-/// Throws InputError naming the bad field and value.
+/// Throws PreconditionError naming the bad field and value (no user input sets these options).
 void ValidateNonlinearIdentificationOptions(const NonlinearIdentificationOptions& options);
 
 enum class NonlinearIdentificationStatus {

@@ -109,16 +109,11 @@ Eigen::JacobiSVD<Square, Eigen::NoQRPreconditioner> ScaledSvd(
     const Eigen::MatrixXd& Phi, const Eigen::VectorXd& column_scale, double relative_tolerance,
     const std::vector<Eigen::VectorXd>& known_invariants, bool with_v, double* cut_out) {
   const int n = static_cast<int>(Phi.cols());
-  if (column_scale.size() != n || n == 0) {
-    throw InputError("AnalyseObservability", "Phi has " + std::to_string(Phi.cols()) +
-                                                 " columns and " +
-                                                 std::to_string(column_scale.size()) +
-                                                 " column scales; they must agree (> 0)");
-  }
-  if (!(relative_tolerance > 0.0 && relative_tolerance < 1.0)) {
-    throw InputError("AnalyseObservability.relative_tolerance",
-                     "must be in (0, 1), got " + std::to_string(relative_tolerance));
-  }
+  TWIN_REQUIRE(column_scale.size() == n && n > 0,
+               "Phi has " + std::to_string(Phi.cols()) + " columns and " +
+                   std::to_string(column_scale.size()) + " column scales; they must agree (> 0)");
+  TWIN_REQUIRE(relative_tolerance > 0.0 && relative_tolerance < 1.0,
+               "relative_tolerance must be in (0, 1), got " + std::to_string(relative_tolerance));
   const Eigen::MatrixXd A = Phi * column_scale.asDiagonal();
   const Square R = GivensR(A);
   // V of the first SVD is needed for the numerical null space when there are invariants.
@@ -140,10 +135,8 @@ Eigen::JacobiSVD<Square, Eigen::NoQRPreconditioner> ScaledSvd(
       if (!(svd.singularValues()(i) > cut)) add(svd.matrixV().col(i));
     }
     for (const Eigen::VectorXd& v : known_invariants) {
-      if (v.size() != n) {
-        throw InputError("AnalyseObservability", "an invariant has " + std::to_string(v.size()) +
-                                                     " entries, expected " + std::to_string(n));
-      }
+      TWIN_REQUIRE(v.size() == n, "an invariant has " + std::to_string(v.size()) +
+                                      " entries, expected " + std::to_string(n));
       add(v.cwiseQuotient(column_scale));
     }
     Square Q = Square::Identity(n, n);
@@ -175,13 +168,10 @@ ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi,
                                          double relative_tolerance,
                                          const std::vector<Eigen::VectorXd>& known_invariants) {
   const int n = static_cast<int>(Phi.cols());
-  if (static_cast<int>(names.size()) != n || column_scale.size() != n || n == 0) {
-    throw InputError("AnalyseObservability", "Phi has " + std::to_string(Phi.cols()) +
-                                                 " columns, " + std::to_string(names.size()) +
-                                                 " names and " +
-                                                 std::to_string(column_scale.size()) +
-                                                 " column scales; they must agree (> 0)");
-  }
+  TWIN_REQUIRE(static_cast<int>(names.size()) == n && column_scale.size() == n && n > 0,
+               "Phi has " + std::to_string(Phi.cols()) + " columns, " +
+                   std::to_string(names.size()) + " names and " +
+                   std::to_string(column_scale.size()) + " column scales; they must agree (> 0)");
   ObservabilityReport rep;
   rep.column_scale = column_scale;
   double cut = 0.0;

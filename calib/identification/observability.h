@@ -37,8 +37,8 @@ struct ObservabilityReport {
 /// line constraints): the null space is then the span of Phi's numerical null space and these
 /// directions, so they land in it even where noisy or inconsistent data give them a small
 /// non-zero singular value; singular_values are then those of Phi restricted to the complement.
-/// `names` (n) name the columns. Throws InputError for mismatched sizes or a tolerance outside
-/// (0, 1).
+/// `names` (n) name the columns. Throws PreconditionError for mismatched sizes or a tolerance
+/// outside (0, 1).
 ObservabilityReport AnalyseObservability(const Eigen::MatrixXd& Phi,
                                          const std::vector<std::string>& names,
                                          const Eigen::VectorXd& column_scale,

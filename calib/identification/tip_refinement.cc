@@ -38,18 +38,15 @@ bool Finite(const Transform& X) { return X.matrix().allFinite(); }
 }  // namespace
 
 void TipRefinementOptions::Validate() const {
-  if (!(min_relative_singular_value >= 0 && min_relative_singular_value < 1)) {
-    throw InputError("TipRefinementOptions.min_relative_singular_value",
-                     "must be in [0, 1), got " + std::to_string(min_relative_singular_value));
-  }
-  if (!(rotation_scale_m > 0 && std::isfinite(rotation_scale_m))) {
-    throw InputError("TipRefinementOptions.rotation_scale_m",
-                     "must be > 0, got " + std::to_string(rotation_scale_m));
-  }
-  if (max_iterations < 1) {
-    throw InputError("TipRefinementOptions.max_iterations",
-                     "must be >= 1, got " + std::to_string(max_iterations));
-  }
+  // No user sets these (the handclasp section reaches none of them): a bad value is our bug.
+  TWIN_REQUIRE(min_relative_singular_value >= 0 && min_relative_singular_value < 1,
+               "TipRefinementOptions.min_relative_singular_value must be in [0, 1), got " +
+                   std::to_string(min_relative_singular_value));
+  TWIN_REQUIRE(rotation_scale_m > 0 && std::isfinite(rotation_scale_m),
+               "TipRefinementOptions.rotation_scale_m must be > 0, got " +
+                   std::to_string(rotation_scale_m));
+  TWIN_REQUIRE(max_iterations >= 1, "TipRefinementOptions.max_iterations must be >= 1, got " +
+                                        std::to_string(max_iterations));
 }
 
 TipRefinementResult RefineBaseAndTips(const std::vector<Transform>& X_B1F1,
@@ -59,21 +56,19 @@ TipRefinementResult RefineBaseAndTips(const std::vector<Transform>& X_B1F1,
                                       const Transform& X_B1B2_initial,
                                       const TipRefinementOptions& options) {
   options.Validate();
-  if (X_B1F1.size() != X_B2F2.size()) {
-    throw InputError("RefineBaseAndTips", std::to_string(X_B1F1.size()) + " flange poses of "
-                                              "robot 1 but " + std::to_string(X_B2F2.size()) +
-                                              " of robot 2");
-  }
+  // The flange poses are forward kinematics of encoder readings, the tips and the start come
+  // from validated models and a base calibration: none is a user's number, so a mismatch or
+  // a non-finite value is our bug.
+  TWIN_REQUIRE(X_B1F1.size() == X_B2F2.size(),
+               std::to_string(X_B1F1.size()) + " flange poses of robot 1 but " +
+                   std::to_string(X_B2F2.size()) + " of robot 2");
   for (size_t i = 0; i < X_B1F1.size(); ++i) {
-    if (!Finite(X_B1F1[i]) || !Finite(X_B2F2[i])) {
-      throw InputError("RefineBaseAndTips contact " + std::to_string(i), "non-finite flange pose");
-    }
+    TWIN_REQUIRE(Finite(X_B1F1[i]) && Finite(X_B2F2[i]),
+                 "non-finite flange pose at contact " + std::to_string(i));
   }
-  if (!t1_F1.allFinite() || !t2_F2.allFinite() || !Finite(X_B1B2_initial) ||
-      !(tip1_axis_F1.allFinite() && tip1_axis_F1.norm() > 1e-9)) {
-    throw InputError("RefineBaseAndTips", "tips, tip axis and initial transform must be finite "
-                                          "(and the axis non-zero)");
-  }
+  TWIN_REQUIRE(t1_F1.allFinite() && t2_F2.allFinite() && Finite(X_B1B2_initial) &&
+                   tip1_axis_F1.allFinite() && tip1_axis_F1.norm() > 1e-9,
+               "tips, tip axis and initial transform must be finite (and the axis non-zero)");
   TipRefinementResult out;
   const int n = static_cast<int>(X_B1F1.size());
   if (n < kMinContacts) {

@@ -36,7 +36,7 @@ struct TipRefinementOptions {
   double rotation_scale_m = 0.5;
   int max_iterations = 50;
 
-  /// Throws InputError naming the bad field and its value.
+  /// Throws PreconditionError naming the bad field and its value (no user sets these).
   void Validate() const;
 };
 
@@ -57,8 +57,9 @@ struct TipRefinementResult {
 
 /// Refines X_B1B2 (from `X_B1B2_initial`, e.g. the general solution of eq. 3 and 12) and the
 /// tip corrections from the flange poses at the contacts. Needs at least 4 contacts (11
-/// unknowns, 3 equations each). Throws InputError for mismatched or non-finite input and bad
-/// options; returns ok = false with a reason when the problem is ill-conditioned.
+/// unknowns, 3 equations each). Throws PreconditionError for mismatched or non-finite input
+/// (forward kinematics and validated models: never a user's numbers) and bad options; returns
+/// ok = false with a reason when the problem is ill-conditioned.
 TipRefinementResult RefineBaseAndTips(const std::vector<Transform>& X_B1F1,
                                       const std::vector<Transform>& X_B2F2,
                                       const Vector3& t1_F1, const Vector3& t2_F2,

@@ -1,9 +1,11 @@
 #include "calib/kinematics/forward_kinematics.h"
 
-#include <cassert>
 #include <cmath>
+#include <string>
 
 #include <Eigen/SVD>
+
+#include "calib/common/errors.h"
 
 namespace twin {
 namespace {
@@ -15,11 +17,20 @@ Eigen::Matrix<double, 6, 1> Twist(const Vector3& axis, const Vector3& point_on_a
   return col;
 }
 
+// q has one angle per joint of `model` (callers pass their own model's readings).
+void RequireJointCount(const KinematicModel& model, const JointVector& q) {
+  TWIN_REQUIRE(q.size() == model.num_joints(),
+               std::to_string(q.size()) + " joint angles for a " +
+                   std::to_string(model.num_joints()) + "-joint chain");
+}
+
 // The model's geometric parameters in a stack buffer (no allocation per FK call).
 struct FlatParameters {
   std::array<double, kParamsPerLink * (kMaxJoints + 1)> phi;
   explicit FlatParameters(const KinematicModel& m) {
-    assert(m.num_joints() >= 1 && m.num_joints() <= kMaxJoints);
+    TWIN_REQUIRE(m.num_joints() >= 1 && m.num_joints() <= kMaxJoints,
+                 std::to_string(m.num_joints()) + " joints, expected 1.." +
+                     std::to_string(kMaxJoints));
     for (int i = 0; i < m.num_links(); ++i) {
       const DhParameters& dh = m.links[i].dh;
       double* p = phi.data() + kParamsPerLink * i;
@@ -35,7 +46,9 @@ struct FlatParameters {
 }  // namespace
 
 ChainTrig::ChainTrig(const KinematicModel& model) {
-  assert(model.num_links() <= kMaxJoints + 1);
+  TWIN_REQUIRE(model.num_links() <= kMaxJoints + 1,
+               std::to_string(model.num_links()) + " links, expected at most " +
+                   std::to_string(kMaxJoints + 1));
   for (int i = 0; i < model.num_links(); ++i) {
     const DhParameters& dh = model.links[i].dh;
     link[i] = {std::cos(dh.alpha), std::sin(dh.alpha), std::cos(dh.beta), std::sin(dh.beta)};
@@ -48,7 +61,7 @@ namespace {
 // as computed, before its conversion (EndPose's product continues from it).
 RigidT<double> ChainFrameSet(const KinematicModel& model, const JointVector& q,
                              const ChainTrig* trig, FrameSet* f) {
-  assert(q.size() == model.num_joints());
+  RequireJointCount(model, q);
   const FlatParameters flat(model);
   std::array<RigidT<double>, kMaxJoints + 2> X;
   ChainFramesT<double>(model, flat.phi.data(), q.data(), 1.0, X.data(),
@@ -70,7 +83,7 @@ FrameSet ForwardKinematics(const KinematicModel& model, const JointVector& q,
 }
 
 Transform EndPose(const KinematicModel& model, const JointVector& q, const ChainTrig* trig) {
-  assert(q.size() == model.num_joints());
+  RequireJointCount(model, q);
   const FlatParameters flat(model);
   return ToTransform(ChainEndPoseT<double>(model, flat.phi.data(), q.data(), 1.0,
                                            trig ? trig->link.data() : nullptr));
@@ -135,7 +148,7 @@ void IdentificationColumns(int num_links, const RigidT<double>* X, const double*
 }
 
 ParameterJacobian IdentificationJacobian(const KinematicModel& model, const JointVector& q) {
-  assert(q.size() == model.num_joints());
+  RequireJointCount(model, q);
   const FlatParameters flat(model);
   std::array<RigidT<double>, kMaxJoints + 2> X;
   ChainFramesT<double>(model, flat.phi.data(), q.data(), 1.0, X.data());

@@ -128,25 +128,21 @@ Attempt Descend(const KinematicModel& model, const Transform& X_target, JointVec
 }  // namespace
 
 void ValidateIkOptions(const IkOptions& o) {
+  // No user sets these (the CLI's `ik` sets only position_only): a bad value is our bug.
   auto positive = [](double v, const char* field) {
-    if (!(std::isfinite(v) && v > 0.0)) {
-      throw InputError(std::string("IkOptions.") + field,
-                       "must be a positive finite number, got " + std::to_string(v));
-    }
+    TWIN_REQUIRE(std::isfinite(v) && v > 0.0, std::string("IkOptions.") + field +
+                                                  " must be a positive finite number, got " +
+                                                  std::to_string(v));
   };
   positive(o.position_tolerance, "position_tolerance");
   positive(o.orientation_tolerance, "orientation_tolerance");
   positive(o.damping, "damping");
   positive(o.max_step, "max_step");
   positive(o.orientation_weight, "orientation_weight");
-  if (o.max_iterations < 1) {
-    throw InputError("IkOptions.max_iterations",
-                     "must be >= 1, got " + std::to_string(o.max_iterations));
-  }
-  if (o.random_restarts < 0) {
-    throw InputError("IkOptions.random_restarts",
-                     "must be >= 0, got " + std::to_string(o.random_restarts));
-  }
+  TWIN_REQUIRE(o.max_iterations >= 1,
+               "IkOptions.max_iterations must be >= 1, got " + std::to_string(o.max_iterations));
+  TWIN_REQUIRE(o.random_restarts >= 0,
+               "IkOptions.random_restarts must be >= 0, got " + std::to_string(o.random_restarts));
 }
 
 const char* ToString(IkStatus status) {

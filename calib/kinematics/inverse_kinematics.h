@@ -23,7 +23,7 @@ struct IkOptions {
   std::uint64_t seed = 1;               ///< seed of the restart generator (reproducible)
 };
 
-/// Throws InputError naming the bad field and value.
+/// Throws PreconditionError naming the bad field and value (no user input sets these options).
 void ValidateIkOptions(const IkOptions& options);
 
 enum class IkStatus {

@@ -135,11 +135,10 @@ MisalignedErrorStack StackMisalignedErrors(const KinematicModel& model,
   std::vector<std::vector<Vector3>> p(num_axes);
   std::vector<std::vector<Eigen::Matrix<double, 3, Eigen::Dynamic>>> J(num_axes);
   for (const AxisSample& s : samples) {
-    if (s.axis < 0 || s.axis >= num_axes) {
-      throw InputError("AxisSample.axis", "axis " + std::to_string(s.axis) +
-                                              " has no direction (" + std::to_string(num_axes) +
-                                              " given)");
-    }
+    // The directions are fitted to (or planned for) these same samples by the caller.
+    TWIN_REQUIRE(s.axis >= 0 && s.axis < num_axes,
+                 "sample of axis " + std::to_string(s.axis) + " has no direction (" +
+                     std::to_string(num_axes) + " given)");
     const FrameSet frames = ForwardKinematics(model, s.q);
     p[s.axis].push_back(frames.X_BE.translation() - s.offset);
     J[s.axis].push_back(IdentificationJacobian(model, s.q).topRows<3>());
@@ -147,10 +146,8 @@ MisalignedErrorStack StackMisalignedErrors(const KinematicModel& model,
   MisalignedErrorStack out;
   for (int k = 0; k < num_axes; ++k) {
     const int n = static_cast<int>(p[k].size());
-    if (n < 2) {
-      throw InputError("AxisSample.axis", "axis " + std::to_string(k) + " has " +
-                                              std::to_string(n) + " samples, needs >= 2");
-    }
+    TWIN_REQUIRE(n >= 2, "axis " + std::to_string(k) + " has " + std::to_string(n) +
+                             " samples, needs >= 2 (the caller's samples were validated)");
     out.num_pairs += n * (n - 1) / 2;
   }
   const int rows = 3 * out.num_pairs;

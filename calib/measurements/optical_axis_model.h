@@ -101,7 +101,9 @@ struct MisalignedErrorStack {
 };
 
 /// Builds E (eq. 22) and Phi (eq. 23) from the nominal positions of `model`. `directions[k]` is
-/// mu_k (unit). Throws InputError for an axis index outside directions or with < 2 samples.
+/// mu_k (unit). Preconditions (PreconditionError): every sample's axis has a direction, and
+/// every direction has >= 2 samples (the caller validated the samples and fitted or planned
+/// the directions for them).
 MisalignedErrorStack StackMisalignedErrors(const KinematicModel& model,
                                            const std::vector<AxisSample>& samples,
                                            const std::vector<Vector3>& directions);

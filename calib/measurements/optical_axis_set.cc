@@ -35,14 +35,16 @@ OpticalAxisSet::OpticalAxisSet(std::vector<AxisSample> samples,
                                const OpticalAxisSetOptions& options)
     : samples_(std::move(samples)), options_(options) {
   num_axes_ = ValidateAxisSamples(samples_);
-  if (!(options.huber_scale >= 0.0) || !std::isfinite(options.huber_scale)) {
-    throw InputError("OpticalAxisSetOptions.huber_scale", "must be a finite number >= 0 [m]");
-  }
-  if (!(options.sigma_perpendicular > 0.0) || !(options.sigma_depth > 0.0) ||
-      !std::isfinite(options.sigma_perpendicular) || !std::isfinite(options.sigma_depth)) {
-    throw InputError("OpticalAxisSetOptions", "sigma_perpendicular and sigma_depth must be "
-                                              "positive finite numbers [m]");
-  }
+  // The options come from the identification's own (no user sets them): a bad one is our bug.
+  TWIN_REQUIRE(options.huber_scale >= 0.0 && std::isfinite(options.huber_scale),
+               "huber_scale must be a finite number >= 0 [m], got " +
+                   std::to_string(options.huber_scale));
+  TWIN_REQUIRE(options.sigma_perpendicular > 0.0 && options.sigma_depth > 0.0 &&
+                   std::isfinite(options.sigma_perpendicular) &&
+                   std::isfinite(options.sigma_depth),
+               "sigma_perpendicular and sigma_depth must be positive finite numbers [m], got " +
+                   std::to_string(options.sigma_perpendicular) + " and " +
+                   std::to_string(options.sigma_depth));
   depth_ = options.use_depth && AllHaveDepth(samples_);
 }
 

@@ -30,7 +30,7 @@ struct OpticalAxisSetOptions {
 
 class OpticalAxisSet : public MeasurementSet {
  public:
-  /// Throws InputError for bad samples (ValidateAxisSamples) or options.
+  /// Throws InputError for bad samples (ValidateAxisSamples), PreconditionError for bad options.
   OpticalAxisSet(std::vector<AxisSample> samples, const OpticalAxisSetOptions& options = {});
 
   std::string kind() const override { return "optical_axis"; }

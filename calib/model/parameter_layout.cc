@@ -41,14 +41,21 @@ ParameterLayout::ParameterLayout(const RobotModel& model) {
 }
 
 int ParameterLayout::Find(const std::string& name) const {
-  for (int i = 0; i < size(); ++i) {
-    if (info_[i].name == name) return i;
+  int found = -1;
+  for (int i = 0; i < size() && found < 0; ++i) {
+    if (info_[i].name == name) found = i;
   }
-  std::string blocks;
-  for (const ParameterBlock& b : blocks_) blocks += (blocks.empty() ? "" : ", ") + b.name;
-  throw InputError(name, "unknown parameter of this model; its names have the form "
-                         "<robot>.link<i>.<theta|d|a|alpha|beta> or belong to its error terms (" +
-                             blocks + ")");
+  // The names come from our own code (a fixed list built from this layout), not from a user.
+  TWIN_REQUIRE(found >= 0, "\"" + name + "\" is no parameter of this model; its names have the "
+                           "form <robot>.link<i>.<theta|d|a|alpha|beta> or belong to its error "
+                           "terms (" + BlockNames() + ")");
+  return found;
+}
+
+std::string ParameterLayout::BlockNames() const {
+  std::string out;
+  for (const ParameterBlock& b : blocks_) out += (out.empty() ? "" : ", ") + b.name;
+  return out;
 }
 
 std::vector<std::string> ParameterLayout::names() const {

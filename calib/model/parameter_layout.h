@@ -42,7 +42,8 @@ class ParameterLayout {
   const std::vector<ParameterBlock>& blocks() const { return blocks_; }
   /// Size of the geometric block (5 (N + 1)).
   int geometry_size() const { return geometry_size_; }
-  /// Index of a name; throws InputError naming it and listing the form of valid names.
+  /// Index of a name. Precondition: the name is one of this model's (callers build their names
+  /// from the layout); else PreconditionError naming it and listing the form of valid names.
   int Find(const std::string& name) const;
   /// All names in flat order.
   std::vector<std::string> names() const;
@@ -50,6 +51,9 @@ class ParameterLayout {
   Eigen::VectorXd scales() const;
 
  private:
+  /// The block names, comma-separated (for Find's message).
+  std::string BlockNames() const;
+
   std::vector<ParameterInfo> info_;
   std::vector<ParameterBlock> blocks_;
   int geometry_size_ = 0;

@@ -1,7 +1,6 @@
 #include "calib/model/parameters.h"
 
 #include <array>
-#include <cassert>
 
 #include "calib/common/errors.h"
 
@@ -19,19 +18,19 @@ double& Field(DhParameters& dh, int kind) {
     case DhParameter::kAlpha: return dh.alpha;
     case DhParameter::kBeta: return dh.beta;
   }
-  assert(false && "bad DhParameter");
-  return dh.theta_offset;
+  FailPrecondition("kind is a DhParameter", "got " + std::to_string(kind), __FILE__, __LINE__);
 }
 
 }  // namespace
 
 int ParameterIndex(int link, DhParameter which) {
-  assert(link >= 1 && link <= kMaxJoints + 1);
+  TWIN_REQUIRE(link >= 1 && link <= kMaxJoints + 1,
+               "link " + std::to_string(link) + ", expected 1.." + std::to_string(kMaxJoints + 1));
   return kParamsPerLink * (link - 1) + static_cast<int>(which);
 }
 
 std::string ParameterName(const std::string& robot, int index) {
-  assert(index >= 0);
+  TWIN_REQUIRE(index >= 0, "index " + std::to_string(index) + ", expected >= 0");
   return robot + ".link" + std::to_string(index / kParamsPerLink + 1) + "." +
          kKindNames[index % kParamsPerLink];
 }
@@ -44,12 +43,14 @@ std::vector<std::string> ParameterNames(const KinematicModel& model) {
 }
 
 int FindParameter(const KinematicModel& model, const std::string& name) {
-  for (int i = 0; i < model.num_parameters(); ++i) {
-    if (ParameterName(model.name, i) == name) return i;
+  int found = -1;
+  for (int i = 0; i < model.num_parameters() && found < 0; ++i) {
+    if (ParameterName(model.name, i) == name) found = i;
   }
-  throw InputError(name, "unknown kinematic parameter; expected " + model.name + ".link<1.." +
-                             std::to_string(model.num_links()) +
-                             ">.<theta|d|a|alpha|beta>");
+  TWIN_REQUIRE(found >= 0, "\"" + name + "\" is no kinematic parameter of " + model.name +
+                               "; expected " + model.name + ".link<1.." +
+                               std::to_string(model.num_links()) + ">.<theta|d|a|alpha|beta>");
+  return found;
 }
 
 bool IsLengthParameter(int index) {
@@ -67,7 +68,9 @@ ParameterVector GetParameters(const KinematicModel& model) {
 }
 
 KinematicModel WithParameters(const KinematicModel& model, const ParameterVector& params) {
-  assert(params.size() == model.num_parameters());
+  TWIN_REQUIRE(params.size() == model.num_parameters(),
+               std::to_string(params.size()) + " parameters for a model of " +
+                   std::to_string(model.num_parameters()));
   KinematicModel out = model;
   for (int i = 0; i < model.num_parameters(); ++i) {
     Field(out.links[i / kParamsPerLink].dh, i % kParamsPerLink) = params(i);

@@ -33,8 +33,8 @@ std::string ParameterName(const std::string& robot, int index);
 /// All 5 (N + 1) names of `model` in flat order.
 std::vector<std::string> ParameterNames(const KinematicModel& model);
 
-/// Flat index of a name produced by ParameterName for this model; throws InputError naming
-/// the unknown name and the expected form otherwise.
+/// Flat index of a name produced by ParameterName for this model. Precondition: it is one
+/// (no user-given name reaches it); else PreconditionError naming it and the expected form.
 int FindParameter(const KinematicModel& model, const std::string& name);
 
 /// True for the length parameters (d, a), false for angles.

@@ -1,7 +1,5 @@
 #include "calib/model/robot_model.h"
 
-#include <cassert>
-
 #include "calib/common/errors.h"
 #include "calib/model/parameters.h"
 
@@ -61,9 +59,8 @@ RobotModel WithDormantTermsFrom(const RobotModel& model, const RobotModel& solve
     const TermSpec& b = solved.terms[i]->spec();
     same = a.type == b.type && a.joint == b.joint && a.orders == b.orders;
   }
-  if (!same) {
-    throw InputError(model.name(), "WithDormantTermsFrom: the solved model has other terms");
-  }
+  // `solved` is a fit started from `model` (our own code), so its terms are the same.
+  TWIN_REQUIRE(same, "the solved model of " + model.name() + " has other terms than the model");
   RobotModel out = model;
   ForEachDormantTermAtZero(model, [&](const ErrorTerm& t, int offset) {
     const int n = static_cast<int>(t.parameters().size());
@@ -79,7 +76,9 @@ Eigen::VectorXd GetParameters(const RobotModel& model) {
 }
 
 RobotModel WithParameters(const RobotModel& model, const Eigen::VectorXd& params) {
-  assert(params.size() == model.num_parameters());
+  TWIN_REQUIRE(params.size() == model.num_parameters(),
+               std::to_string(params.size()) + " parameters for a model of " +
+                   std::to_string(model.num_parameters()));
   RobotModel out = model;
   const int g = model.chain.num_parameters();
   out.chain = WithParameters(model.chain, params.head(g));
@@ -88,7 +87,9 @@ RobotModel WithParameters(const RobotModel& model, const Eigen::VectorXd& params
 }
 
 Transform EndPose(const RobotModel& model, const MeasurementContext& context) {
-  assert(context.q.size() == model.chain.num_joints());
+  TWIN_REQUIRE(context.q.size() == model.chain.num_joints(),
+               std::to_string(context.q.size()) + " joint angles for a " +
+                   std::to_string(model.chain.num_joints()) + "-joint chain");
   const Eigen::VectorXd p = GetParameters(model);
   return ToTransform(RobotEndPoseT<double>(model, p.data(), context));
 }

@@ -69,7 +69,8 @@ struct RobotModel {
 RobotModel MakeRobotModel(const KinematicModel& chain, const Vector3& gravity_B = -Vector3::UnitZ());
 
 /// `model` with one more term, its parameters at zero (the term's nominal: no effect). Throws
-/// InputError when the same term (type, joint, orders) is already in the model.
+/// InputError when the same term (type, joint, orders) is already in the model (a user can
+/// declare a term twice, e.g. `identify --declare`).
 RobotModel WithTerm(const RobotModel& model, std::shared_ptr<const ErrorTerm> term);
 
 /// Whether some term of `model` has dormant parameters (ErrorTerm::has_dormant_parameters)
@@ -78,8 +79,8 @@ RobotModel WithTerm(const RobotModel& model, std::shared_ptr<const ErrorTerm> te
 bool HasDormantTermsAtZero(const RobotModel& model);
 
 /// `model` with the values of each term HasDormantTermsAtZero names taken from `solved` (the
-/// same terms, fitted): a start where their dormant parameters have a gradient. Throws
-/// InputError when `solved` has other terms.
+/// same terms, fitted): a start where their dormant parameters have a gradient. Precondition:
+/// `solved` has the same terms (PreconditionError otherwise).
 RobotModel WithDormantTermsFrom(const RobotModel& model, const RobotModel& solved);
 
 /// The model's flat parameter vector (geometry, then the terms) [SI].

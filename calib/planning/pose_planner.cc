@@ -170,11 +170,13 @@ std::string CountsText(const RejectionCounts& r) {
   return s.str();
 }
 
+// A field no user can set badly (the scenario's planning keys are bounded where they are
+// read, bench/io/calibration_config.cc): a bad value is our bug.
 void Require(bool ok, const std::string& field, double value, const std::string& expected) {
   if (!ok) {
     std::ostringstream s;
-    s << "= " << value << ", expected " << expected;
-    throw InputError("PosePlannerOptions." + field, s.str());
+    s << "PosePlannerOptions." << field << " = " << value << ", expected " << expected;
+    FailPrecondition("valid PosePlannerOptions", s.str(), __FILE__, __LINE__);
   }
 }
 
@@ -215,8 +217,12 @@ void ValidatePosePlannerOptions(const PosePlannerOptions& o) {
           "min_singular_value", o.min_singular_value, "finite >= 0");
   Require(o.max_visibility_angle > 0.0 && o.max_visibility_angle < kPi / 2,
           "max_visibility_angle", o.max_visibility_angle, "in (0, pi/2) rad");
-  Require(std::isfinite(o.min_distance) && o.min_distance > 0.0, "min_distance", o.min_distance,
-          "finite > 0 m");
+  // The scenario's calibration.planning.min_distance_mm may be 0, which reaches this check.
+  if (!(std::isfinite(o.min_distance) && o.min_distance > 0.0)) {
+    std::ostringstream s;
+    s << "= " << o.min_distance << ", expected finite > 0 m (calibration.planning.min_distance_mm)";
+    throw InputError("PosePlannerOptions.min_distance", s.str());
+  }
   Require(std::isfinite(o.max_distance) && o.max_distance > 0.0, "max_distance", o.max_distance,
           "finite > 0 m");
   Require(std::isfinite(o.planning_max_distance) && o.planning_max_distance > 0.0,
@@ -244,10 +250,8 @@ static std::pair<double, double> PredictedErrorAndRaw(const KinematicModel& pass
                                                       const std::vector<PlannedAxis>& axes,
                                                       double rank_tolerance, int configurations,
                                                       std::uint64_t seed, PredictionGauge gauge) {
-  if (configurations < 1) {
-    throw InputError("PredictedPositionError configurations",
-                     "must be >= 1, got " + std::to_string(configurations));
-  }
+  TWIN_REQUIRE(configurations >= 1,
+               "configurations must be >= 1, got " + std::to_string(configurations));
   std::vector<AxisSample> samples;
   for (size_t k = 0; k < axes.size(); ++k) {
     for (size_t i = 0; i < axes[k].q_passive.size(); ++i) {
@@ -551,14 +555,11 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
     result.run_fitness.push_back(runs[run].best);
     double predicted = kInf, predicted_similarity = kInf;
     if (std::isfinite(runs[run].best)) {
-      try {
-        std::tie(predicted_similarity, predicted) = PredictedErrorAndRaw(
-            passive, runs[run].axes, o.rank_tolerance, o.prediction_configurations,
-            o.prediction_seed, PredictionGauge::kSimilarity);
-      } catch (const InputError&) {
-        // Samples the identification refuses (cannot happen for a feasible plan of >= 3
-        // positions per axis): no prediction, the run stays selectable by 1/O1.
-      }
+      // A feasible plan has >= 3 positions on every axis, which the identification accepts:
+      // a refusal would be our bug, and it propagates rather than becoming "no prediction".
+      std::tie(predicted_similarity, predicted) = PredictedErrorAndRaw(
+          passive, runs[run].axes, o.rank_tolerance, o.prediction_configurations,
+          o.prediction_seed, PredictionGauge::kSimilarity);
     }
     result.run_predicted_error.push_back(predicted);
     result.run_predicted_similarity_error.push_back(predicted_similarity);

@@ -79,8 +79,10 @@ struct PosePlannerOptions {
   std::shared_ptr<std::atomic<bool>> cancel;
 };
 
-/// Throws InputError naming the bad field and value. Geometric infeasibility (for example
-/// min_distance > max_distance) is not an input error: it gives kNoFeasiblePoses.
+/// Throws InputError for a min_distance <= 0 (a scenario's calibration.planning.min_distance_mm
+/// may be 0) and PreconditionError naming any other bad field and value (the scenario's keys
+/// are bounded where they are read; the others no user sets). Geometric infeasibility (for
+/// example min_distance > max_distance) is not an error: it gives kNoFeasiblePoses.
 void ValidatePosePlannerOptions(const PosePlannerOptions& options);
 
 enum class PosePlannerStatus {

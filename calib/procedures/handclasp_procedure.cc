@@ -114,13 +114,12 @@ Teach TeachOne(const std::array<KinematicModel, 2>& m, const Transform& X_B1B2,
   return t;
 }
 
-// Throws InputError naming the first taught joint vector that is not finite.
+// Throws PreconditionError naming the first taught joint vector that is not finite: they are
+// IK solutions of TeachPoints or PlanTaughtPoints, never a user's numbers.
 void RequireFiniteTaughtAngles(const std::vector<JointVector>& taught_q1) {
   for (size_t i = 0; i < taught_q1.size(); ++i) {
-    if (!taught_q1[i].allFinite()) {
-      throw InputError("RunHandclaspProcedure taught_q1[" + std::to_string(i) + "]",
-                       "joint angles must be finite");
-    }
+    TWIN_REQUIRE(taught_q1[i].allFinite(),
+                 "taught_q1[" + std::to_string(i) + "]: joint angles must be finite");
   }
 }
 
@@ -271,8 +270,11 @@ Matrix3 FacingTipRotation(const Matrix3& R_A_TipOther, double roll) {
 }
 
 void TeachOptions::Validate() const {
+  // No user sets these (the handclasp run sets the seed and the orientations): a bad value is
+  // our bug.
   const auto fail = [](const std::string& field, const std::string& msg) {
-    throw InputError("TeachOptions." + field, msg);
+    FailPrecondition("valid TeachOptions", "TeachOptions." + field + " " + msg, __FILE__,
+                     __LINE__);
   };
   if (cube_sides_m.empty()) fail("cube_sides_m", "must list at least one side");
   for (double s : cube_sides_m) {
@@ -301,9 +303,8 @@ TaughtPoints TeachPoints(const std::array<KinematicModel, 2>& tip_models,
   options.Validate();
   TaughtPoints out;
   for (size_t i = 0; i < p_B1.size(); ++i) {
-    if (!p_B1[i].allFinite()) {
-      throw InputError("TeachPoints p_B1[" + std::to_string(i) + "]", "must be finite");
-    }
+    // A scenario's points are finite numbers where they are read (bench/io/yaml_util.cc).
+    TWIN_REQUIRE(p_B1[i].allFinite(), "p_B1[" + std::to_string(i) + "] must be finite");
     const Teach t = TeachOne(tip_models, X_B1B2_rough, p_B1[i],
                              TipDirection(tip_models, X_B1B2_rough, p_B1[i], 0, options), q_seed,
                              options);
@@ -376,9 +377,9 @@ TaughtPoints PlanTaughtPoints(const std::array<KinematicModel, 2>& tip_models,
 void HandclaspOptions::Validate() const {
   base.Validate();
   ValidateIkOptions(ik);
-  if (!(std::isfinite(retract_m) && retract_m >= 0)) {
-    throw InputError("HandclaspOptions.retract_m", "must be >= 0, got " + std::to_string(retract_m));
-  }
+  // No user sets it: a bad value is our bug.
+  TWIN_REQUIRE(std::isfinite(retract_m) && retract_m >= 0,
+               "retract_m must be >= 0, got " + std::to_string(retract_m));
 }
 
 const char* ToString(HandclaspResult::Status status) {

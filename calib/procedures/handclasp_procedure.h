@@ -57,7 +57,7 @@ struct TeachOptions {
   /// Tilt of the extra orientations [deg] (0 < tilt < 90).
   double tilt_deg = 30.0;
 
-  /// Throws InputError naming the bad field and its value.
+  /// Throws PreconditionError naming the bad field and its value (no user sets these).
   void Validate() const;
 };
 
@@ -107,7 +107,7 @@ struct HandclaspOptions {
   bool identify_tips = false;
   TipRefinementOptions tips;
 
-  /// Throws InputError naming the bad field and its value.
+  /// Throws PreconditionError naming the bad field and its value (no user sets these).
   void Validate() const;
 };
 
@@ -145,8 +145,8 @@ const char* ToString(HandclaspResult::Status status);
 /// Runs the procedure: for each of robot 1's taught joint angles `taught_q1` (rad) move robot 1
 /// there, JogTipToContact(1), read both encoders, compute p_B1 and p_B2 with the pendant tip
 /// models (WithTipTool of the controller's kinematics), retract robot 2; then calibrate. Failed
-/// moves or contacts are skipped and logged to `log` (may be null). Throws InputError for bad
-/// options or non-finite taught angles.
+/// moves or contacts are skipped and logged to `log` (may be null). Throws PreconditionError for
+/// bad options or non-finite taught angles.
 HandclaspResult RunHandclaspProcedure(Cell& cell,
                                       const std::array<KinematicModel, 2>& pendant_tip_models,
                                       const std::vector<JointVector>& taught_q1,

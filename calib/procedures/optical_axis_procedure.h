@@ -114,7 +114,10 @@ struct OpticalAxisOptions {
   std::function<void(const std::string&)> progress;
 };
 
-/// Throws InputError naming the bad field and value.
+/// Throws InputError for a calibration_axes outside 1..planner.num_axes (a scenario's
+/// calibration.calibration_axes is unbounded where it is read) and for the values the nested
+/// validators leave to the user (planner.min_distance, servo.gain); PreconditionError naming
+/// any other bad field and value (the scenario's other keys are bounded where they are read).
 void ValidateOpticalAxisOptions(const OpticalAxisOptions& options);
 
 /// The passive robot's estimator model: the nominal model with link 7 the board mount (Zhu et
@@ -229,7 +232,8 @@ struct OpticalAxisResult {
   double intrinsics_s = 0;             ///< wall time of the intrinsics step [s]
 };
 
-/// Runs the procedure (header). Throws InputError for bad options or knowledge, when the
+/// Runs the procedure (header). Throws as ValidateOpticalAxisOptions for bad options,
+/// PreconditionError for a bad board geometry, InputError for a bad nominal model, when the
 /// camera does not see the board at the start (intrinsics), when planning finds no feasible
 /// poses, or when too few poses align to identify (each message names the robot and step).
 /// Failed single poses are skipped and listed.

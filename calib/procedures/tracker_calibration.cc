@@ -83,12 +83,13 @@ std::string Mm(double m) {
   return os.str();
 }
 
-// Throws InputError for a holdout fraction outside (0, 0.5] or bad engine options.
+// Throws PreconditionError for a holdout fraction outside (0, 0.5] or bad engine options:
+// the user's --holdout and tracker_calibration.holdout are bounded where they are read
+// (bench/runs), and no user sets the engine's.
 void ValidateCalibrationOptions(const TrackerCalibrationOptions& options) {
-  if (!(options.holdout_fraction > 0.0 && options.holdout_fraction <= 0.5)) {
-    throw InputError("holdout fraction", "expected a fraction in (0, 0.5], got " +
-                                             std::to_string(options.holdout_fraction));
-  }
+  TWIN_REQUIRE(options.holdout_fraction > 0.0 && options.holdout_fraction <= 0.5,
+               "holdout fraction: expected a fraction in (0, 0.5], got " +
+                   std::to_string(options.holdout_fraction));
   ValidateIdentificationOptions(options.engine);
 }
 

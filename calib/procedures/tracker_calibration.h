@@ -62,9 +62,10 @@ PointErrors ScorePoints(const RobotModel& model, const Transform& X_TB,
                         const std::vector<TrackerPoint>& points);
 
 /// Identifies `nominal` from `points`, with the random and the region split (the region's
-/// held-out points are `validation` when it is not empty). Throws InputError for bad options,
-/// too few points for the unknowns (3 coordinates a point against the geometry and the
-/// tracker pose) or a failed identification.
+/// held-out points are `validation` when it is not empty). Throws PreconditionError for bad
+/// options (bounded where the user's values are read), InputError for too few points for the
+/// unknowns (3 coordinates a point against the geometry and the tracker pose) or a failed
+/// identification.
 TrackerCalibrationResult CalibrateFromTracker(const RobotModel& nominal,
                                               const std::vector<TrackerPoint>& points,
                                               const std::vector<TrackerPoint>& validation,

@@ -28,10 +28,9 @@ TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const Kinemati
 TrackerProcedureResult RunTrackerProcedure(Cell& cell, int robot, const RobotModel& start,
                                            const TrackerProcedureOptions& o) {
   const KinematicModel& nominal = start.chain;
-  if (o.poses < 1 || o.poses > 100000) {
-    throw InputError("tracker_calibration.poses", "expected 1 to 100000 poses, got " +
-                                                      std::to_string(o.poses));
-  }
+  // The scenario's tracker_calibration.poses is bounded where it is read (bench/runs).
+  TWIN_REQUIRE(o.poses >= 1 && o.poses <= 100000,
+               "expected 1 to 100000 poses, got " + std::to_string(o.poses));
   const int attempts = o.max_attempts > 0 ? o.max_attempts : 3 * o.poses;
   TrackerProcedureResult out;
   std::mt19937_64 rng(o.seed);

@@ -46,8 +46,9 @@ struct TrackerProcedureResult {
 /// tool link's theta, d, a place it: a = |(x, y)|, theta = atan2(y, x), d = z).
 KinematicModel WithReflector(KinematicModel flange_model, const Vector3& p_F);
 
-/// Runs the procedure on `robot` of `cell`. Throws InputError for bad options, or when fewer
-/// poses than the identification needs could be measured (with the skip reasons' counts).
+/// Runs the procedure on `robot` of `cell`. Throws PreconditionError for bad options (bounded
+/// where the scenario is read), InputError when the cell has no tracker or fewer poses than
+/// the identification needs could be measured (with the skip reasons' counts).
 /// Each point's context carries the joint readings, the tracker's time stamp, the robot's
 /// temperature change since the first point when the cell reads one (Cell::ReadTemperatureC:
 /// a sensor reading, not a told value), and each joint's approach direction (the sign of the

@@ -11,10 +11,10 @@
 namespace twin {
 namespace {
 
+// The priors are the procedure's constants, no user's: a bad one is our bug.
 void Positive(double v, const char* name) {
-  if (!std::isfinite(v) || v <= 0) {
-    throw InputError("AxisStartPredictor", std::string(name) + " = " + ShortestNumber(v) + ": expected > 0");
-  }
+  TWIN_REQUIRE(std::isfinite(v) && v > 0,
+               std::string(name) + " = " + ShortestNumber(v) + ": expected > 0");
 }
 
 }  // namespace
@@ -32,9 +32,9 @@ AxisStartPredictor::AxisStartPredictor(double prior_translation_m, double prior_
 void AxisStartPredictor::Add(const Vector3& planned, const Vector3& aligned,
                              const Vector3& axis_direction) {
   const double n = axis_direction.norm();
-  if (!planned.allFinite() || !aligned.allFinite() || !(n > 0) || !std::isfinite(n)) {
-    throw InputError("AxisStartPredictor", "a position with a non-finite point or a zero axis");
-  }
+  // A plan's position, the servo's aligned one and the fitted axis: all our own numbers.
+  TWIN_REQUIRE(planned.allFinite() && aligned.allFinite() && n > 0 && std::isfinite(n),
+               "a position with a non-finite point or a zero axis");
   const Vector3 d = axis_direction / n;
   const Matrix3 across = Matrix3::Identity() - d * d.transpose();  // what the servo sees
   // across (t + w x p) = across (t - [p]x w) = across (aligned - planned)

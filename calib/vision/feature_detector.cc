@@ -11,19 +11,18 @@
 namespace twin {
 
 void ValidateBoardGeometry(const BoardGeometry& board, const std::string& where) {
+  // The boards the estimator is told are bounded where the scenario is read
+  // (bench/io/calibration_config.cc): a bad one here is our bug.
   auto check_count = [&](const char* field, int n) {
-    if (n < 2 || n % 2 != 0) {
-      throw InputError(where, std::string(field) + " = " + std::to_string(n) +
-                                  ": expected an even number of squares >= 2 (one centre inner "
-                                  "corner)");
-    }
+    TWIN_REQUIRE(n >= 2 && n % 2 == 0,
+                 where + ": " + field + " = " + std::to_string(n) +
+                     ": expected an even number of squares >= 2 (one centre inner corner)");
   };
   check_count("squares_x", board.squares_x);
   check_count("squares_y", board.squares_y);
-  if (!std::isfinite(board.square_m) || board.square_m <= 0.0) {
-    throw InputError(where, "square_m = " + std::to_string(board.square_m) +
-                                ": expected a positive finite side length [m]");
-  }
+  TWIN_REQUIRE(std::isfinite(board.square_m) && board.square_m > 0.0,
+               where + ": square_m = " + std::to_string(board.square_m) +
+                   ": expected a positive finite side length [m]");
 }
 
 const char* ToString(DetectionStatus status) {
@@ -55,11 +54,10 @@ bool FindGridAdaptive(const cv::Mat& grey, const cv::Size& pattern,
 FeatureDetection DetectFeaturePoint(const cv::Mat& bgr, const BoardGeometry& board,
                                     const DetectorOptions& options) {
   ValidateBoardGeometry(board, "DetectFeaturePoint board");
-  if (bgr.empty()) throw InputError("DetectFeaturePoint image", "the image is empty");
-  if (bgr.depth() != CV_8U || (bgr.channels() != 3 && bgr.channels() != 1)) {
-    throw InputError("DetectFeaturePoint image",
-                     "type " + std::to_string(bgr.type()) + ": expected 8-bit BGR or grey");
-  }
+  // The images are the cell's camera frames, never a user's file.
+  TWIN_REQUIRE(!bgr.empty(), "the image is empty");
+  TWIN_REQUIRE(bgr.depth() == CV_8U && (bgr.channels() == 3 || bgr.channels() == 1),
+               "image type " + std::to_string(bgr.type()) + ": expected 8-bit BGR or grey");
   cv::Mat grey;
   if (bgr.channels() == 3) {
     cv::cvtColor(bgr, grey, cv::COLOR_BGR2GRAY);

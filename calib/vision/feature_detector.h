@@ -18,8 +18,9 @@ struct BoardGeometry {
   double square_m = 0.02;   ///< side of one square [m]
 };
 
-/// Throws InputError naming `where`, the field and the value: counts must be even and >= 2
-/// (so a single centre inner corner exists) and square_m positive and finite.
+/// Throws PreconditionError naming `where`, the field and the value: counts must be even and
+/// >= 2 (so a single centre inner corner exists) and square_m positive and finite. (A user's
+/// board is checked where the scenario is read.)
 void ValidateBoardGeometry(const BoardGeometry& board, const std::string& where);
 
 enum class DetectionStatus {
@@ -58,7 +59,7 @@ constexpr int kCoarseSearchMinSide = 300;
 /// Finds the board's inner corners in an 8-bit BGR (or grey) image and returns them with the
 /// feature point pixel: the corner at the median row and median column of the detected grid,
 /// which is the centre corner whatever order (flips, transposition) OpenCV reports. Throws
-/// InputError for an empty image, an unsupported pixel type, or a bad board.
+/// PreconditionError for an empty image, an unsupported pixel type, or a bad board.
 FeatureDetection DetectFeaturePoint(const cv::Mat& bgr, const BoardGeometry& board,
                                     const DetectorOptions& options = DetectorOptions());
 

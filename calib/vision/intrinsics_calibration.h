@@ -27,7 +27,7 @@ struct IntrinsicsOptions {
   double max_view_error_ratio = 3.0;
 };
 
-/// Throws InputError naming the bad field and value.
+/// Throws PreconditionError naming the bad field and value (no user input sets these options).
 void ValidateIntrinsicsOptions(const IntrinsicsOptions& options);
 
 enum class IntrinsicsStatus {
@@ -61,7 +61,8 @@ struct IntrinsicsResult {
 /// Moves robot `board_robot` to each of `board_poses` (motor angles [rad]), grabs an image,
 /// detects all inner corners with DetectFeaturePoint and runs cv::calibrateCamera with the
 /// board's object points on its plane z = 0 [m]. Failed moves and images without the board are
-/// skipped and logged in `skipped`. Throws InputError for bad options, board or robot index.
+/// skipped and logged in `skipped`. Throws PreconditionError for bad options, board or robot
+/// index.
 IntrinsicsResult CalibrateIntrinsics(Cell& cell, int board_robot,
                                      const std::vector<JointVector>& board_poses,
                                      const BoardGeometry& board,
@@ -71,7 +72,8 @@ IntrinsicsResult CalibrateIntrinsics(Cell& cell, int board_robot,
 /// (board plane, z = 0 [m]), image points [px] and the index of the pose it was taken at (for
 /// the messages); `poses` is how many poses were tried, `result` carries the skipped lines so
 /// far. Zhang's method (cv::calibrateCamera), then outlier views dropped as max_view_error_ratio
-/// says, each with a line in `skipped`. Throws InputError for bad options or unequal counts.
+/// says, each with a line in `skipped`. Throws PreconditionError for bad options, unequal counts
+/// or an empty image size; a view set cv::calibrateCamera refuses gives kFailed.
 IntrinsicsResult CalibrateFromCorners(std::vector<std::vector<cv::Point3f>> object_points,
                                       std::vector<std::vector<cv::Point2f>> image_points,
                                       std::vector<int> view_pose, cv::Size image_size,
@@ -81,7 +83,8 @@ IntrinsicsResult CalibrateFromCorners(std::vector<std::vector<cv::Point3f>> obje
 /// n poses for intrinsic calibration around q_center (a pose where the camera sees the board):
 /// the first is q_center, the others perturb joints 4-6 uniformly within +-20 deg and joints
 /// 1-3 within +-5 deg so the board appears tilted and shifted; all inside the model's limits.
-/// Reproducible for a given seed. Throws InputError for n < 1 or q_center outside the limits.
+/// Reproducible for a given seed. Throws PreconditionError for n < 1, InputError for q_center
+/// outside the limits or too close to them (the scenario's start pose).
 std::vector<JointVector> IntrinsicsViewPoses(const KinematicModel& board_model,
                                              const JointVector& q_center, int n,
                                              std::uint64_t seed);
@@ -115,7 +118,8 @@ IntrinsicsViewSpec IntrinsicsViewSpecFor(const BoardGeometry& plate);
 /// joint angles of the board robot from nominal IK (seeded at q_seed). X_BbC is the camera in
 /// the board robot's base, from rough knowledge: poses need not be accurate, only well spread.
 /// Poses whose IK fails or leaves the limits are replaced by new draws. Reproducible per seed.
-/// Throws InputError for n < 1 or when fewer than n poses are found in 50 n draws.
+/// Throws PreconditionError for n < 1, InputError when fewer than n poses are found in 50 n
+/// draws (the scenario's cell leaves the board no room in front of the camera).
 std::vector<JointVector> PlannedIntrinsicsViews(const KinematicModel& board_model,
                                                 const JointVector& q_seed,
                                                 const Transform& X_BbC, int n, std::uint64_t seed,

@@ -78,28 +78,24 @@ void ServoStepModel::Add(const Eigen::Vector2d& c, const Eigen::Vector2d& observ
 }
 
 void ValidateServoOptions(const ServoOptions& o) {
-  const std::string where = "ServoOptions";
-  if (!std::isfinite(o.tolerance_px) || o.tolerance_px <= 0) {
-    throw InputError(where, "tolerance_px = " + Num(o.tolerance_px) + ": expected > 0 [px]");
-  }
-  if (o.max_iterations < 0) {
-    throw InputError(where,
-                     "max_iterations = " + std::to_string(o.max_iterations) + ": expected >= 0");
-  }
+  // The scenario's calibration.servo keys are bounded where they are read
+  // (bench/io/calibration_config.cc) and no user sets the others: a bad value is our bug,
+  // except the gain, whose scenario bound (0.01 to 2) admits 2.
+  TWIN_REQUIRE(std::isfinite(o.tolerance_px) && o.tolerance_px > 0,
+               "tolerance_px = " + Num(o.tolerance_px) + ": expected > 0 [px]");
+  TWIN_REQUIRE(o.max_iterations >= 0,
+               "max_iterations = " + std::to_string(o.max_iterations) + ": expected >= 0");
   if (!std::isfinite(o.gain) || o.gain <= 0 || o.gain >= 2) {
-    throw InputError(where, "gain = " + Num(o.gain) + ": expected in (0, 2)");
+    throw InputError("ServoOptions.gain", "gain = " + Num(o.gain) +
+                                              ": expected in (0, 2) (calibration.servo.gain)");
   }
-  if (!std::isfinite(o.nominal_depth_m) || o.nominal_depth_m < 0) {
-    throw InputError(where, "nominal_depth_m = " + Num(o.nominal_depth_m) +
-                                ": expected >= 0 [m] (0: estimate by solvePnP)");
-  }
-  if (!std::isfinite(o.max_step_m) || o.max_step_m <= 0) {
-    throw InputError(where, "max_step_m = " + Num(o.max_step_m) + ": expected > 0 [m]");
-  }
-  if (o.encoder_readings < 1) {
-    throw InputError(where, "encoder_readings = " + std::to_string(o.encoder_readings) +
-                                ": expected >= 1");
-  }
+  TWIN_REQUIRE(std::isfinite(o.nominal_depth_m) && o.nominal_depth_m >= 0,
+               "nominal_depth_m = " + Num(o.nominal_depth_m) +
+                   ": expected >= 0 [m] (0: estimate by solvePnP)");
+  TWIN_REQUIRE(std::isfinite(o.max_step_m) && o.max_step_m > 0,
+               "max_step_m = " + Num(o.max_step_m) + ": expected > 0 [m]");
+  TWIN_REQUIRE(o.encoder_readings >= 1,
+               "encoder_readings = " + std::to_string(o.encoder_readings) + ": expected >= 1");
 }
 
 const char* ToString(ServoStatus status) {
@@ -121,15 +117,13 @@ ServoResult AlignFeatureToOpticalAxis(Cell& cell, const ServoSetup& setup,
                                       ServoStepModel* step_model) {
   ValidateServoOptions(options);
   ValidateBoardGeometry(setup.board, "ServoSetup.board");
-  if (setup.passive_robot != 0 && setup.passive_robot != 1) {
-    throw InputError("ServoSetup", "passive_robot = " + std::to_string(setup.passive_robot) +
-                                       ": expected 0 or 1");
-  }
+  TWIN_REQUIRE(setup.passive_robot == 0 || setup.passive_robot == 1,
+               "passive_robot = " + std::to_string(setup.passive_robot) + ": expected 0 or 1");
+  // The intrinsics are a successful calibration's (the procedure stops at a failed one).
   const PinholeIntrinsics& k = setup.intrinsics;
-  if (!(k.fx > 0) || !(k.fy > 0) || !std::isfinite(k.cx) || !std::isfinite(k.cy)) {
-    throw InputError("ServoSetup.intrinsics", "fx = " + Num(k.fx) + ", fy = " + Num(k.fy) +
-                                                  ": expected positive focal lengths");
-  }
+  TWIN_REQUIRE(k.fx > 0 && k.fy > 0 && std::isfinite(k.cx) && std::isfinite(k.cy),
+               "fx = " + Num(k.fx) + ", fy = " + Num(k.fy) + ", cx = " + Num(k.cx) +
+                   ", cy = " + Num(k.cy) + ": expected positive focal lengths, finite centre");
   const int passive = setup.passive_robot;
   ServoResult result;
   auto finish = [&](ServoStatus status, const std::string& reason) {

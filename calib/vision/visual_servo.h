@@ -60,7 +60,9 @@ struct ServoOptions {
   double region_slack_px = 12.0;       ///< and by this much for the prediction's error [px]
 };
 
-/// Throws InputError naming the bad field and value.
+/// Throws InputError for a gain outside (0, 2) (a scenario's calibration.servo.gain may be 2),
+/// PreconditionError naming any other bad field and value (the scenario's servo keys are
+/// bounded where they are read; the others no user sets).
 void ValidateServoOptions(const ServoOptions& options);
 
 /// What the servo learns of its own moves: how the image of P moves when it commands a motion
@@ -118,8 +120,9 @@ struct ServoResult {
 /// Moves the passive robot to q_passive_start, then repeats: grab an image, detect P, and if
 /// (du, dv) (eq. 31) is not within tolerance move the passive end frame by -gain * dP_Bp with
 /// dP_Bp = R_BpC (du z / fx, dv z / fy, 0) (eq. 42-43), keeping its nominal orientation, via
-/// nominal IK seeded at the encoders. Never loops past max_iterations moves. Throws InputError
-/// for bad options or setup (robot index, board); cell failures come back as a status.
+/// nominal IK seeded at the encoders. Never loops past max_iterations moves. Throws as
+/// ValidateServoOptions for bad options, PreconditionError for a bad setup (robot index, board,
+/// intrinsics); cell failures come back as a status.
 /// With options.use_regions, `first_region` (frame pixels; empty: a whole frame) is where to
 /// look in the first image (for example PredictBoardRegion of the previous pose's detection).
 /// With `step_model` (optional, updated), each move commands M^-1 of the wanted image motion

@@ -381,21 +381,23 @@ TEST(CalibrateBaseFrame, WarnsWhenTheDeclaredInstallationDoesNotFit) {
   EXPECT_TRUE(Contains(r.warnings[0], "check the declared installation")) << r.warnings[0];
 }
 
-TEST(CalibrateBaseFrame, MalformedInputIsAnInputError) {
+// The contacts are forward kinematics of encoder readings (never a user's numbers): unequal
+// counts or a non-finite coordinate are a caller's bug.
+TEST(CalibrateBaseFrame, MalformedInputIsAPreconditionError) {
   std::vector<Vector3> p_B1, p_B2;
   MakeContacts(PaperCases()[0].ideal, PyramidContacts(4), &p_B1, &p_B2);
   std::vector<Vector3> short_B2(p_B2.begin(), p_B2.end() - 1);
   try {
     CalibrateBaseFrame(p_B1, short_B2, BaseConstraint::kFloorFloor);
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
+    FAIL() << "expected PreconditionError";
+  } catch (const PreconditionError& e) {
     EXPECT_TRUE(Contains(e.what(), "got 4 and 3")) << e.what();
   }
   p_B2[1].y() = std::nan("");
   try {
     CalibrateBaseFrame(p_B1, p_B2, BaseConstraint::kFloorFloor);
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
+    FAIL() << "expected PreconditionError";
+  } catch (const PreconditionError& e) {
     EXPECT_TRUE(Contains(e.what(), "p_B2[1]")) << e.what();
   }
 }
@@ -406,14 +408,14 @@ TEST(BaseCalibrationOptions, ValidateNamesTheBadField) {
   options.coplanar_ratio_min = 1.5;
   try {
     options.Validate();
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
+    FAIL() << "expected PreconditionError";  // no user sets these options
+  } catch (const PreconditionError& e) {
     EXPECT_TRUE(Contains(e.what(), "BaseCalibrationOptions.coplanar_ratio_min")) << e.what();
     EXPECT_TRUE(Contains(e.what(), "1.5")) << e.what();
   }
   options = BaseCalibrationOptions{};
   options.lm_max_iterations = 0;
-  EXPECT_THROW(options.Validate(), InputError);
+  EXPECT_THROW(options.Validate(), PreconditionError);
 }
 
 }  // namespace

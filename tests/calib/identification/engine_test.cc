@@ -231,8 +231,9 @@ TEST(Engine, FixedParametersAreHeldAndOthersStillFit) {
   // fit still lowers it.
   EXPECT_LT(r.sets[0].rms_after, r.sets[0].rms_before);
   EXPECT_GT(r.sets[0].rms_after, 1e-6);
+  // The fixed names are built by our procedures from the layout: an unknown one is our bug.
   o.fixed = {"r1.joint9.compliance"};
-  EXPECT_THROW(Identify(s.start, {&set}, o), InputError);
+  EXPECT_THROW(Identify(s.start, {&set}, o), PreconditionError);
 }
 
 TEST(Engine, SetsThatDoNotFitTheModelAreRefusedWithTheRow) {
@@ -250,7 +251,9 @@ TEST(Engine, SetsThatDoNotFitTheModelAreRefusedWithTheRow) {
     EXPECT_NE(std::string(e.what()).find("cell.csv:9"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("needs a temperature change"), std::string::npos);
   }
-  EXPECT_THROW(Identify(s.start, {}), InputError);
+  // No set at all, or a null one, is a caller's bug, not the data's.
+  EXPECT_THROW(Identify(s.start, {}), PreconditionError);
+  EXPECT_THROW(Identify(s.start, {nullptr}), PreconditionError);
 }
 
 TEST(Engine, CorrelationsAreReportedStrongestFirstWithinTheThreshold) {

@@ -89,14 +89,16 @@ TEST(LinearizedIdentification, PapersFixedDirectionStepAlsoConverges) {
   EXPECT_LT(after, 1e-3);
 }
 
+// Bad options are our bug (no user sets them); too few samples on an axis are the measurements
+// file's (InputError).
 TEST(LinearizedIdentification, ValidatesOptionsAndSamples) {
   const auto s = MakeOpticalAxisScenario(42);
   LinearizedIdentificationOptions o;
   o.lambda_factor = 1.0;
   try {
     IdentifyFromOpticalAxes(s.nominal, s.samples, o);
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
+    FAIL() << "expected PreconditionError";
+  } catch (const PreconditionError& e) {
     EXPECT_NE(std::string(e.what()).find("lambda_factor"), std::string::npos);
   }
   std::vector<AxisSample> few(s.samples.begin(), s.samples.begin() + 2);

@@ -202,6 +202,8 @@ TEST(NonlinearIdentification, IdentifiabilityIsTheFirstPassObservability) {
             NonlinearIdentifiability(s.nominal, s.samples).rank + 1);
 }
 
+// No user sets the options (a bad one is our bug, PreconditionError); the samples come from a
+// measurements file (bad ones are the user's, InputError).
 TEST(NonlinearIdentification, ValidatesOptionsAndSamples) {
   const auto s = MakeOpticalAxisScenario(42);
   NonlinearIdentificationOptions o;
@@ -209,19 +211,19 @@ TEST(NonlinearIdentification, ValidatesOptionsAndSamples) {
   o.huber_scale = -1.0;
   try {
     IdentifyNonlinear(s.nominal, s.samples, o);
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
+    FAIL() << "expected PreconditionError";
+  } catch (const PreconditionError& e) {
     EXPECT_NE(std::string(e.what()).find("huber_scale"), std::string::npos);
   }
   o = {};
   o.relinearize_passes = -1;
-  EXPECT_THROW(IdentifyNonlinear(s.nominal, s.samples, o), InputError);
+  EXPECT_THROW(IdentifyNonlinear(s.nominal, s.samples, o), PreconditionError);
   o = {};
   o.max_iterations = 0;
   try {
     IdentifyNonlinear(s.nominal, s.samples, o);
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
+    FAIL() << "expected PreconditionError";
+  } catch (const PreconditionError& e) {
     EXPECT_NE(std::string(e.what()).find("max_iterations"), std::string::npos);
   }
   std::vector<AxisSample> few(s.samples.begin(), s.samples.begin() + 2);

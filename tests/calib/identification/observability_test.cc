@@ -110,17 +110,19 @@ TEST(Observability, NamesCombinations) {
   EXPECT_EQ(NameCombination(v, ParameterNames(R2())), "r2.link1.theta");
 }
 
-TEST(Observability, RejectsBadInput) {
+// Phi, its names and scales and the tolerance all come from our own code: a mismatch is a
+// broken precondition.
+TEST(Observability, RejectsBrokenPreconditions) {
   try {
     AnalyseObservability(Eigen::MatrixXd::Zero(6, 34), R2(), 1e-6);
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
+    FAIL() << "expected PreconditionError";
+  } catch (const PreconditionError& e) {
     EXPECT_NE(std::string(e.what()).find("34 columns"), std::string::npos);
   }
   try {
     AnalyseObservability(Eigen::MatrixXd::Ones(6, 35), R2(), 1.5);
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
+    FAIL() << "expected PreconditionError";
+  } catch (const PreconditionError& e) {
     EXPECT_NE(std::string(e.what()).find("relative_tolerance"), std::string::npos);
   }
 }

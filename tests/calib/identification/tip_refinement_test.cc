@@ -136,12 +136,15 @@ TEST(TipRefinement, RefusesContactsWithoutOrientationVariety) {
   EXPECT_NE(r.reason.find("vary too little"), std::string::npos) << r.reason;
 }
 
-TEST(TipRefinement, RejectsBadInput) {
+// The flange poses, tips and options all come from our own code (forward kinematics,
+// validated models, fixed options): malformed ones are broken preconditions.
+TEST(TipRefinement, RejectsBrokenPreconditions) {
   const Contacts c = MakeContacts(6, 30.0, Vector3::Zero(), Vector3::Zero(), 0.0, 5);
   std::vector<Transform> shorter(c.X_B2F2.begin(), c.X_B2F2.end() - 1);
-  EXPECT_THROW(RefineBaseAndTips(c.X_B1F1, shorter, kT1, kT2, kAxis1, TrueX()), InputError);
+  EXPECT_THROW(RefineBaseAndTips(c.X_B1F1, shorter, kT1, kT2, kAxis1, TrueX()),
+               PreconditionError);
   EXPECT_THROW(RefineBaseAndTips(c.X_B1F1, c.X_B2F2, kT1, kT2, Vector3::Zero(), TrueX()),
-               InputError);
+               PreconditionError);
   std::vector<Transform> three(c.X_B1F1.begin(), c.X_B1F1.begin() + 3);
   std::vector<Transform> three2(c.X_B2F2.begin(), c.X_B2F2.begin() + 3);
   const TipRefinementResult r = RefineBaseAndTips(three, three2, kT1, kT2, kAxis1, TrueX());
@@ -150,7 +153,7 @@ TEST(TipRefinement, RejectsBadInput) {
   TipRefinementOptions bad;
   bad.max_iterations = 0;
   EXPECT_THROW(RefineBaseAndTips(c.X_B1F1, c.X_B2F2, kT1, kT2, kAxis1, TrueX(), bad),
-               InputError);
+               PreconditionError);
 }
 
 }  // namespace

@@ -141,18 +141,19 @@ TEST(SolveIk, InvalidInputsAreReportedNotSolved) {
   EXPECT_TRUE(Contains(r.reason, "seed is outside the joint limits")) << r.reason;
 }
 
-TEST(IkOptions, ValidationNamesTheField) {
+// No user sets IkOptions (the CLI's `ik` sets only position_only): a bad one is our bug.
+TEST(IkOptions, ValidationIsAPreconditionNamingTheField) {
   IkOptions o;
   o.damping = -1.0;
   try {
     ValidateIkOptions(o);
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
+    FAIL() << "expected PreconditionError";
+  } catch (const PreconditionError& e) {
     EXPECT_TRUE(Contains(e.what(), "IkOptions.damping")) << e.what();
   }
   o = IkOptions();
   o.max_iterations = 0;
-  EXPECT_THROW(ValidateIkOptions(o), InputError);
+  EXPECT_THROW(ValidateIkOptions(o), PreconditionError);
 }
 
 }  // namespace

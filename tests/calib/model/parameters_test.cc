@@ -30,13 +30,15 @@ TEST(Parameters, LengthParametersAreDAndA) {
   EXPECT_FALSE(IsLengthParameter(ParameterIndex(1, DhParameter::kTheta)));
 }
 
-TEST(Parameters, UnknownNameIsAnInputErrorWithTheExpectedForm) {
+// Only our own code looks names up (no user's name reaches FindParameter): an unknown one is a
+// broken precondition, not bad input.
+TEST(Parameters, UnknownNameIsAPreconditionErrorWithTheExpectedForm) {
   KinematicModel r1;
   r1.name = "r1";
   try {
     FindParameter(r1, "r1.link9.alpha");
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
+    FAIL() << "expected PreconditionError";
+  } catch (const PreconditionError& e) {
     EXPECT_NE(std::string(e.what()).find("r1.link9.alpha"), std::string::npos);
     EXPECT_NE(std::string(e.what()).find("r1.link<1..7>.<theta|d|a|alpha|beta>"),
               std::string::npos);

@@ -194,7 +194,7 @@ TEST_F(PosePlannerTest, PredictedErrorFallsBySqrtTwoWithEveryAxisTwice) {
   ASSERT_TRUE(std::isfinite(once));
   ASSERT_GT(once, 0.0);
   EXPECT_NEAR(once / both, std::sqrt(2.0), 1e-6 * std::sqrt(2.0));
-  EXPECT_THROW(PredictedPositionError(passive, result_->axes, 1e-6, 0, 3), InputError);
+  EXPECT_THROW(PredictedPositionError(passive, result_->axes, 1e-6, 0, 3), PreconditionError);
 }
 
 // The gauges of PredictedPositionError against a Monte Carlo that shares none of its linear
@@ -343,20 +343,37 @@ TEST(PosePlanner, BasesTooFarApartGiveNoFeasiblePoses) {
                 r.rejections.c5_max_distance, 0) << r.reason;
 }
 
-TEST(PosePlanner, InvalidOptionNamesFieldAndValue) {
+// The scenario's planning keys are bounded where they are read, and no user sets the other
+// fields: a bad value is a broken precondition naming the field and value.
+TEST(PosePlanner, InvalidOptionIsAPreconditionErrorNamingFieldAndValue) {
   PosePlannerOptions o;
   o.swarm_size = 0;
   try {
     ValidatePosePlannerOptions(o);
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("PosePlannerOptions.swarm_size"), std::string::npos);
-    EXPECT_NE(std::string(e.what()).find("= 0"), std::string::npos);
+    FAIL() << "expected PreconditionError";
+  } catch (const PreconditionError& e) {
+    EXPECT_NE(std::string(e.what()).find("PosePlannerOptions"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("swarm_size = 0"), std::string::npos) << e.what();
   }
   o = PosePlannerOptions{};
   o.max_visibility_angle = 2.0;
-  EXPECT_THROW(ValidatePosePlannerOptions(o), InputError);
+  EXPECT_THROW(ValidatePosePlannerOptions(o), PreconditionError);
   EXPECT_NO_THROW(ValidatePosePlannerOptions(PosePlannerOptions{}));
+}
+
+// A scenario's calibration.planning.min_distance_mm may be 0 (its bound there is [0, 5000]):
+// that reaches the planner's check, which names the field and the scenario key.
+TEST(PosePlanner, ZeroMinDistanceIsAnInputErrorNamingTheScenarioKey) {
+  PosePlannerOptions o;
+  o.min_distance = 0.0;
+  try {
+    ValidatePosePlannerOptions(o);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.where(), "PosePlannerOptions.min_distance");
+    EXPECT_NE(e.message().find("calibration.planning.min_distance_mm"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

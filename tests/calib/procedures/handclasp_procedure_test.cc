@@ -221,18 +221,21 @@ TEST(HandclaspProcedure, RefusesCollinearContactsWithAClearMessage) {
   EXPECT_NE(r.reason.find("triangle"), std::string::npos) << r.reason;
 }
 
-TEST(HandclaspProcedure, BadInputIsAnInputError) {
+// The taught angles are IK solutions and no user sets the options: a non-finite angle or a
+// bad option is a broken precondition, naming what was wrong.
+TEST(HandclaspProcedure, BrokenPreconditionsArePreconditionErrors) {
   FakeCell cell(TipModels(), FloorFloorLayout());
   JointVector bad = JointVector::Zero(6);
   bad(2) = std::nan("");
-  EXPECT_THROW(RunHandclaspProcedure(cell, TipModels(), {bad}, {}, nullptr), InputError);
+  EXPECT_THROW(RunHandclaspProcedure(cell, TipModels(), {bad}, {}, nullptr), PreconditionError);
   HandclaspOptions o;
   o.retract_m = -1;
   try {
     RunHandclaspProcedure(cell, TipModels(), {}, o, nullptr);
     ADD_FAILURE();
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.where(), "HandclaspOptions.retract_m");
+  } catch (const PreconditionError& e) {
+    EXPECT_NE(std::string(e.what()).find("retract_m must be >= 0"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -109,10 +109,12 @@ TEST(TrackerCalibration, TooFewPointsAndBadOptionsAreRefused) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("points needed"), std::string::npos) << e.what();
   }
+  // The user's holdout (--holdout, tracker_calibration.holdout) is bounded where it is read:
+  // a bad one here is our bug.
   TrackerCalibrationOptions o;
   o.holdout_fraction = 0.9;
   EXPECT_THROW(CalibrateFromTracker(c.nominal, SyntheticTrackerPoints(c.truth, 60, 11), {}, o),
-               InputError);
+               PreconditionError);
 }
 
 // Repeats are no independent points (issue 38): 8 poses measured 26 times each pass no

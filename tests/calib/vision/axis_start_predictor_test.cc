@@ -94,14 +94,15 @@ TEST(AxisStartPredictor, AScatteredPositionPullsThePredictionOnlyAsItsWeightAllo
   EXPECT_NEAR(c.dot(across), 0.042, 0.004);
 }
 
+// Its positions and priors are the procedure's own numbers: bad ones are broken preconditions.
 TEST(AxisStartPredictor, RefusesNonFiniteInputAndBadPriors) {
   AxisStartPredictor pr;
   const Vector3 p(0.5, 0, 0.4);
-  EXPECT_THROW(pr.Add(p, p, Vector3::Zero()), InputError);
-  EXPECT_THROW(pr.Add(p, Vector3(NAN, 0, 0), Vector3::UnitX()), InputError);
+  EXPECT_THROW(pr.Add(p, p, Vector3::Zero()), PreconditionError);
+  EXPECT_THROW(pr.Add(p, Vector3(NAN, 0, 0), Vector3::UnitX()), PreconditionError);
   EXPECT_EQ(pr.positions(), 0);
-  EXPECT_THROW(AxisStartPredictor(0.0), InputError);
-  EXPECT_THROW(AxisStartPredictor(0.1, -1.0), InputError);
+  EXPECT_THROW(AxisStartPredictor(0.0), PreconditionError);
+  EXPECT_THROW(AxisStartPredictor(0.1, -1.0), PreconditionError);
 }
 
 }  // namespace

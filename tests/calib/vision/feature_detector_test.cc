@@ -181,22 +181,25 @@ TEST(FeatureDetectorTest, TheHalfSizeAdaptiveSearchEndsOnTheFullSizeOnesCorners)
   EXPECT_LT(cv::norm(coarse.feature_px - full.feature_px), 0.01);
 }
 
-TEST(FeatureDetectorTest, BadInputThrowsNamingTheField) {
+// The boards are bounded where the scenario is read and the images are the cell's frames: a
+// bad one here is a broken precondition naming the field.
+TEST(FeatureDetectorTest, BrokenPreconditionsThrowNamingTheField) {
   const cv::Mat image(480, 640, CV_8UC3, cv::Scalar(0, 0, 0));
   try {
     DetectFeaturePoint(image, BoardGeometry{5, 4, 0.02});
     FAIL() << "odd squares_x accepted";
-  } catch (const InputError& e) {
+  } catch (const PreconditionError& e) {
     EXPECT_NE(std::string(e.what()).find("squares_x = 5"), std::string::npos) << e.what();
   }
   try {
     DetectFeaturePoint(image, BoardGeometry{4, 4, -0.01});
     FAIL() << "negative square_m accepted";
-  } catch (const InputError& e) {
+  } catch (const PreconditionError& e) {
     EXPECT_NE(std::string(e.what()).find("square_m"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(DetectFeaturePoint(cv::Mat(), BoardGeometry{}), InputError);
-  EXPECT_THROW(DetectFeaturePoint(cv::Mat(10, 10, CV_32FC1), BoardGeometry{}), InputError);
+  EXPECT_THROW(DetectFeaturePoint(cv::Mat(), BoardGeometry{}), PreconditionError);
+  EXPECT_THROW(DetectFeaturePoint(cv::Mat(10, 10, CV_32FC1), BoardGeometry{}),
+               PreconditionError);
 }
 
 }  // namespace

@@ -142,9 +142,9 @@ TEST(CalibrateFromCorners, HonestViewsAreAllKept) {
     EXPECT_EQ(r.views_used, 25) << "seed " << seed;
     EXPECT_TRUE(r.skipped.empty()) << r.skipped.front();
   }
-  IntrinsicsOptions bad;
+  IntrinsicsOptions bad;  // no user sets these options: a bad one is our bug
   bad.max_view_error_ratio = 0.5;
-  EXPECT_THROW(ValidateIntrinsicsOptions(bad), InputError);
+  EXPECT_THROW(ValidateIntrinsicsOptions(bad), PreconditionError);
 }
 
 }  // namespace

@@ -151,13 +151,14 @@ TEST_F(IntrinsicsCalibrationTest, FewerViewsThanMinViewsIsReported) {
   EXPECT_EQ(r.views_used, 4) << r.reason;
 }
 
+// No user sets these options (the scenario sets only fix_all_distortion): a bad one is our bug.
 TEST(IntrinsicsOptionsTest, ValidationNamesTheField) {
   IntrinsicsOptions options;
   options.min_views = 2;
   try {
     ValidateIntrinsicsOptions(options);
-    FAIL() << "expected InputError";
-  } catch (const InputError& e) {
+    FAIL() << "expected PreconditionError";
+  } catch (const PreconditionError& e) {
     EXPECT_NE(std::string(e.what()).find("min_views"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("2"), std::string::npos) << e.what();
   }
@@ -177,7 +178,7 @@ TEST(IntrinsicsViewPosesTest, PosesAreReproducibleAndWithinTheWristRange) {
     EXPECT_LE(d.head<3>().cwiseAbs().maxCoeff(), DegToRad(5.0) + 1e-12);
     EXPECT_LE(d.tail<3>().cwiseAbs().maxCoeff(), DegToRad(20.0) + 1e-12);
   }
-  EXPECT_THROW(IntrinsicsViewPoses(model, DemoPose(), 0, 5), InputError);
+  EXPECT_THROW(IntrinsicsViewPoses(model, DemoPose(), 0, 5), PreconditionError);
 }
 
 }  // namespace

@@ -233,9 +233,9 @@ TEST_F(VisualServoTest, TheAlignedPosesJointsAreTheMeanOfTheEncoderReadings) {
     }
     EXPECT_GE(cell.reads, readings);
   }
-  ServoOptions bad;
+  ServoOptions bad;  // the scenario's encoder_readings is bounded where it is read: our bug
   bad.encoder_readings = 0;
-  EXPECT_THROW(ValidateServoOptions(bad), InputError);
+  EXPECT_THROW(ValidateServoOptions(bad), PreconditionError);
 }
 
 TEST_F(VisualServoTest, OneIterationIsNotEnough) {
@@ -319,6 +319,8 @@ TEST_F(VisualServoTest, StartOutsideTheLimitsIsRefused) {
   EXPECT_EQ(r.frames, 0);
 }
 
+// The gain stays the user's (calibration.servo.gain admits 2, no stable gain): InputError.
+// The other fields are bounded where the scenario is read or set by no user: our bug.
 TEST_F(VisualServoTest, BadOptionsThrowNamingTheField) {
   ServoOptions o;
   o.gain = 0.0;
@@ -330,10 +332,10 @@ TEST_F(VisualServoTest, BadOptionsThrowNamingTheField) {
   }
   o = ServoOptions{};
   o.tolerance_px = -1;
-  EXPECT_THROW(ValidateServoOptions(o), InputError);
+  EXPECT_THROW(ValidateServoOptions(o), PreconditionError);
   o = ServoOptions{};
   o.max_iterations = -1;
-  EXPECT_THROW(ValidateServoOptions(o), InputError);
+  EXPECT_THROW(ValidateServoOptions(o), PreconditionError);
 }
 
 }  // namespace
