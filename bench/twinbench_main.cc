@@ -36,6 +36,7 @@
 #include "calib/kinematics/inverse_kinematics.h"
 #include "calib/model/parameters.h"
 #include "sim/world/mujoco_handles.h"
+#include "twinbench_version.h"  // generated: bench/CMakeLists.txt, twinbench_version
 
 namespace twin {
 namespace {
@@ -556,6 +557,8 @@ int main(int argc, char** argv) {
   mallopt(M_MMAP_THRESHOLD, 64 << 20);
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
   CLI::App app{"twinbench: digital-twin test bench for dual-robot kinematic calibration"};
+  app.set_version_flag("--version", std::string("twinbench ") + TWINBENCH_VERSION + " (" +
+                                        TWINBENCH_GIT_DESCRIBE + ")");
   app.require_subcommand(1);
 
   // The verbs and their options, in the order of --help.

@@ -28,6 +28,24 @@ TEST(TwinbenchCli, HelpListsTheSubcommands) {
   }
 }
 
+// The version line carries CMake's project version (passed to this test by CMake, not read from
+// the binary) and `git describe` of the tree: an abbreviated commit, maybe tagged and -dirty,
+// or "unknown" when built outside a git checkout.
+TEST(TwinbenchCli, VersionPrintsTheProjectVersionAndTheCommit) {
+  const CliRun r = Twinbench("--version");
+  EXPECT_EQ(r.code, 0);
+  const std::string expected_start = std::string("twinbench ") + TWINBENCH_PROJECT_VERSION + " (";
+  EXPECT_EQ(r.output.rfind(expected_start, 0), 0u) << r.output;
+  const std::size_t open = r.output.find('('), close = r.output.find(')');
+  ASSERT_NE(close, std::string::npos) << r.output;
+  const std::string describe = r.output.substr(open + 1, close - open - 1);
+  EXPECT_TRUE(describe == "unknown" ||
+              describe.find_first_not_of("0123456789abcdefghijklmnopqrstuvwxyz.-_") ==
+                  std::string::npos)
+      << describe;
+  EXPECT_GE(describe.size(), 7u) << describe;  // git's shortest abbreviation is 7 hex digits
+}
+
 TEST(TwinbenchCli, UnknownSubcommandExitsTwo) {
   EXPECT_EQ(Twinbench("frobnicate").code, 2);
 }
