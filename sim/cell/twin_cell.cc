@@ -92,7 +92,13 @@ struct TwinCell::Impl {
   std::array<KinematicModel, kNumRobots> models;
   std::array<std::vector<JointDrive>, kNumRobots> drives;
   std::array<MountCompliance, kNumRobots> mounts;  // target brackets (mount deflection)
-  std::vector<int> mount_dofs;                     // their slide joints' dof addresses
+  std::array<StructureCompliance, kNumRobots> structures;  // bearings and bases on springs
+  std::vector<int> passive_dofs;   // dof addresses of the mounts' and supports' spring joints
+  // Axis wobble: per robot, whether an effect tilts its axes, and each link body's id and its
+  // orientation in the parent as compiled (the twin turns it by the tilt as the joint moves).
+  std::array<bool, kNumRobots> tilts_axes{false, false};
+  std::array<std::vector<int>, kNumRobots> link_body;
+  std::array<std::vector<Eigen::Quaterniond>, kNumRobots> link_quat0;
   std::string mjcf;
   MjModelPtr m;
   MjDataPtr d;
@@ -147,7 +153,8 @@ struct TwinCell::Impl {
         link.dh.d *= 1.0 + kProbe;
         link.dh.a *= 1.0 + kProbe;
       }
-      const MjModelPtr p = LoadMjcfFromString(WriteTwinMjcf(spec, probe_models, drives, mounts));
+      const MjModelPtr p =
+          LoadMjcfFromString(WriteTwinMjcf(spec, probe_models, drives, mounts, structures));
       if (p->nbody != m->nbody || p->ngeom != m->ngeom || p->nsite != m->nsite ||
           p->ncam != m->ncam || p->njnt != m->njnt) {
         throw std::logic_error("thermal drift: the probe world differs in structure");
@@ -186,6 +193,40 @@ struct TwinCell::Impl {
     std::array<double, kNumRobots> scale;
     for (int k = 0; k < kNumRobots; ++k) scale[k] = LengthScale(k, d->time);
     for (const DriftEntry& e : drift) *e.value = e.base + e.slope * (scale[e.robot] - 1.0);
+  }
+
+  // Turns the link bodies of robots whose axes wobble by their tilts at the current link-side
+  // angles (Effect::AddAxisTilt): the rotation vector (tx, ty, 0) in the parent's DH frame
+  // L(i-1) = U_i RotZ(-theta_offset_i), written into body i's orientation in its parent.
+  void ApplyWobble() {
+    for (int k = 0; k < kNumRobots; ++k) {
+      if (!tilts_axes[k]) continue;
+      std::vector<Eigen::Vector2d> tilt(Joints(k), Eigen::Vector2d::Zero());
+      const JointVector q = LinkAngles(k);
+      for (const auto& e : effects) e->AddAxisTilt(k, q, &tilt);
+      for (int i = 0; i < Joints(k); ++i) {
+        const Vector3 v_L(tilt[i].x(), tilt[i].y(), 0.0);
+        const Vector3 v_U =
+            Eigen::AngleAxisd(-models[k].links[i].dh.theta_offset, Vector3::UnitZ()) * v_L;
+        const double angle = v_U.norm();
+        const Eigen::Quaterniond turn =
+            angle > 0.0 ? Eigen::Quaterniond(Eigen::AngleAxisd(angle, v_U / angle))
+                        : Eigen::Quaterniond::Identity();
+        const Eigen::Quaterniond q_new = link_quat0[k][i] * turn;
+        mjtNum* quat = m->body_quat + 4 * link_body[k][i];
+        quat[0] = q_new.w();
+        quat[1] = q_new.x();
+        quat[2] = q_new.y();
+        quat[3] = q_new.z();
+      }
+    }
+  }
+
+  // The model changes that follow the twin's clock and pose (drift, wobble): call before
+  // stepping or mj_forward, after setting qpos.
+  void ApplyModelMotion() {
+    ApplyDrift();
+    ApplyWobble();
   }
 
   // Link-side joint angles of robot k now (MuJoCo's qpos).
@@ -267,9 +308,9 @@ struct TwinCell::Impl {
       if (robot >= 0 && k != robot) continue;
       for (int i = 0; i < Joints(k); ++i) speed = std::max(speed, std::abs(d->qvel[dadr[k][i]]));
     }
-    // A compliant target bracket must come to rest too (it moves with either robot's motion
-    // only through its own robot, but it is cheap to always include).
-    for (int dof : mount_dofs) speed = std::max(speed, std::abs(d->qvel[dof]));
+    // Compliant target brackets, bearings and bases must come to rest too (each moves with
+    // its own robot's motion only, but it is cheap to always include them).
+    for (int dof : passive_dofs) speed = std::max(speed, std::abs(d->qvel[dof]));
     return speed;
   }
 
@@ -317,7 +358,7 @@ struct TwinCell::Impl {
         ramp_done = t >= ramp_time;
         motor[robot] = ramp_done ? target : JointVector(start + (t / ramp_time) * delta);
       }
-      ApplyDrift();
+      ApplyModelMotion();
       mj_step1(m.get(), d.get());
       if (const mjContact* c = Collision(tolerated)) {
         result.status = MoveStatus::kCollision;
@@ -337,7 +378,7 @@ struct TwinCell::Impl {
       calm = ramp_done && MaxSpeed(robot) < ph.settle_speed ? calm + 1 : 0;
       if (calm >= ph.settle_steps) break;
     }
-    ApplyDrift();
+    ApplyModelMotion();
     mj_forward(m.get(), d.get());  // kinematics, cameras and contacts of the final state
     if (result.status == MoveStatus::kSettled) {
       if (const mjContact* c = Collision(tolerated)) {
@@ -377,7 +418,7 @@ struct TwinCell::Impl {
   void Build() {
     hand_renderer.reset();
     overview_renderer.reset();
-    mjcf = WriteTwinMjcf(spec, models, drives, mounts);
+    mjcf = WriteTwinMjcf(spec, models, drives, mounts, structures);
     d.reset();
     m = LoadMjcfFromString(mjcf);
     d.reset(mj_makeData(m.get()));
@@ -398,11 +439,27 @@ struct TwinCell::Impl {
       for (int i = 0; i <= n + 1; ++i) site_L[k][i] = Id(mjOBJ_SITE, p + "L" + std::to_string(i));
       site_tip[k] = Id(mjOBJ_SITE, p + "tip");
     }
-    mount_dofs.clear();
+    passive_dofs.clear();
     for (int k = 0; k < kNumRobots; ++k) {
-      for (const char* axis : {"x", "y", "z"}) {
-        const int j = mj_name2id(m.get(), mjOBJ_JOINT, (Prefix(k) + "mount_" + axis).c_str());
-        if (j >= 0) mount_dofs.push_back(m->jnt_dofadr[j]);
+      std::vector<std::string> names;
+      for (const char* axis : {"x", "y", "z"}) names.push_back(std::string("mount_") + axis);
+      for (const char* axis : {"x", "y"}) {
+        names.push_back(std::string("base_tilt_") + axis);
+        for (int i = 0; i < Joints(k); ++i) {
+          names.push_back("j" + std::to_string(i + 1) + "_tilt_" + axis);
+        }
+      }
+      for (const std::string& name : names) {
+        const int j = mj_name2id(m.get(), mjOBJ_JOINT, (Prefix(k) + name).c_str());
+        if (j >= 0) passive_dofs.push_back(m->jnt_dofadr[j]);
+      }
+      link_body[k].assign(Joints(k), -1);
+      link_quat0[k].assign(Joints(k), Eigen::Quaterniond::Identity());
+      for (int i = 0; i < Joints(k); ++i) {
+        const int b = Id(mjOBJ_BODY, Prefix(k) + "link" + std::to_string(i + 1));
+        const mjtNum* quat = m->body_quat + 4 * b;
+        link_body[k][i] = b;
+        link_quat0[k][i] = Eigen::Quaterniond(quat[0], quat[1], quat[2], quat[3]);
       }
     }
     camera = Id(mjOBJ_CAMERA, kHandCameraName);
@@ -438,6 +495,9 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
     s.drives[k].assign(s.models[k].num_joints(), {spec.physics.stiffness, true});
     for (const auto& e : s.effects) e->ApplyToDrive(k, &s.drives[k]);
     for (const auto& e : s.effects) e->ApplyToMount(k, &s.mounts[k]);
+    s.structures[k].joint_tilt_stiffness.assign(s.models[k].num_joints(), 0.0);
+    for (const auto& e : s.effects) e->ApplyToStructure(k, &s.structures[k]);
+    for (const auto& e : s.effects) s.tilts_axes[k] = s.tilts_axes[k] || e->TiltsAxes(k);
   }
   if (spec.camera.distortion.Any()) {
     try {
@@ -468,6 +528,7 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
     const JointVector link = s.motor[k] + s.TransmissionOffset(k);
     for (int i = 0; i < s.Joints(k); ++i) s.d->qpos[s.qadr[k][i]] = link(i);
   }
+  s.ApplyModelMotion();
   mj_forward(s.m.get(), s.d.get());
   s.CheckServoStability(where);
   if (const mjContact* c = s.Collision({})) {
@@ -532,10 +593,10 @@ MoveResult TwinCell::RemountTools(const std::function<void()>& change, const std
     change();
     s.Build();
     s.d->time = time;
-    s.ApplyDrift();
     for (int k = 0; k < kNumRobots; ++k) {
       for (int i = 0; i < s.Joints(k); ++i) s.d->qpos[s.qadr[k][i]] = link[k](i);
     }
+    s.ApplyModelMotion();
     mj_forward(s.m.get(), s.d.get());
   };
   rebuild();

@@ -11,6 +11,9 @@ double Effect::LengthScaleAt(int, double) const { return 1.0; }
 double Effect::TemperatureDeltaAt(int, double) const { return 0.0; }
 void Effect::ApplyToDrive(int, std::vector<JointDrive>*) const {}
 void Effect::ApplyToMount(int, MountCompliance*) const {}
+void Effect::ApplyToStructure(int, StructureCompliance*) const {}
+bool Effect::TiltsAxes(int) const { return false; }
+void Effect::AddAxisTilt(int, const JointVector&, std::vector<Eigen::Vector2d>*) const {}
 void Effect::ApplyToTransmission(int, const JointVector&, const JointVector&,
                                  JointVector*) const {}
 void Effect::ApplyToEncoder(int, JointVector*, std::mt19937_64*) const {}

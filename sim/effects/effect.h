@@ -29,6 +29,18 @@ struct MountCompliance {
   bool any() const { return deflection_F.cwiseAbs().maxCoeff() > 0.0; }
 };
 
+/// Elastic supports of a robot's structure, simulated physically as passive hinges with
+/// springs that gravity bends. Zero stiffness: rigid (no hinge).
+struct StructureCompliance {
+  /// Per joint: tilting stiffness of its bearing about the two axes perpendicular to its axis
+  /// (x and y of the joint's body frame, fixed in the parent link), at the joint's anchor
+  /// [N m/rad]; empty or 0: rigid.
+  std::vector<double> joint_tilt_stiffness;
+  /// Tilting stiffness of the base's mounting about the base frame's x and y axes, at the
+  /// base origin [N m/rad]; 0: rigid.
+  double base_tilt_stiffness = 0.0;
+};
+
 class Effect {
  public:
   virtual ~Effect() = default;
@@ -50,6 +62,15 @@ class Effect {
   virtual void ApplyToMount(int robot, MountCompliance* mount) const;
   /// Drive settings of robot `robot`'s joints.
   virtual void ApplyToDrive(int robot, std::vector<JointDrive>* drives) const;
+  /// Elastic supports of robot `robot`'s structure (joint bearings, base).
+  virtual void ApplyToStructure(int robot, StructureCompliance* structure) const;
+  /// True if this effect tilts robot `robot`'s joint axes with their angles (AddAxisTilt).
+  virtual bool TiltsAxes(int robot) const;
+  /// Adds to `tilt` the kinematic tilt of each joint axis of robot `robot` at link-side angles
+  /// `q_link` [rad]: the x and y components of the small rotation, in the parent's DH frame
+  /// L(i-1) of joint i and about its origin, applied before the joint's own rotation [rad].
+  virtual void AddAxisTilt(int robot, const JointVector& q_link,
+                           std::vector<Eigen::Vector2d>* tilt) const;
   /// Adds to `link_offset` the link-side minus motor-side angle of each joint for motor angles
   /// `motor`, approached moving in `direction` (+1, -1 per joint; 0 if never moved) [rad].
   virtual void ApplyToTransmission(int robot, const JointVector& motor,

@@ -29,6 +29,12 @@ std::unique_ptr<Effect> MakeEncoderQuantization(const EffectSpec& spec);
 std::unique_ptr<Effect> MakeEncoderNoise(const EffectSpec& spec);
 /// "mount_deflection": the target's bracket deflects under gravity (spring-mounted target).
 std::unique_ptr<Effect> MakeMountDeflection(const EffectSpec& spec);
+/// "lateral_compliance": a joint's axis tilts under the bending moment it carries (springs).
+std::unique_ptr<Effect> MakeLateralCompliance(const EffectSpec& spec);
+/// "base_compliance": the whole arm tilts on its base under the gravity moment (springs).
+std::unique_ptr<Effect> MakeBaseCompliance(const EffectSpec& spec);
+/// "axis_wobble": a joint's axis tilts periodically with its own angle (bearing runout).
+std::unique_ptr<Effect> MakeAxisWobble(const EffectSpec& spec);
 /// "image_noise": Gaussian grey-level noise on camera images.
 std::unique_ptr<Effect> MakeImageNoise(const EffectSpec& spec);
 

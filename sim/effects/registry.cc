@@ -26,6 +26,9 @@ constexpr Registration kRegistry[] = {
     {"encoder_noise", effects::MakeEncoderNoise},
     {"image_noise", effects::MakeImageNoise},
     {"mount_deflection", effects::MakeMountDeflection},
+    {"lateral_compliance", effects::MakeLateralCompliance},
+    {"base_compliance", effects::MakeBaseCompliance},
+    {"axis_wobble", effects::MakeAxisWobble},
 };
 
 // Checks the fields every effect shares: robot -1, 0..kNumRobots-1; joint -1, 0..kMaxJoints-1

@@ -123,12 +123,11 @@ struct Part {
   Matrix3 I;       // about com, axes of B [kg m^2]
 };
 
-// Diagonal of the joint-space inertia at the initial pose (the composite inertia outboard of
-// each joint about its axis; camera and board as point masses) plus armature [kg m^2].
-std::vector<double> EffectiveInertia(const TwinSpec& spec, int robot, const KinematicModel& m) {
+// The rigid parts of robot `robot` at its initial pose, in its base frame B: links, tool, and
+// camera and board as point masses.
+std::vector<Part> Parts(const TwinSpec& spec, int robot, const KinematicModel& m) {
   const int n = m.num_joints();
-  const JointVector& q = spec.robots[robot].q_initial;
-  const FrameSet f = ForwardKinematics(m, q);
+  const FrameSet f = ForwardKinematics(m, spec.robots[robot].q_initial);
   std::vector<Part> parts;
   const auto add = [&](int link, const LinkInertia& in, const Transform& X_BA) {
     parts.push_back({link, in.mass, X_BA * in.p_LiCom,
@@ -145,20 +144,51 @@ std::vector<double> EffectiveInertia(const TwinSpec& spec, int robot, const Kine
     parts.push_back({n - 1, spec.board.mass_kg, X_BF * spec.board.X_FT.translation(),
                      Matrix3::Zero()});
   }
-  std::vector<double> inertia(n);
-  for (int j = 0; j < n; ++j) {
-    const Vector3 n = f.X_BL[j].linear().col(2);
-    const Vector3 o = f.X_BL[j].translation();
-    double sum = spec.physics.armature;
-    for (const Part& p : parts) {
-      if (p.link < j) continue;
-      const Vector3 r = p.com - o;
-      const Vector3 r_perp = r - r.dot(n) * n;
-      sum += n.dot(p.I * n) + p.mass * r_perp.squaredNorm();
-    }
-    inertia[j] = sum;
+  return parts;
+}
+
+// `sum` plus the inertia of the parts on links >= `first_link` about the axis through `o` along
+// unit `n` (in B) [kg m^2].
+double InertiaAbout(const std::vector<Part>& parts, int first_link, const Vector3& o,
+                    const Vector3& n, double sum = 0.0) {
+  for (const Part& p : parts) {
+    if (p.link < first_link) continue;
+    const Vector3 r = p.com - o;
+    const Vector3 r_perp = r - r.dot(n) * n;
+    sum += n.dot(p.I * n) + p.mass * r_perp.squaredNorm();
+  }
+  return sum;
+}
+
+// Diagonal of the joint-space inertia at the initial pose (the composite inertia outboard of
+// each joint about its axis; camera and board as point masses) plus armature [kg m^2].
+std::vector<double> EffectiveInertia(const TwinSpec& spec, int robot, const KinematicModel& m) {
+  const std::vector<Part> parts = Parts(spec, robot, m);
+  const FrameSet f = ForwardKinematics(m, spec.robots[robot].q_initial);
+  std::vector<double> inertia(m.num_joints());
+  for (int j = 0; j < m.num_joints(); ++j) {
+    inertia[j] = InertiaAbout(parts, j, f.X_BL[j].translation(), f.X_BL[j].linear().col(2),
+                              spec.physics.armature);
   }
   return inertia;
+}
+
+// Two spring hinges "<name>_x", "<name>_y" at the body origin about the body's x and y axes,
+// of stiffness k [N m/rad], for a body whose outboard inertia about them is about `inertia`
+// [kg m^2] (at the initial pose): armature keeps omega * dt <= kMaxTiltOmegaDt whatever the
+// pose (the stiffness is explicit in MuJoCo's Euler step), damping makes them near critical.
+std::string TiltHinges(const std::string& name, double k, double inertia, double dt) {
+  if (!(k > 0.0)) return "";
+  const double armature = k * dt * dt / (kMaxTiltOmegaDt * kMaxTiltOmegaDt);
+  const double damping = CriticalDamping(k, inertia + armature);
+  std::string x;
+  for (const char* axis : {"x", "y"}) {
+    x += "<joint name=\"" + name + "_" + axis + "\" type=\"hinge\" pos=\"0 0 0\" axis=\"" +
+         (axis[0] == 'x' ? "1 0 0" : "0 1 0") + "\" limited=\"false\" stiffness=\"" + Num(k) +
+         "\" springref=\"0\" damping=\"" + Num(damping) + "\" armature=\"" + Num(armature) +
+         "\"/>\n";
+  }
+  return x;
 }
 
 std::string Assets() {
@@ -285,15 +315,30 @@ std::string FlangeBodies(const TwinSpec& spec, const Intrinsics& canvas,
   return x.str();
 }
 
+// Outboard inertia about the x and y axes of frame X_BA through its origin, averaged (the
+// damping estimate of a pair of tilt hinges) [kg m^2].
+double TiltInertia(const std::vector<Part>& parts, int first_link, const Transform& X_BA) {
+  return 0.5 * (InertiaAbout(parts, first_link, X_BA.translation(), X_BA.linear().col(0)) +
+                InertiaAbout(parts, first_link, X_BA.translation(), X_BA.linear().col(1)));
+}
+
 std::string Robot(const TwinSpec& spec, const Intrinsics& canvas, const KinematicModel& m,
                   const std::vector<JointDrive>& drives, const MountCompliance& mount,
-                  int robot) {
+                  const StructureCompliance& structure, int robot) {
   const std::string p = Prefix(robot);
   const PhysicsSpec& phys = spec.physics;
   const std::vector<double> inertia = EffectiveInertia(spec, robot, m);
+  const std::vector<Part> parts = Parts(spec, robot, m);
+  const FrameSet f0 = ForwardKinematics(m, spec.robots[robot].q_initial);
   const int n = m.num_joints();
+  const auto tilt_stiffness = [&](int i) {
+    const std::vector<double>& k = structure.joint_tilt_stiffness;
+    return i < static_cast<int>(k.size()) ? k[i] : 0.0;
+  };
   std::ostringstream x;
   x << "<body name=\"" << p << "base\" " << PoseAttrs(spec.robots[robot].X_WB) << ">\n"
+    << TiltHinges(p + "base_tilt", structure.base_tilt_stiffness,
+                  TiltInertia(parts, 0, Transform::Identity()), phys.timestep_s)
     << "<geom name=\"" << p << "base\" type=\"cylinder\" pos=\"0 0 " << Num(kBaseHeight / 2)
     << "\" size=\"" << Num(kBaseRadius) << " " << Num(kBaseHeight / 2) << "\" material=\"base\" "
     << RobotContact(robot) << "/>\n"
@@ -303,6 +348,9 @@ std::string Robot(const TwinSpec& spec, const Intrinsics& canvas, const Kinemati
     const Link& link = m.links[i];
     const Transform M = LinkM(link.dh);
     x << "<body name=\"" << p << "link" << i + 1 << "\" " << PoseAttrs(X_parent_child) << ">\n"
+      << TiltHinges(p + "j" + std::to_string(i + 1) + "_tilt", tilt_stiffness(i),
+                    TiltInertia(parts, i, f0.X_BL[i] * RotZ(link.dh.theta_offset)),
+                    phys.timestep_s)
       << "<joint name=\"" << p << "j" << i + 1 << "\" type=\"hinge\" pos=\"0 0 0\" axis=\"0 0 1\""
       << " limited=\"true\" range=\"" << Num(link.limits.lower) << " " << Num(link.limits.upper)
       << "\" armature=\"" << Num(phys.armature) << "\" damping=\""
@@ -329,7 +377,8 @@ double CriticalDamping(double kp, double inertia) { return 2.0 * std::sqrt(kp * 
 
 std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel, 2>& true_models,
                           const std::array<std::vector<JointDrive>, 2>& drives,
-                          const std::array<MountCompliance, 2>& mounts) {
+                          const std::array<MountCompliance, 2>& mounts,
+                          const std::array<StructureCompliance, 2>& structures) {
   const Intrinsics canvas =
       DistortionMapper(spec.camera.intrinsics, spec.camera.distortion).canvas();
   const Vector3 mid =
@@ -369,7 +418,7 @@ std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel,
     << " " << Num(mid.y()) << " 4\" dir=\"-0.4 -0.5 -0.6\" diffuse=\"0.25 0.25 0.25\""
     << " specular=\"0 0 0\"/>\n";
   for (int k = 0; k < kNumRobots; ++k) {
-    x << Robot(spec, canvas, true_models[k], drives[k], mounts[k], k);
+    x << Robot(spec, canvas, true_models[k], drives[k], mounts[k], structures[k], k);
   }
   x << "</worldbody>\n<contact>\n";
   for (int k = 0; k < kNumRobots; ++k) {

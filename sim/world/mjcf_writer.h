@@ -47,13 +47,22 @@ double CriticalDamping(double kp, double inertia);
 /// The whole cell as MJCF text. `true_models` replace spec.robots[k].model (they carry the
 /// geometry effects); `drives` give each joint's position-actuator gain kp [N m/rad]; `mounts`
 /// the compliance of each robot's target bracket: a compliant board hangs on three slide
-/// joints "robot<k>_mount_x/y/z" along the flange axes, springs of stiffness m g / d.
+/// joints "robot<k>_mount_x/y/z" along the flange axes, springs of stiffness m g / d;
+/// `structures` the elastic supports of each robot: a compliant joint i's body hangs on two
+/// spring hinges "robot<k>_j<i>_tilt_x/y" about its body frame's x and y axes, before the joint
+/// (so fixed in the parent), a compliant base on "robot<k>_base_tilt_x/y" about the base frame's
+/// x and y axes at its origin.
 std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel, 2>& true_models,
                           const std::array<std::vector<JointDrive>, 2>& drives,
-                          const std::array<MountCompliance, 2>& mounts = {});
+                          const std::array<MountCompliance, 2>& mounts = {},
+                          const std::array<StructureCompliance, 2>& structures = {});
 
 /// Largest omega * timestep of a mount's spring (armature is added to stay below it): the
 /// explicit stiffness step of MuJoCo's Euler integrator is well inside its stability limit.
 constexpr double kMaxMountOmegaDt = 1.0;
+
+/// Largest omega * timestep of a tilt hinge's spring on its armature alone (the bodies'
+/// inertia only lowers it), for the same reason.
+constexpr double kMaxTiltOmegaDt = 1.0;
 
 }  // namespace twin

@@ -69,6 +69,10 @@ std::map<std::string, EffectSpec> ValidSpecs() {
       {"encoder_noise", Spec("encoder_noise", {{"sigma_deg", 0.001}}, 0)},
       {"image_noise", Spec("image_noise", {{"sigma_levels", 2.0}})},
       {"mount_deflection", Spec("mount_deflection", {{"deflection_x_mm", 0.04}}, 1)},
+      {"lateral_compliance", Spec("lateral_compliance", {{"stiffness_Nm_per_rad", 2e5}}, 1, 1)},
+      {"base_compliance", Spec("base_compliance", {}, 1)},
+      {"axis_wobble",
+       Spec("axis_wobble", {{"amplitude_rad", 5e-5}, {"order", 3}, {"phase_rad", 0.2}}, 1, 0)},
   };
 }
 
@@ -141,6 +145,108 @@ TEST(EffectRegistry, OutOfRangeValuesAreNamed) {
   ExpectInputError(Spec("geometry_errors", {{"sigma_angle_deg", 0.1}}, 0, 2),
                    {"geometry_errors", "joint = 2", "expected -1"});
   ExpectInputError(Spec("image_noise", {{"sigma_levels", 2.0}}, 0), {"image_noise", "robot = 0"});
+}
+
+// The three structural effects (issue 39): each bad key named with its value and range.
+TEST(EffectRegistry, StructuralEffectsRefuseBadParametersNamingTheKey) {
+  ExpectInputError(Spec("lateral_compliance", {{"stiffness_Nm_per_rad", 10.0}}, 1, 1),
+                   {"lateral_compliance", "stiffness_Nm_per_rad = 10", "[1000, 1e+10]"});
+  ExpectInputError(Spec("lateral_compliance", {{"stiffness_Nm_per_rad", std::nan("")}}, 1, 1),
+                   {"stiffness_Nm_per_rad = nan"});
+  ExpectInputError(Spec("lateral_compliance", {{"stiffnes_Nm_per_rad", 2e5}}, 1, 1),
+                   {"unknown parameter \"stiffnes_Nm_per_rad\"", "allowed: stiffness_Nm_per_rad"});
+  ExpectInputError(Spec("base_compliance", {{"stiffness_Nm_per_rad", -1e6}}, 1),
+                   {"base_compliance", "stiffness_Nm_per_rad = -1000000"});
+  ExpectInputError(Spec("base_compliance", {}, 1, 2),
+                   {"base_compliance", "joint = 2", "expected -1"});
+  ExpectInputError(Spec("axis_wobble", {{"amplitude_rad", 0.0}}, 1, 0),
+                   {"axis_wobble", "amplitude_rad = 0", "> 0"});
+  ExpectInputError(Spec("axis_wobble", {{"amplitude_rad", 0.02}}, 1, 0),
+                   {"amplitude_rad = 0.02", "<= 0.01"});
+  ExpectInputError(Spec("axis_wobble", {{"order", 0}}, 1, 0), {"order = 0", "whole number"});
+  ExpectInputError(Spec("axis_wobble", {{"order", 2.5}}, 1, 0), {"order = 2.5", "whole number"});
+  ExpectInputError(Spec("axis_wobble", {{"phase_rad", 7.0}}, 1, 0), {"phase_rad = 7"});
+  ExpectInputError(Spec("axis_wobble", {{"phase_deg", 10.0}}, 1, 0),
+                   {"unknown parameter \"phase_deg\"", "amplitude_rad, order, phase_rad"});
+}
+
+// A 3rd-order gear error (issue 39): the transmission error takes harmonic 3 and follows
+// A sin(3 q + phase).
+TEST(TransmissionError, TakesAThirdOrderGearError) {
+  const auto effect = MakeEffect(Spec(
+      "transmission_error", {{"amplitude_deg", 0.01}, {"harmonic", 3}, {"phase_deg", 20}}, 0, 1));
+  const JointVector motor = (JointVector(6) << 0.0, 0.7, 0.0, 0.0, 0.0, 0.0).finished();
+  JointVector offset = JointVector::Zero(6);
+  effect->ApplyToTransmission(0, motor, JointVector::Zero(6), &offset);
+  const double A = 0.01 * kPi / 180.0, phase = 20.0 * kPi / 180.0;
+  // 1e-15 rad: the same double arithmetic up to rounding of the degree conversion.
+  EXPECT_NEAR(offset(1), A * std::sin(3.0 * 0.7 + phase), 1e-15);
+  EXPECT_EQ(offset(0), 0.0);
+}
+
+TEST(LateralCompliance, SetsTheTiltStiffnessOfOnlyTheNamedRobotAndJoint) {
+  const auto effect =
+      MakeEffect(Spec("lateral_compliance", {{"stiffness_Nm_per_rad", 3e5}}, 1, 2));
+  StructureCompliance s0, s1;
+  s0.joint_tilt_stiffness.assign(6, 0.0);
+  s1.joint_tilt_stiffness.assign(6, 0.0);
+  effect->ApplyToStructure(0, &s0);
+  effect->ApplyToStructure(1, &s1);
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_EQ(s0.joint_tilt_stiffness[j], 0.0) << j;
+    EXPECT_EQ(s1.joint_tilt_stiffness[j], j == 2 ? 3e5 : 0.0) << j;  // copied values: exact
+  }
+  EXPECT_EQ(s1.base_tilt_stiffness, 0.0);
+  // The documented default.
+  StructureCompliance d;
+  d.joint_tilt_stiffness.assign(6, 0.0);
+  MakeEffect(Spec("lateral_compliance", {}, 0, 1))->ApplyToStructure(0, &d);
+  EXPECT_EQ(d.joint_tilt_stiffness[1], 2e5);
+}
+
+TEST(BaseCompliance, SetsTheBaseStiffnessOfOnlyTheNamedRobot) {
+  const auto effect = MakeEffect(Spec("base_compliance", {{"stiffness_Nm_per_rad", 4e6}}, 0));
+  StructureCompliance s0, s1;
+  effect->ApplyToStructure(0, &s0);
+  effect->ApplyToStructure(1, &s1);
+  EXPECT_EQ(s0.base_tilt_stiffness, 4e6);
+  EXPECT_EQ(s1.base_tilt_stiffness, 0.0);
+  EXPECT_TRUE(s0.joint_tilt_stiffness.empty());
+}
+
+TEST(AxisWobble, TiltCounterRotatesWithItsOrderOnOnlyTheNamedJoint) {
+  const double A = 4e-5, h = 2, phase = 0.3;
+  const auto effect = MakeEffect(
+      Spec("axis_wobble", {{"amplitude_rad", A}, {"order", h}, {"phase_rad", phase}}, 1, 0));
+  EXPECT_TRUE(effect->TiltsAxes(1));
+  EXPECT_FALSE(effect->TiltsAxes(0));
+  for (double q1 : {-1.2, 0.0, 0.5, 2.0}) {
+    JointVector q = JointVector::Constant(6, 0.4);
+    q(0) = q1;
+    std::vector<Eigen::Vector2d> tilt(6, Eigen::Vector2d::Zero()), tilt0 = tilt;
+    effect->AddAxisTilt(1, q, &tilt);
+    effect->AddAxisTilt(0, q, &tilt0);
+    // 1e-18 rad: the documented formula in the same double arithmetic, against 4e-5 rad.
+    EXPECT_NEAR(tilt[0].x(), A * std::sin(h * q1 + phase), 1e-18) << q1;
+    EXPECT_NEAR(tilt[0].y(), A * std::cos(h * q1 + phase), 1e-18) << q1;
+    EXPECT_EQ(tilt[0].norm() > 0.9 * A, true);
+    for (int j = 1; j < 6; ++j) EXPECT_EQ(tilt[j].norm(), 0.0) << j;
+    for (int j = 0; j < 6; ++j) EXPECT_EQ(tilt0[j].norm(), 0.0) << j;
+  }
+  // The direction of the tilt in the parent turns by -h times the joint's rotation: a quarter
+  // turn of the tilt's angle for dq = pi / (2 h), clockwise.
+  JointVector qa = JointVector::Zero(6), qb = qa;
+  qb(0) = kPi / (2 * h);
+  std::vector<Eigen::Vector2d> ta(6, Eigen::Vector2d::Zero()), tb = ta;
+  effect->AddAxisTilt(1, qa, &ta);
+  effect->AddAxisTilt(1, qb, &tb);
+  const double turn = std::atan2(ta[0].x() * tb[0].y() - ta[0].y() * tb[0].x(), ta[0].dot(tb[0]));
+  EXPECT_NEAR(turn, -kPi / 2, 1e-12);  // rounding of atan2 on unit-scale ratios
+  // Defaults: 5e-5 rad, order 2, phase 0.
+  std::vector<Eigen::Vector2d> td(6, Eigen::Vector2d::Zero());
+  MakeEffect(Spec("axis_wobble", {}, 0, 3))->AddAxisTilt(0, qb, &td);
+  EXPECT_NEAR(td[3].x(), 5e-5 * std::sin(2 * qb(3)), 1e-18);
+  EXPECT_NEAR(td[3].y(), 5e-5 * std::cos(2 * qb(3)), 1e-18);
 }
 
 TEST(TransmissionError, MatchesItsFormulaAtSeveralAngles) {
@@ -389,6 +495,15 @@ TEST(Effect, HooksAnEffectDoesNotUseChangeNothing) {
   std::vector<JointDrive> drives(6);
   backlash->ApplyToDrive(0, &drives);
   EXPECT_EQ(drives[0].stiffness, 0.0);
+  StructureCompliance structure;
+  structure.joint_tilt_stiffness.assign(6, 0.0);
+  backlash->ApplyToStructure(0, &structure);
+  EXPECT_EQ(structure.base_tilt_stiffness, 0.0);
+  EXPECT_EQ(structure.joint_tilt_stiffness, std::vector<double>(6, 0.0));
+  EXPECT_FALSE(backlash->TiltsAxes(0));
+  std::vector<Eigen::Vector2d> tilt(6, Eigen::Vector2d::Zero());
+  backlash->AddAxisTilt(0, JointVector::Constant(6, 0.5), &tilt);
+  EXPECT_EQ(tilt[0].norm(), 0.0);
   const cv::Mat original(4, 4, CV_8UC3, cv::Scalar(10, 20, 30));
   cv::Mat image = original.clone();
   backlash->ApplyToImage(&image, &rng);
