@@ -13,9 +13,11 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "calib/diagnosis/session_scoring.h"
 #include "calib/identification/engine.h"
 #include "calib/measurements/tracker_set.h"
 
@@ -26,6 +28,9 @@ struct TrackerCalibrationOptions {
   std::uint64_t seed = 1;          ///< of the random split
   IdentificationOptions engine;    ///< of every identification
   TrackerSetOptions set;           ///< default sigma, told tracker pose
+  /// The halvings of the second session (the validation file): the nominal and the delivered
+  /// model are scored on it as well (session_scoring.h).
+  SessionScoringOptions session;
 };
 
 /// Distance statistics of predicted vs measured points [m].
@@ -51,6 +56,11 @@ struct TrackerCalibrationResult {
   PointErrors all_before, all_after;  ///< every point, nominal (pose + reflector) and delivered
   std::vector<HeldOutSplit> splits;   ///< random, region
   std::vector<std::string> warnings;  ///< e.g. a held-out part where the calibration is worse
+  /// With a validation file (a second session): the nominal model (its reflector offset fitted
+  /// on every point, as all_before) and the delivered model scored on it, the tracker pose
+  /// refitted on half its poses and the other half scored, over the halvings
+  /// (session_scoring.h); empty without one.
+  std::optional<SessionScore> session_nominal, session_geometric;
 };
 
 /// The parameters "before" keeps free: the reflector offset (the tool link's theta, d, a),
