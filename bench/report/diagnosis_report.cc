@@ -268,8 +268,27 @@ std::string DiagnosisHtml(const json& d) {
       bars.push_back({"+ " + s["accepted"].get<std::string>(), s["heldout_rms_after_mm"]});
     }
   }
+  const json& box = d.contains("black_box") ? d["black_box"] : json(nullptr);
+  const bool boxed = box.is_object() && box["heldout_rms_mm"].is_number();
+  if (boxed) bars.push_back({"black box (comparator)", box["heldout_rms_mm"].get<double>()});
   os << "<h3>Region-disjoint held-out RMS</h3><p>" << Esc(d["region_rule"]) << "</p>"
      << Bars(bars, "mm");
+  if (d.contains("session") && d["session"].is_object()) {
+    // The second session: the same models, the tracker pose refitted on half its poses.
+    std::vector<std::pair<std::string, double>> session{
+        {"geometric model", d["session"]["start"]["rms_mm"].get<double>()}};
+    for (const json& s : d["steps"]) {
+      if (!s["accepted"].is_null() && s["session_rms_mm"].is_number()) {
+        session.push_back({"+ " + s["accepted"].get<std::string>() +
+                               (s["session_worse"] == true ? " (WORSE)" : ""),
+                           s["session_rms_mm"].get<double>()});
+      }
+    }
+    if (boxed && box["session_rms_mm"].is_number()) {
+      session.push_back({"black box (comparator)", box["session_rms_mm"].get<double>()});
+    }
+    os << "<h3>Second session (mean over halvings)</h3>" << Bars(session, "mm");
+  }
   os << "<h3>Decision chain</h3><table><tr><th>step</th><th>candidate</th><th>tested</th>"
         "<th>held-out gain [%]</th><th>p</th><th>Holm p</th><th>size p (Wald)</th>"
         "<th>max |rho| geometry</th><th>accepted</th><th>note</th></tr>";
