@@ -86,6 +86,7 @@ DiscoveryOptions IdentifyDiscoveryOptions(const TrackerIdentifyOptions& o) {
   discovery.jobs = o.jobs;
   discovery.joint_sigma_rad = DegToRad(o.encoder_sigma_deg);
   discovery.seed = o.seed;
+  discovery.session_scoring.seed = o.seed;  // the calibration's halvings: one paired comparison
   discovery.set.source = o.measurements;
   if (!o.quiet) {
     discovery.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
@@ -100,6 +101,7 @@ TrackerCalibrationResult CalibrateTrackerFile(const TrackerIdentifyOptions& o,
   TrackerCalibrationOptions options;
   options.holdout_fraction = o.holdout_fraction;
   options.seed = o.seed;
+  options.session.seed = o.seed;  // the diagnosis's halvings too (IdentifyDiscoveryOptions)
   options.set.source = o.measurements;
   TrackerCalibrationResult r;
   try {

@@ -7,6 +7,9 @@
 //           (a workspace region the training points do not cover), or a separate file (from
 //           another session: each model's tracker pose is refitted to its points, 6 of their
 //           3 n coordinates, before they are scored).
+// With a separate file, the nominal and the delivered model are also scored on it as a second
+// session: the pose refitted on a random half of it, the other half scored, over seeded
+// halvings (calib/diagnosis/session_scoring.h).
 // A calibrated model worse than the nominal one on a held-out part is flagged (worse = true)
 // and said in the result's warnings, never averaged away. Estimator side: points and the
 // nominal model only.

@@ -152,6 +152,12 @@ TEST(RealTrackerData, MotomanSecondSessionScoresAndTheBlackBoxArePresentAndFinit
     }
     EXPECT_EQ(s["session_worse"].get<bool>(), warned) << s;
   }
+  // The calibration's geometric model and the diagnosis's starting model are the same
+  // identification of the same points, scored over the same halvings (one --seed): equal but
+  // for the solver's stopping point (1e-4 relative: a tenth of a micrometre here).
+  EXPECT_NEAR(session["geometric"]["rms_mm"].get<double>(),
+              d["session"]["start"]["rms_mm"].get<double>(),
+              1e-4 * session["geometric"]["rms_mm"].get<double>());
   EXPECT_TRUE(finite(d["black_box"]["heldout_rms_mm"])) << d["black_box"];
   EXPECT_TRUE(finite(d["black_box"]["session_rms_mm"])) << d["black_box"];
   std::printf("[ measured ] wide trained, cube as the second session: nominal %.4f, geometric "
