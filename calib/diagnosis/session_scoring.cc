@@ -30,7 +30,9 @@ std::vector<SessionHalving> SessionHalvings(const std::vector<TrackerPoint>& ses
                                  "on and 3 to score (6 or more)");
   }
   std::vector<std::vector<int>> members(poses);
-  for (std::size_t i = 0; i < session.size(); ++i) members[pose_of[i]].push_back(static_cast<int>(i));
+  for (std::size_t i = 0; i < session.size(); ++i) {
+    members[pose_of[i]].push_back(static_cast<int>(i));
+  }
   std::mt19937_64 rng(o.seed);
   std::vector<int> order(poses);
   std::vector<SessionHalving> out;
@@ -116,7 +118,8 @@ void ScoreOnSecondSession(const TrackerData& data, const RobotModel& start,
                           const DiscoveryOptions& o, DiscoveryResult* out) {
   DiscoveryResult& r = *out;
   const std::string source = o.set.source + " (second session)";
-  const std::vector<SessionHalving> halvings = SessionHalvings(o.session, o.session_scoring, source);
+  const std::vector<SessionHalving> halvings =
+      SessionHalvings(o.session, o.session_scoring, source);
   const auto score = [&](const RobotModel& model, const std::string& what) {
     const Fit fit = data.FitOn(model, {}, what + ", all data, for the second session");
     return ScoreModelOnSession(fit.result.model, o.session, halvings, source);

@@ -82,8 +82,14 @@ TEST(BlackBox, TheCrossValidationChoosesFromTheGridAndItsHeldOutErrorOnARegionFo
         std::vector<int> tr, te;
         for (int i = 0; i < X.rows(); ++i) (folds[i] == k ? te : tr).push_back(i);
         Eigen::MatrixXd Xt(tr.size(), 3), Yt(tr.size(), 3), Xe(te.size(), 3), Ye(te.size(), 3);
-        for (std::size_t a = 0; a < tr.size(); ++a) { Xt.row(a) = X.row(tr[a]); Yt.row(a) = Y.row(tr[a]); }
-        for (std::size_t a = 0; a < te.size(); ++a) { Xe.row(a) = X.row(te[a]); Ye.row(a) = Y.row(te[a]); }
+        for (std::size_t a = 0; a < tr.size(); ++a) {
+          Xt.row(a) = X.row(tr[a]);
+          Yt.row(a) = Y.row(tr[a]);
+        }
+        for (std::size_t a = 0; a < te.size(); ++a) {
+          Xe.row(a) = X.row(te[a]);
+          Ye.row(a) = Y.row(te[a]);
+        }
         s += (FitKernelRidge(Xt, Yt, l, r).Predict(Xe) - Ye).squaredNorm();
       }
       if (s < best) best = s;
