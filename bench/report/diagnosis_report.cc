@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -68,7 +69,66 @@ json CandidateJson(const CandidateScore& c, int step) {
           {"note", c.note}};
 }
 
+// An optional session score's JSON, or null.
+json OptionalSession(const std::optional<SessionScore>& s) {
+  return s ? SessionScoreJson(*s) : json(nullptr);
+}
+
+// One step's entry of steps[]; its second-session keys null without a second session.
+json StepJson(const DiscoveryStep& s) {
+  return {{"step", s.index},
+          {"heldout_rms_before_mm", 1e3 * s.heldout_rms_before_m},
+          {"heldout_rms_after_mm", 1e3 * s.heldout_rms_after_m},
+          {"candidates", s.candidates.size()},
+          {"accepted", s.accepted >= 0 ? json(s.candidates[s.accepted].label) : json(nullptr)},
+          {"session_rms_mm", s.session ? json(1e3 * s.session->rms_m) : json(nullptr)},
+          {"session_rms_sd_mm", s.session ? json(1e3 * s.session->rms_sd_m) : json(nullptr)},
+          {"session_worse", s.session ? json(s.session_worse) : json(nullptr)},
+          {"session_worse_halvings",
+           s.session ? json(s.session_worse_halvings) : json(nullptr)}};
+}
+
+// diagnosis.black_box: the comparator's scores, what it was trained on and its
+// hyperparameters; {computed: false, note} where it was not computed.
+json BlackBoxJson(const DiscoveryResult& r) {
+  const BlackBoxResult& b = r.black_box;
+  json j = {{"computed", b.computed},
+            {"note", b.note.empty() ? json(nullptr) : json(b.note)},
+            {"in_delivered_model", false},
+            {"heldout_rms_mm", nullptr},
+            {"session_rms_mm", nullptr}};
+  if (!b.computed) return j;
+  json folds = json::array();
+  for (const BlackBoxFold& f : b.folds) {
+    folds.push_back({{"fold", f.fold},
+                     {"training_points", f.training},
+                     {"scored_points", f.scored},
+                     {"length_scale", f.length_scale},
+                     {"regularisation", f.regularisation}});
+  }
+  j["model"] = "kernel ridge regression, RBF kernel";
+  j["trained_on"] = b.trained_on;
+  j["hyperparameter_rule"] = b.hyperparameter_rule;
+  j["length_scale"] = Number(b.length_scale);
+  j["regularisation"] = Number(b.regularisation);
+  j["folds"] = folds;
+  j["heldout_rms_mm"] = Number(1e3 * b.heldout_rms_m);
+  j["heldout_rms_start_mm"] = Number(1e3 * b.heldout_rms_start_m);
+  j["heldout_rms_discovered_mm"] = 1e3 * r.heldout_rms_discovered_m;
+  j["session_rms_mm"] = b.session ? json(1e3 * b.session->rms_m) : json(nullptr);
+  j["session"] = OptionalSession(b.session);
+  return j;
+}
+
 }  // namespace
+
+json SessionScoreJson(const SessionScore& s) {
+  return {{"rms_mm", 1e3 * s.rms_m},
+          {"rms_sd_mm", 1e3 * s.rms_sd_m},
+          {"rms_min_mm", 1e3 * s.rms_min_m},
+          {"rms_max_mm", 1e3 * s.rms_max_m},
+          {"halvings", s.halvings}};
+}
 
 json DiagnosisJson(const DiscoveryResult& r) {
   json j;
@@ -99,12 +159,7 @@ json DiagnosisJson(const DiscoveryResult& r) {
   j["steps"] = json::array();
   j["candidates"] = json::array();
   for (const DiscoveryStep& s : r.steps) {
-    j["steps"].push_back(
-        {{"step", s.index},
-         {"heldout_rms_before_mm", 1e3 * s.heldout_rms_before_m},
-         {"heldout_rms_after_mm", 1e3 * s.heldout_rms_after_m},
-         {"candidates", s.candidates.size()},
-         {"accepted", s.accepted >= 0 ? json(s.candidates[s.accepted].label) : json(nullptr)}});
+    j["steps"].push_back(StepJson(s));
     for (const CandidateScore& c : s.candidates) j["candidates"].push_back(CandidateJson(c, s.index));
   }
   j["effects_added"] = json::array();
@@ -128,6 +183,10 @@ json DiagnosisJson(const DiscoveryResult& r) {
                                   {"rms_mm", rms},
                                   {"count", m.count}});
   }
+  j["session"] = r.session_start ? json({{"start", SessionScoreJson(*r.session_start)},
+                                         {"discovered", OptionalSession(r.session_discovered)}})
+                                 : json(nullptr);
+  j["black_box"] = BlackBoxJson(r);
   return j;
 }
 
@@ -209,8 +268,27 @@ std::string DiagnosisHtml(const json& d) {
       bars.push_back({"+ " + s["accepted"].get<std::string>(), s["heldout_rms_after_mm"]});
     }
   }
+  const json& box = d.contains("black_box") ? d["black_box"] : json(nullptr);
+  const bool boxed = box.is_object() && box["heldout_rms_mm"].is_number();
+  if (boxed) bars.push_back({"black box (comparator)", box["heldout_rms_mm"].get<double>()});
   os << "<h3>Region-disjoint held-out RMS</h3><p>" << Esc(d["region_rule"]) << "</p>"
      << Bars(bars, "mm");
+  if (d.contains("session") && d["session"].is_object()) {
+    // The second session: the same models, the tracker pose refitted on half its poses.
+    std::vector<std::pair<std::string, double>> session{
+        {"geometric model", d["session"]["start"]["rms_mm"].get<double>()}};
+    for (const json& s : d["steps"]) {
+      if (!s["accepted"].is_null() && s["session_rms_mm"].is_number()) {
+        session.push_back({"+ " + s["accepted"].get<std::string>() +
+                               (s["session_worse"] == true ? " (WORSE)" : ""),
+                           s["session_rms_mm"].get<double>()});
+      }
+    }
+    if (boxed && box["session_rms_mm"].is_number()) {
+      session.push_back({"black box (comparator)", box["session_rms_mm"].get<double>()});
+    }
+    os << "<h3>Second session (mean over halvings)</h3>" << Bars(session, "mm");
+  }
   os << "<h3>Decision chain</h3><table><tr><th>step</th><th>candidate</th><th>tested</th>"
         "<th>held-out gain [%]</th><th>p</th><th>Holm p</th><th>size p (Wald)</th>"
         "<th>max |rho| geometry</th><th>accepted</th><th>note</th></tr>";

@@ -12,8 +12,13 @@
 namespace twin {
 
 /// {verdict, reason, noise_floor_mm, noise_floor, residual_test, heldout_rms_mm, region_rule,
-///  steps[], effects_added[], candidates[], unexplained_evidence[], residual_maps[]}.
+///  steps[], effects_added[], candidates[], unexplained_evidence[], residual_maps[], session,
+///  black_box}.
 nlohmann::json DiagnosisJson(const DiscoveryResult& r);
+
+/// A second-session score (session_scoring.h): {rms_mm (mean over the halvings), rms_sd_mm,
+/// rms_min_mm, rms_max_mm, halvings}.
+nlohmann::json SessionScoreJson(const SessionScore& s);
 
 /// An HTML fragment (a section, no page) of DiagnosisJson's output: the verdict and reason, the
 /// noise floor and residual tests, before/after bars of the region-disjoint held-out RMS, the

@@ -32,8 +32,29 @@ json FileJson(const TrackerIdentifyResult& r) {
   return j;
 }
 
+// heldout.session: the second session's scores of the nominal, the geometric and the
+// discovered model (null without --validate; discovered null with --no-diagnosis).
+json SessionJson(const TrackerCalibrationResult& r, const DiscoveryResult* diagnosis) {
+  if (!r.session_nominal || !r.session_geometric) return nullptr;
+  const SessionScore& n = *r.session_nominal;
+  json j = {{"rule", "the validation file (another session): per halving the tracker pose is "
+                     "refitted on a random half of its poses and the other half is scored; "
+                     "each model as trained on the measurements file; the same halvings for "
+                     "every model"},
+            {"points", n.points},
+            {"halvings", n.halvings},
+            {"nominal", SessionScoreJson(n)},
+            {"geometric", SessionScoreJson(*r.session_geometric)},
+            {"discovered", nullptr}};
+  if (diagnosis && diagnosis->session_discovered) {
+    j["discovered"] = SessionScoreJson(*diagnosis->session_discovered);
+  }
+  return j;
+}
+
 // The held-out splits and all points' errors before and after.
-void AddHeldOut(const TrackerCalibrationResult& r, json* report) {
+void AddHeldOut(const TrackerCalibrationResult& r, const DiscoveryResult* diagnosis,
+                json* report) {
   json& j = *report;
   for (const HeldOutSplit& s : r.splits) {
     j["heldout"][s.name] = {{"rule", s.rule},
@@ -43,6 +64,7 @@ void AddHeldOut(const TrackerCalibrationResult& r, json* report) {
                             {"training_after", PointErrorsJson(s.training_after)},
                             {"worse", s.worse}};
   }
+  j["heldout"]["session"] = SessionJson(r, diagnosis);
   j["all_points"] = {{"before", PointErrorsJson(r.all_before)},
                      {"after", PointErrorsJson(r.all_after)}};
 }
@@ -81,7 +103,7 @@ json TrackerPoseJson(const Transform& X_TB) {
 json TrackerIdentifyReportJson(const TrackerIdentifyResult& r) {
   const TrackerCalibrationResult& calibration = *r.calibration;
   json j = FileJson(r);
-  AddHeldOut(calibration, &j);
+  AddHeldOut(calibration, r.diagnosis, &j);
   AddIdentification(calibration.identified, &j);
   j["tracker_pose"] = TrackerPoseJson(calibration.X_TB);
   j["declared_terms"] = r.declared_terms;
@@ -91,6 +113,9 @@ json TrackerIdentifyReportJson(const TrackerIdentifyResult& r) {
     j["diagnosis"] = {{"verdict", nullptr}, {"skipped", "--no-diagnosis"}};
   }
   j["warnings"] = calibration.warnings;
+  if (r.diagnosis) {
+    for (const std::string& w : r.diagnosis->warnings) j["warnings"].push_back(w);
+  }
   return j;
 }
 

@@ -4,12 +4,15 @@
 //   file, model, robot, points, distinct_poses, rank_causes
 //   columns                 joints, sigma, time, temperature, ignored[] {name, min, max}
 //   heldout.<split>         rule, training_poses, before, after, training_after, worse
+//   heldout.session         rule, points, halvings, nominal, geometric, discovered (each
+//                           {rms_mm, rms_sd_mm, rms_min_mm, rms_max_mm, halvings}); null
+//                           without --validate, discovered null with --no-diagnosis
 //   all_points              before, after (fitted, not held out)
 //   parameters[]            name, unit, nominal, estimated, correction, sigma
 //   unidentifiable, condition_number, rank, sigma0, correlations[] {a, b, rho}
 //   tracker_pose            xyz_mm, rotation_deg, rotation_axis
 //   declared_terms, diagnosis (bench/report/diagnosis_report.h, or {verdict: null, skipped}),
-//   warnings
+//   warnings (the calibration's, then the diagnosis's)
 #pragma once
 
 #include <string>

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 #include "bench/io/model_loader.h"
 #include "bench/io/model_yaml.h"
@@ -85,6 +86,7 @@ DiscoveryOptions IdentifyDiscoveryOptions(const TrackerIdentifyOptions& o) {
   discovery.jobs = o.jobs;
   discovery.joint_sigma_rad = DegToRad(o.encoder_sigma_deg);
   discovery.seed = o.seed;
+  discovery.session_scoring.seed = o.seed;  // the calibration's halvings: one paired comparison
   discovery.set.source = o.measurements;
   if (!o.quiet) {
     discovery.progress = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
@@ -99,6 +101,7 @@ TrackerCalibrationResult CalibrateTrackerFile(const TrackerIdentifyOptions& o,
   TrackerCalibrationOptions options;
   options.holdout_fraction = o.holdout_fraction;
   options.seed = o.seed;
+  options.session.seed = o.seed;  // the diagnosis's halvings too (IdentifyDiscoveryOptions)
   options.set.source = o.measurements;
   TrackerCalibrationResult r;
   try {
@@ -115,8 +118,11 @@ DiscoveryResult DiscoverTrackerFileModel(const TrackerIdentifyOptions& o, const 
                                          const DiscoveryOptions& discovery) {
   DiscoveryResult diagnosis;
   if (o.diagnosis) {
+    // The second session (--validate) is scored, never trained on (issue 39).
+    DiscoveryOptions with_session = discovery;
+    with_session.session = in.validation.points;
     try {
-      diagnosis = DiscoverTrackerModel(in.nominal, in.file.points, discovery);
+      diagnosis = DiscoverTrackerModel(in.nominal, in.file.points, with_session);
     } catch (const InputError& e) {
       if (e.where().rfind(o.measurements, 0) == 0) throw;
       throw InputError(o.measurements, e.what());
@@ -186,6 +192,21 @@ void WriteIdentifyOutputs(const TrackerIdentifyOptions& o, const KinematicModel&
   }
 }
 
+// The second session's line: each model's mean held-out RMS over the halvings, +- their
+// standard deviation.
+void PrintSessionLine(const SessionScore& nominal, const SessionScore& geometric,
+                      const std::optional<SessionScore>& discovered) {
+  std::printf("%-8s %-10d nominal %.4f +- %.4f, geometric %.4f +- %.4f", "session", nominal.points,
+              1e3 * nominal.rms_m, 1e3 * nominal.rms_sd_m, 1e3 * geometric.rms_m,
+              1e3 * geometric.rms_sd_m);
+  if (discovered) {
+    std::printf(", discovered %.4f +- %.4f", 1e3 * discovered->rms_m, 1e3 * discovered->rms_sd_m);
+  }
+  std::printf(" mm (validation file, tracker pose refitted on half; mean +- sd over %d "
+              "halvings)\n",
+              nominal.halvings);
+}
+
 // Prints the summary: the rank, each split's held-out errors, the diagnosis, the warnings
 // and notes, and what was written.
 void PrintIdentifySummary(const TrackerIdentifyOptions& o, const IdentifyInputs& in,
@@ -209,8 +230,17 @@ void PrintIdentifySummary(const TrackerIdentifyOptions& o, const IdentifyInputs&
   std::printf("%-8s %-10zu %18.4f / %7.4f %18.4f / %7.4f   (fitted, not held out)\n", "all",
               file.points.size(), 1e3 * r.all_before.rms, 1e3 * r.all_before.max,
               1e3 * r.all_after.rms, 1e3 * r.all_after.max);
+  if (r.session_nominal) {
+    PrintSessionLine(*r.session_nominal, *r.session_geometric,
+                     o.diagnosis ? outcome.diagnosis.session_discovered : std::nullopt);
+  }
   if (o.diagnosis) std::printf("%s", DiagnosisSummary(outcome.diagnosis).c_str());
   for (const std::string& w : r.warnings) std::fprintf(stderr, "WARNING: %s\n", w.c_str());
+  if (o.diagnosis) {
+    for (const std::string& w : outcome.diagnosis.warnings) {
+      std::fprintf(stderr, "WARNING: %s\n", w.c_str());
+    }
+  }
   for (const std::string& c : outcome.rank_causes) std::fprintf(stderr, "note: %s\n", c.c_str());
   std::printf("wrote %s/report.json, report.html and identified_%s.yaml\n", out.string().c_str(),
               chain.name.c_str());

@@ -148,6 +148,22 @@ std::string CandidateLine(const CandidateScore& c) {
   return os.str();
 }
 
+// The black box's line: its region held-out RMS beside the physics', and its second-session
+// score beside the discovered model's.
+std::string BlackBoxLine(const DiscoveryResult& r) {
+  const BlackBoxResult& b = r.black_box;
+  std::ostringstream os;
+  os << "  black box (kernel ridge on the starting model's residual; a comparator, not in the "
+        "model): region held-out RMS "
+     << FixedMm(b.heldout_rms_m) << " against discovered " << FixedMm(r.heldout_rms_discovered_m);
+  if (b.session && r.session_discovered) {
+    os << "; second session " << FixedMm(b.session->rms_m) << " against discovered "
+       << FixedMm(r.session_discovered->rms_m);
+  }
+  os << "\n";
+  return os.str();
+}
+
 }  // namespace
 
 std::string DiscoveryResult::BriefReport() const {
@@ -183,6 +199,7 @@ std::string DiscoveryResult::BriefReport() const {
     }
     os << "\n";
   }
+  if (black_box.computed) os << BlackBoxLine(*this);
   return os.str();
 }
 

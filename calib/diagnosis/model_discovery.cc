@@ -8,6 +8,7 @@
 #include "calib/common/cpus.h"
 #include "calib/common/errors.h"
 #include "calib/diagnosis/candidate_scoring.h"
+#include "calib/diagnosis/comparators.h"
 #include "calib/diagnosis/cross_validation.h"
 #include "calib/diagnosis/discovery_data.h"
 #include "calib/diagnosis/discovery_folds.h"
@@ -117,6 +118,7 @@ bool AcceptTerm(const Search& search, DiscoveryStep s, int best, RobotModel* cur
           accepted.parameters[k].estimated;
     }
   }
+  s.model_after = *current;
   *current_region =
       CrossValidate(search.data, *current, search.region, search.folds, "region folds");
   s.heldout_rms_after_m = current_region->Rms();
@@ -231,6 +233,8 @@ void ValidateDiscoveryOptions(const DiscoveryOptions& o) {
     fail("joint_sigma", "must be from 0 to 0.01 rad (0.57 deg)");
   }
   ValidateIdentificationOptions(o.engine);
+  ValidateSessionScoringOptions(o.session_scoring, "diagnosis.session_scoring");
+  ValidateKernelRidgeOptions(o.kernel_ridge, "diagnosis.kernel_ridge");
 }
 
 DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
@@ -260,6 +264,11 @@ DiscoveryResult DiscoverTrackerModel(const RobotModel& start,
                                   ")";
   // Steps 2-4.
   discovery::Discover(data, start, random, o.folds, region, o.folds, random_rule, o, &r);
+  // The comparators beside the verdict (issue 39): the second session, the black box. They
+  // start where the search started: the declared terms' dormant parameters woken.
+  const RobotModel woken = discovery::WakeDormantTerms(data, start, [](const std::string&) {});
+  if (!o.session.empty()) discovery::ScoreOnSecondSession(data, woken, o, &r);
+  if (o.black_box) r.black_box = discovery::TrackerBlackBox(data, woken, region, o.folds, o);
   return r;
 }
 
@@ -294,6 +303,9 @@ DiscoveryResult DiscoverOpticalAxisModel(const RobotModel& start,
       "samples of few short axes have leverages up to near 1 and a heavy-tailed chi-square";
   // Steps 2-4.
   discovery::Discover(data, start, region, folds, region, folds, global_rule, o, &r);
+  r.black_box.note = "not computed for optical axes: a held-out axis is scored by the "
+                     "straightness of its points against its own line, not by points a "
+                     "residual model could be added to";
   return r;
 }
 

@@ -58,6 +58,14 @@
 //    "effects_added", or "unexplained" (systematic and no candidate passes), with the
 //    residual's strongest correlations (joint angles, gravity torques, time, temperature,
 //    acquisition order) and binned residual maps as evidence.
+// 5. Comparators beside the verdict (issue 39), tracker points only; neither decides anything
+//    nor enters the model. With a second session (DiscoveryOptions::session, another tracker
+//    session of the arm, its tracker pose unknown): the starting model, the model after each
+//    step and the discovered one, each fitted on every point of the first session, scored on
+//    it over seeded random halvings (session_scoring.h: pose refitted on one half, the other
+//    scored); a step whose term makes the session worse is flagged and warned of. And a black
+//    box (black_box.h): kernel ridge regression of the starting model's residual over the
+//    joint readings, scored on the same region folds and on the second session.
 //
 // Optical axes (DiscoverOpticalAxisModel). A unit of data is one aligned pose (AxisSample).
 // - Noise floor: each sample's own sigmas where it states them (AxisSample::sigma_offset,
@@ -91,9 +99,12 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "calib/diagnosis/black_box.h"
+#include "calib/diagnosis/session_scoring.h"
 #include "calib/identification/engine.h"
 #include "calib/measurements/optical_axis_set.h"
 #include "calib/measurements/tracker_set.h"
@@ -139,6 +150,14 @@ struct DiscoveryOptions {
   std::string axis_source = "optical-axis samples";  ///< origin, for messages (optical axes)
   /// Called with a line of progress (step, candidate k of m); may be empty.
   std::function<void(const std::string&)> progress;
+  /// Tracker points: a second session of the same arm (its tracker pose unknown); empty:
+  /// none. The starting model, each step's model and the discovered one, trained on the first
+  /// session, are scored on it (session_scoring.h); it never trains or decides anything.
+  std::vector<TrackerPoint> session;
+  SessionScoringOptions session_scoring;  ///< the halvings of the second session
+  /// Tracker points: fit the black-box comparator (black_box.h) beside the verdict.
+  bool black_box = true;
+  KernelRidgeOptions kernel_ridge;        ///< its hyperparameter grid
 };
 
 /// Throws InputError naming the bad field.
@@ -224,6 +243,17 @@ struct DiscoveryStep {
   double heldout_rms_after_m = 0;   ///< after the accepted term (= before when none) [m]
   std::vector<CandidateScore> candidates;
   int accepted = -1;                ///< index into candidates, -1 none
+  /// The step's base model with its accepted term, as the later steps start from it (not yet
+  /// fitted); the default model when none was accepted.
+  RobotModel model_after;
+  /// The second session's score after the step's accepted term (its base's when none was
+  /// accepted), the model fitted on every point of the first session; empty without a second
+  /// session (DiscoveryOptions::session).
+  std::optional<SessionScore> session;
+  /// The accepted term made the second session worse than the step's base (a larger mean RMS
+  /// over the same halvings); DiscoveryResult::warnings names it.
+  bool session_worse = false;
+  int session_worse_halvings = 0;   ///< halvings on which it was worse
 };
 
 struct ResidualCorrelation {
@@ -282,6 +312,13 @@ struct DiscoveryResult {
   Transform X_TB = Transform::Identity();  ///< tracker points: the tracker pose
   std::vector<ResidualCorrelation> evidence;  ///< strongest |r| first (at most 8)
   std::vector<ResidualMap> maps;  ///< residual vs each joint angle, gravity torque, order
+  /// The second session's scores (DiscoveryOptions::session) of the starting model and of the
+  /// discovered one, each fitted on every point of the first; empty without one.
+  std::optional<SessionScore> session_start, session_discovered;
+  /// The black-box comparator (never part of `model`); not computed for optical axes.
+  BlackBoxResult black_box;
+  /// E.g. a term that made the second session worse, named.
+  std::vector<std::string> warnings;
 
   /// A few lines for the terminal (as Ceres' Solver::Summary::BriefReport): the verdict and
   /// reason, the noise floor, the residual test, one line per step (its best tested candidate

@@ -91,6 +91,9 @@ void ValidateCalibrationOptions(const TrackerCalibrationOptions& options) {
                "holdout fraction: expected a fraction in (0, 0.5], got " +
                    std::to_string(options.holdout_fraction));
   ValidateIdentificationOptions(options.engine);
+  TWIN_REQUIRE(options.session.halvings >= 1 && options.session.halvings <= 1000,
+               "session halvings: expected 1 to 1000, got " +
+                   std::to_string(options.session.halvings));
 }
 
 /// The points' pose groups (PoseGroups: repeats of one pose share an index) and their count.
@@ -108,8 +111,9 @@ PoseGrouping GroupPoses(const std::vector<TrackerPoint>& points) {
   return g;
 }
 
-// Identifies the delivered model on every point and scores it and the baseline on them all.
-void FitDeliveredModel(const RobotModel& nominal, const RobotModel& start,
+// Identifies the delivered model on every point and scores it and the baseline on them all;
+// returns the baseline model (the nominal one, its reflector offset fitted).
+RobotModel FitDeliveredModel(const RobotModel& nominal, const RobotModel& start,
                        const std::vector<TrackerPoint>& points,
                        const TrackerCalibrationOptions& options,
                        const IdentificationOptions& baseline, TrackerCalibrationResult* out) {
@@ -119,6 +123,19 @@ void FitDeliveredModel(const RobotModel& nominal, const RobotModel& start,
   out->X_TB = all.X_TB;
   out->all_after = ScorePoints(all.result.model, all.X_TB, points);
   out->all_before = ScorePoints(before.result.model, before.X_TB, points);
+  return before.result.model;
+}
+
+// The second session (the validation file): the baseline and the delivered model scored over
+// the same halvings, each with its tracker pose refitted on half the file.
+void ScoreSecondSession(const RobotModel& baseline, const std::vector<TrackerPoint>& validation,
+                        const TrackerCalibrationOptions& options, TrackerCalibrationResult* out) {
+  const std::string source = options.set.source + " (validation file)";
+  const std::vector<SessionHalving> halvings =
+      SessionHalvings(validation, options.session, source);
+  out->session_nominal = ScoreModelOnSession(baseline, validation, halvings, source);
+  out->session_geometric =
+      ScoreModelOnSession(out->identified.model, validation, halvings, source);
 }
 
 // The number of points each split holds out: the holdout fraction of them, at least 1.
@@ -337,13 +354,16 @@ TrackerCalibrationResult CalibrateFromTracker(const RobotModel& nominal,
   const RobotModel start = WokenStart(nominal, points, options.set, options.engine);
 
   // The delivered model: every point.
-  FitDeliveredModel(nominal, start, points, options, baseline, &out);
+  const RobotModel fitted_nominal =
+      FitDeliveredModel(nominal, start, points, options, baseline, &out);
 
   const SplitContext split{nominal, options, baseline, HeldOutCount(options, points)};
   // (a) Random: a seeded shuffle.
   RunRandomSplit(split, points, grouping, &out);
   // (b) Region: a separate file, or the far end along the principal axis of the cloud.
   RunRegionSplit(split, points, validation, &out);
+  // (c) The second session, when there is one: both models over the same halvings.
+  if (!validation.empty()) ScoreSecondSession(fitted_nominal, validation, options, &out);
   return out;
 }
 

@@ -7,15 +7,20 @@
 //           (a workspace region the training points do not cover), or a separate file (from
 //           another session: each model's tracker pose is refitted to its points, 6 of their
 //           3 n coordinates, before they are scored).
+// With a separate file, the nominal and the delivered model are also scored on it as a second
+// session: the pose refitted on a random half of it, the other half scored, over seeded
+// halvings (calib/diagnosis/session_scoring.h).
 // A calibrated model worse than the nominal one on a held-out part is flagged (worse = true)
 // and said in the result's warnings, never averaged away. Estimator side: points and the
 // nominal model only.
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "calib/diagnosis/session_scoring.h"
 #include "calib/identification/engine.h"
 #include "calib/measurements/tracker_set.h"
 
@@ -26,6 +31,9 @@ struct TrackerCalibrationOptions {
   std::uint64_t seed = 1;          ///< of the random split
   IdentificationOptions engine;    ///< of every identification
   TrackerSetOptions set;           ///< default sigma, told tracker pose
+  /// The halvings of the second session (the validation file): the nominal and the delivered
+  /// model are scored on it as well (session_scoring.h).
+  SessionScoringOptions session;
 };
 
 /// Distance statistics of predicted vs measured points [m].
@@ -51,6 +59,11 @@ struct TrackerCalibrationResult {
   PointErrors all_before, all_after;  ///< every point, nominal (pose + reflector) and delivered
   std::vector<HeldOutSplit> splits;   ///< random, region
   std::vector<std::string> warnings;  ///< e.g. a held-out part where the calibration is worse
+  /// With a validation file (a second session): the nominal model (its reflector offset fitted
+  /// on every point, as all_before) and the delivered model scored on it, the tracker pose
+  /// refitted on half its poses and the other half scored, over the halvings
+  /// (session_scoring.h); empty without one.
+  std::optional<SessionScore> session_nominal, session_geometric;
 };
 
 /// The parameters "before" keeps free: the reflector offset (the tool link's theta, d, a),

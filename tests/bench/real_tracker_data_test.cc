@@ -1,6 +1,7 @@
 // The real laser-tracker data of ../shared/data/motoman_leica/ (not in the repository: the
 // public ctu-vras/multirobot-calibration repository has it; README, "Calibrating from a laser
 // tracker file"). Skipped with a message when the files are absent.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -117,6 +118,55 @@ TEST(RealTrackerData, MotomanDiagnosisGivesAVerdictWithItsEvidenceOnBothFiles) {
       EXPECT_FALSE(d["residual_maps"].empty());
     }
   }
+}
+
+// The second session and the black box (issue 39): the wide file trained, the cube file as
+// the second session. Every new key is there and finite; a step flagged worse on the session
+// is warned of by its term's name, and only such a step.
+TEST(RealTrackerData, MotomanSecondSessionScoresAndTheBlackBoxArePresentAndFinite) {
+  if (!fs::exists(kData / "right_arm_wide.csv") || !fs::exists(kData / "right_arm_cube.csv")) {
+    GTEST_SKIP() << "real tracker data absent: " << kData.string();
+  }
+  const nlohmann::json j = Identify("right_arm_wide.csv", 1, "right_arm_cube.csv", true);
+  ASSERT_TRUE(j.is_object());
+  const auto finite = [](const nlohmann::json& v) {
+    return v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() > 0.0;
+  };
+  const nlohmann::json& session = j["heldout"]["session"];
+  for (const char* model : {"nominal", "geometric", "discovered"}) {
+    EXPECT_TRUE(finite(session[model]["rms_mm"])) << model << ": " << session[model];
+    EXPECT_TRUE(finite(session[model]["rms_sd_mm"])) << model;
+  }
+  EXPECT_EQ(session["points"], 212);
+  EXPECT_EQ(session["halvings"], 20);
+  const nlohmann::json& d = j["diagnosis"];
+  for (const auto& s : d["steps"]) {
+    EXPECT_TRUE(finite(s["session_rms_mm"])) << s;
+    bool warned = false;
+    if (!s["accepted"].is_null()) {
+      for (const auto& w : j["warnings"]) {
+        const std::string text = w;
+        warned = warned || (text.find("second session") == 0 &&
+                            text.find(s["accepted"].get<std::string>()) != std::string::npos);
+      }
+    }
+    EXPECT_EQ(s["session_worse"].get<bool>(), warned) << s;
+  }
+  // The calibration's geometric model and the diagnosis's starting model are the same
+  // identification of the same points, scored over the same halvings (one --seed): equal but
+  // for the solver's stopping point (1e-4 relative: a tenth of a micrometre here).
+  EXPECT_NEAR(session["geometric"]["rms_mm"].get<double>(),
+              d["session"]["start"]["rms_mm"].get<double>(),
+              1e-4 * session["geometric"]["rms_mm"].get<double>());
+  EXPECT_TRUE(finite(d["black_box"]["heldout_rms_mm"])) << d["black_box"];
+  EXPECT_TRUE(finite(d["black_box"]["session_rms_mm"])) << d["black_box"];
+  std::printf("[ measured ] wide trained, cube as the second session: nominal %.4f, geometric "
+              "%.4f, discovered %.4f mm; black box region %.4f mm, session %.4f mm\n",
+              session["nominal"]["rms_mm"].get<double>(),
+              session["geometric"]["rms_mm"].get<double>(),
+              session["discovered"]["rms_mm"].get<double>(),
+              d["black_box"]["heldout_rms_mm"].get<double>(),
+              d["black_box"]["session_rms_mm"].get<double>());
 }
 
 }  // namespace

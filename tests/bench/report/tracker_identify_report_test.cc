@@ -51,8 +51,51 @@ TEST(TrackerIdentifyReportTest, WritesEveryKeyInReportUnits) {
   EXPECT_EQ(j["declared_terms"][0], "backlash:1");
   EXPECT_EQ(j["rank_causes"][0], "joint 2 spans only 0.1 deg");
   EXPECT_EQ(j["diagnosis"]["skipped"], "--no-diagnosis");
+  // Without --validate there is no second session: the key is there, null.
+  EXPECT_TRUE(j["heldout"].contains("session"));
+  EXPECT_TRUE(j["heldout"]["session"].is_null());
   // The file name is escaped in the page.
   EXPECT_NE(report.html.find("points &lt;1&gt;.csv"), std::string::npos) << report.html;
+}
+
+// With --validate: the nominal and geometric scores from the calibration, the discovered one
+// from the diagnosis, and the diagnosis's warnings after the calibration's.
+TEST(TrackerIdentifyReportTest, TheSecondSessionsScoresAndWarnings) {
+  TrackerFile file;
+  file.points.resize(5);
+  TrackerCalibrationResult calibration;
+  SessionScore s;
+  s.points = 212;
+  s.halvings = 20;
+  s.rms_m = 0.0004;
+  s.rms_sd_m = 0.00001;
+  calibration.session_nominal = s;
+  s.rms_m = 0.0005;
+  calibration.session_geometric = s;
+  calibration.warnings = {"held-out region split: WORSE"};
+  DiscoveryResult diagnosis;
+  s.rms_m = 0.00035;
+  diagnosis.session_discovered = s;
+  diagnosis.warnings = {"second session: step 2's term mount_deflection makes it WORSE"};
+  TrackerIdentifyResult r;
+  r.measurements = &file;
+  r.calibration = &calibration;
+  r.diagnosis = &diagnosis;
+  const json j = json::parse(MakeTrackerIdentifyReport(r).json_text);
+  const json& session = j["heldout"]["session"];
+  EXPECT_EQ(session["points"], 212);
+  EXPECT_EQ(session["halvings"], 20);
+  EXPECT_DOUBLE_EQ(session["nominal"]["rms_mm"].get<double>(), 0.4);
+  EXPECT_DOUBLE_EQ(session["geometric"]["rms_mm"].get<double>(), 0.5);
+  EXPECT_DOUBLE_EQ(session["discovered"]["rms_mm"].get<double>(), 0.35);
+  EXPECT_DOUBLE_EQ(session["discovered"]["rms_sd_mm"].get<double>(), 0.01);
+  ASSERT_EQ(j["warnings"].size(), 2u);
+  EXPECT_EQ(j["warnings"][1], diagnosis.warnings[0]);
+  // With --no-diagnosis the discovered score is null.
+  r.diagnosis = nullptr;
+  const json k = json::parse(MakeTrackerIdentifyReport(r).json_text);
+  EXPECT_TRUE(k["heldout"]["session"]["discovered"].is_null());
+  EXPECT_DOUBLE_EQ(k["heldout"]["session"]["nominal"]["rms_mm"].get<double>(), 0.4);
 }
 
 }  // namespace

@@ -77,6 +77,9 @@ TEST(OpticalAxisDiscovery, AGeometricTruthIsConsistentWithNoise) {
   EXPECT_GT(r.test_before.dof, 0.0);
   EXPECT_LT(r.test_before.dof, 150.0 - 25.0);
   EXPECT_NE(r.region_rule.find("whole optical axes"), std::string::npos) << r.region_rule;
+  // No black box for optical axes (issue 39): not computed, and said why.
+  EXPECT_FALSE(r.black_box.computed);
+  EXPECT_NE(r.black_box.note.find("optical axes"), std::string::npos) << r.black_box.note;
 }
 
 TEST(OpticalAxisDiscovery, WithTheNoiseEveryCandidateIsScreenedAndTheInvisibleOnesNamed) {
