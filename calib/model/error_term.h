@@ -8,7 +8,10 @@
 //   2. lengths: every d and a of the chain times a scale (thermal growth and drift);
 //   3. gravity sag: link angle += c * (gravity torque about the joint), solved together with
 //      the configuration it changes (joint compliance);
-//   4. tool point: the end point moves in the flange frame (mount deflection).
+//   4. tool point: the end point moves in the flange frame (mount deflection);
+//   5. axis deflections: small rotations of the chain at each joint, before the joint turns,
+//      given the frames of the chain after stages 1-3 (lumped-mass joint compliance, lateral
+//      compliance of a joint's bearing or of the base, a wobbling axis).
 // Terms are written independently of sim/effects (the truth side): a formula shared between
 // what simulates and what estimates would hide its own mistake.
 //
@@ -59,6 +62,15 @@ struct TermSpec {
 /// times than it was fitted on, and the held-out regions of one session cannot test that.
 enum class TermDriver { kMeasured = 0, kClockLevelling = 1, kClockUnbounded = 2 };
 
+/// What stage 5 gives a term: the frames of the chain after stages 1-3 and gravity.
+template <typename T>
+struct DeflectionInputT {
+  const RigidT<T>* X_BL = nullptr;  ///< frames L0..Lt in B (N + 2 entries)
+  Vec3T<T> p_BE = Vec3T<T>::Zero();  ///< the end point in B (before stage 4)
+  Vector3 g_B = -Vector3::UnitZ();  ///< gravity direction in B (unit)
+  double gravity = 9.80665;          ///< its magnitude [m/s^2]
+};
+
 /// One error term (interface). Parameters are passed as a pointer to the term's own slice of
 /// the model's flat parameter vector (ParameterLayout); stages add to what they are given.
 class ErrorTerm {
@@ -74,6 +86,8 @@ class ErrorTerm {
   virtual bool sags_under_gravity() const { return false; }
   /// True for terms with a tool-offset stage (stage 4).
   virtual bool offsets_tool() const { return false; }
+  /// True for terms with an axis-deflection stage (stage 5).
+  virtual bool deflects_axes() const { return false; }
   /// How many of its parameters, leading its slice, are amplitudes: at zero the term does
   /// nothing. The rest shape the effect (a time constant) and have no "no effect" value.
   /// Default: every parameter.
@@ -116,10 +130,18 @@ class ErrorTerm {
                           Vec3T<double>* dp_F) const = 0;
   virtual void OffsetTool(const Jet* p, const Mat3T<Jet>& R_BF, const Vector3& g_B,
                           Vec3T<Jet>* dp_F) const = 0;
+  /// Stage 5: adds to w (3 entries per joint i, 0-based) the small rotation vector [rad] that
+  /// turns the chain at frame X_BL[i] (the frame joint i turns about its z, before it turns),
+  /// in that frame's axes: x and y tilt joint i's axis and everything beyond it, z adds to its
+  /// angle. Given the chain's frames after stages 1-3 (`in`) and the context.
+  virtual void DeflectAxes(const double* p, const MeasurementContext& c,
+                           const DeflectionInputT<double>& in, double* w) const = 0;
+  virtual void DeflectAxes(const Jet* p, const MeasurementContext& c,
+                           const DeflectionInputT<Jet>& in, Jet* w) const = 0;
 };
 
 /// CRTP helper: a term writes the stages it has as member templates named OffsetJointsT,
-/// ScaleLengthsT, SagT and OffsetToolT; the others keep these do-nothing defaults.
+/// ScaleLengthsT, SagT, OffsetToolT and DeflectAxesT; the others keep these do-nothing defaults.
 template <class Derived>
 class ErrorTermT : public ErrorTerm {
  public:
@@ -151,6 +173,14 @@ class ErrorTermT : public ErrorTerm {
                   Vec3T<Jet>* dp_F) const final {
     self().OffsetToolT(p, R_BF, g_B, dp_F);
   }
+  void DeflectAxes(const double* p, const MeasurementContext& c,
+                   const DeflectionInputT<double>& in, double* w) const final {
+    self().DeflectAxesT(p, c, in, w);
+  }
+  void DeflectAxes(const Jet* p, const MeasurementContext& c, const DeflectionInputT<Jet>& in,
+                   Jet* w) const final {
+    self().DeflectAxesT(p, c, in, w);
+  }
 
   template <typename T>
   void OffsetJointsT(const T*, const MeasurementContext&, T*) const {}
@@ -160,6 +190,8 @@ class ErrorTermT : public ErrorTerm {
   void SagT(const T*, const T*, T*) const {}
   template <typename T>
   void OffsetToolT(const T*, const Mat3T<T>&, const Vector3&, Vec3T<T>*) const {}
+  template <typename T>
+  void DeflectAxesT(const T*, const MeasurementContext&, const DeflectionInputT<T>&, T*) const {}
 
  private:
   const Derived& self() const { return static_cast<const Derived&>(*this); }
@@ -177,10 +209,15 @@ std::shared_ptr<const ErrorTerm> MakeErrorTerm(const TermSpec& spec, const Kinem
 /// Registry names of every error term type.
 std::vector<std::string> ErrorTermTypes();
 
+/// Highest harmonic order a periodic term may have (registry.cc).
+int MaxHarmonicOrder();
+
 /// Every instance of every registered term that model discovery tries for `nominal`: each
-/// joint for per-joint terms, harmonic orders 1 and 2 (one candidate each) for periodic ones,
-/// one for whole-robot terms.
-std::vector<TermSpec> CandidateTermSpecs(const KinematicModel& nominal);
+/// joint for per-joint terms, one candidate per harmonic order for periodic ones (joint j's
+/// orders `orders[j]`; orders 1 and 2 for every joint when `orders` is empty), one for
+/// whole-robot terms.
+std::vector<TermSpec> CandidateTermSpecs(const KinematicModel& nominal,
+                                         const std::vector<std::vector<int>>& orders = {});
 
 /// Readable label of a spec, e.g. "joint_compliance (joint 2)" or "transmission_error (joint 4,
 /// order 2)" (joints 1-based).

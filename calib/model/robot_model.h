@@ -13,6 +13,10 @@
 //              (kSagIterations; the sag of a compliant joint changes the torques)   (stage 3)
 //   X_BF     = chain to the flange L_N at q_link (eq. 1-2, ChainFramesT)
 //   p_BE     = X_BF (X_FE p + dp_F), dp_F the terms' tool offsets in the flange   (stage 4)
+//   where terms deflect axes (stage 5), the chain X_BF = X_BL0 prod_i Rot(w_i) X_L(i-1)Li
+//              with w_i the small rotations the terms give from the frames of the chain
+//              above (one pass: a deflection of 1e-4 rad changes the moments it comes from
+//              by 1e-4 of themselves)
 // With no terms it is exactly the geometric forward kinematics of the chain.
 #pragma once
 
@@ -24,6 +28,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <ceres/rotation.h>
 
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/kinematic_model.h"
@@ -154,6 +159,59 @@ void LinkAnglesT(const RobotModel& model, const T* params, const MeasurementCont
   }
 }
 
+/// True when some term of `model` deflects axes (stage 5).
+inline bool DeflectsAxes(const RobotModel& model) {
+  for (const auto& term : model.terms) {
+    if (term->deflects_axes()) return true;
+  }
+  return false;
+}
+
+/// Stage 5 of the model (header): the terms' small rotations w (3 per joint i, in the frame
+/// X_BL[i] before joint i turns), given the chain's frames X (after stages 1-3, N + 2
+/// entries).
+template <typename T>
+void AxisDeflectionsT(const RobotModel& model, const T* params, const MeasurementContext& c,
+                      const RigidT<T>* X, T* w) {
+  const KinematicModel& chain = model.chain;
+  const int n = chain.num_joints();
+  DeflectionInputT<T> in;
+  in.X_BL = X;
+  in.p_BE = X[n + 1] * chain.X_LtE.translation().template cast<T>();
+  in.g_B = model.gravity_B;
+  in.gravity = model.gravity;
+  for (int k = 0; k < 3 * n; ++k) w[k] = T(0.0);
+  const T* p = params + chain.num_parameters();
+  for (const auto& term : model.terms) {
+    if (term->deflects_axes()) term->DeflectAxes(p, c, in, w);
+    p += term->parameters().size();
+  }
+}
+
+/// True when the three entries at w are exactly zero, derivatives included (no term writes
+/// that slot): its rotation is the identity and is skipped.
+inline bool IsZeroRotation(const double* w) { return w[0] == 0.0 && w[1] == 0.0 && w[2] == 0.0; }
+template <typename Jet>
+bool IsZeroRotation(const Jet* w) {
+  for (int k = 0; k < 3; ++k) {
+    if (w[k].a != 0.0 || !w[k].v.isZero()) return false;
+  }
+  return true;
+}
+
+/// Rotation matrix of a small rotation vector w [rad] (Rodrigues' formula; its series near
+/// zero, where a Jet's derivative needs it: ceres::AngleAxisToRotationMatrix).
+template <typename T>
+Mat3T<T> SmallRotationT(const T* w) {
+  T R[9];
+  ceres::AngleAxisToRotationMatrix(w, R);  // column-major
+  Mat3T<T> M;
+  for (int col = 0; col < 3; ++col) {
+    for (int row = 0; row < 3; ++row) M(row, col) = R[3 * col + row];
+  }
+  return M;
+}
+
 /// Pose of the end frame E in B for a measurement context (the model's forward kinematics,
 /// header) on scalar T. The tool offset moves E's origin only.
 template <typename T>
@@ -164,9 +222,26 @@ RigidT<T> RobotEndPoseT(const RobotModel& model, const T* params, const Measurem
   T s;
   LinkAnglesT<T>(model, params, c, q, &s);
   RigidT<T> X_BF = RigidT<T>::FromTransform(chain.X_BL0);
-  for (int i = 0; i < n; ++i) X_BF = X_BF * LinkTransformT(params + kParamsPerLink * i, q[i], s);
   const RigidT<T> X_FE = LinkTransformT(params + kParamsPerLink * n, T(0.0), T(1.0)) *
                          RigidT<T>::FromTransform(chain.X_LtE);
+  if (!DeflectsAxes(model)) {
+    for (int i = 0; i < n; ++i) X_BF = X_BF * LinkTransformT(params + kParamsPerLink * i, q[i], s);
+  } else {
+    // The links' transforms once; the frames of stages 1-3 give the deflections (stage 5),
+    // then the chain is composed again with them.
+    std::array<RigidT<T>, kMaxJoints + 1> A;
+    for (int i = 0; i < n; ++i) A[i] = LinkTransformT(params + kParamsPerLink * i, q[i], s);
+    A[n] = LinkTransformT(params + kParamsPerLink * n, T(0.0), T(1.0));  // stage 2
+    std::array<RigidT<T>, kMaxJoints + 2> X;
+    X[0] = X_BF;
+    for (int i = 0; i <= n; ++i) X[i + 1] = X[i] * A[i];
+    T w[3 * kMaxJoints];
+    AxisDeflectionsT<T>(model, params, c, X.data(), w);
+    for (int i = 0; i < n; ++i) {
+      if (!IsZeroRotation(w + 3 * i)) X_BF.R = X_BF.R * SmallRotationT<T>(w + 3 * i);
+      X_BF = X_BF * A[i];
+    }
+  }
   Vec3T<T> dp_F = Vec3T<T>::Zero();
   const T* p = params + chain.num_parameters();
   for (const auto& term : model.terms) {

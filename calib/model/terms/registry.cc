@@ -40,6 +40,8 @@ constexpr Registration kRegistry[] = {
     {"thermal_drift", Scope::kRobot, terms::MakeThermalDrift},
     {"thermal_warmup", Scope::kRobotTimeConstant, terms::MakeThermalWarmup},
     {"mount_deflection", Scope::kRobot, terms::MakeMountDeflection},
+    {"lateral_compliance", Scope::kJoint, terms::MakeLateralCompliance},
+    {"axis_wobble", Scope::kJointPeriodic, terms::MakeAxisWobble},
 };
 
 std::string KnownTypes() {
@@ -114,7 +116,13 @@ std::vector<std::string> ErrorTermTypes() {
   return types;
 }
 
-std::vector<TermSpec> CandidateTermSpecs(const KinematicModel& nominal) {
+int MaxHarmonicOrder() { return kMaxHarmonicOrder; }
+
+std::vector<TermSpec> CandidateTermSpecs(const KinematicModel& nominal,
+                                         const std::vector<std::vector<int>>& orders) {
+  TWIN_REQUIRE(orders.empty() || static_cast<int>(orders.size()) == nominal.num_joints(),
+               "harmonic orders for " + std::to_string(orders.size()) + " joints of " +
+                   std::to_string(nominal.num_joints()));
   std::vector<TermSpec> out;
   for (const Registration& r : kRegistry) {
     switch (r.scope) {
@@ -129,7 +137,9 @@ std::vector<TermSpec> CandidateTermSpecs(const KinematicModel& nominal) {
         break;
       case Scope::kJointPeriodic:
         for (int j = 0; j < nominal.num_joints(); ++j) {
-          for (int h : {1, 2}) out.push_back({r.type, j, {h}});
+          for (int h : orders.empty() ? std::vector<int>{1, 2} : orders[j]) {
+            out.push_back({r.type, j, {h}});
+          }
         }
         break;
     }

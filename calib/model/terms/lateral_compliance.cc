@@ -1,0 +1,79 @@
+#include <cmath>
+
+#include "calib/model/robot_model.h"
+#include "calib/model/terms/terms.h"
+
+namespace twin::terms {
+namespace {
+
+// Lateral (bending) compliance of joint i: its bearing, or for joint 1 the base, pedestal or
+// torso it stands on, tilts under the bending moment it carries. In the frame X_BL[i] (joint
+// i's axis z, before it turns), with M the gravity moment about its origin of everything joint
+// i turns:
+//   w_x += c_x M_x,   w_y += c_y M_y                       (stage 5: x and y tilt the axis)
+// where the model has masses (M from the nominal masses, c_x, c_y [rad/(N m)]); for a model
+// without them, the weight is lumped at the points LumpsBeyond gives, m_k at P_k, and what the
+// data identify is the compliance times each lump's weight:
+//   w_x += sum_k a_xk ((P_k - o_i) x g_B)_x,   w_y += sum_k a_yk ((P_k - o_i) x g_B)_y
+// with a_k = c m_k g [rad/m]. Joint 1 is the base's tilt under the arm's moment about it.
+class LateralCompliance : public ErrorTermT<LateralCompliance> {
+ public:
+  LateralCompliance(TermSpec spec, std::vector<TermParameter> parameters,
+                    const KinematicModel& nominal, Lumps lumps)
+      : ErrorTermT(std::move(spec), std::move(parameters)),
+        nominal_(nominal),
+        lumps_(std::move(lumps)) {}
+  bool deflects_axes() const override { return true; }
+
+  template <typename T>
+  void DeflectAxesT(const T* p, const MeasurementContext&, const DeflectionInputT<T>& in,
+                    T* w) const {
+    const int i = spec().joint;
+    if (lumps_.points.empty()) {
+      const Vec3T<T> m = NominalGravityMoment(nominal_, in, i);
+      w[3 * i] += p[0] * m.x();
+      w[3 * i + 1] += p[1] * m.y();
+      return;
+    }
+    const int n = nominal_.num_joints();
+    const RigidT<T>& X = in.X_BL[i];
+    for (size_t k = 0; k < lumps_.points.size(); ++k) {
+      const Vec3T<T> r = LumpPoint(in, lumps_.points[k], n) - X.p;
+      const Vec3T<T> m = X.R.transpose() * r.cross(in.g_B.template cast<T>());
+      w[3 * i] += p[2 * k] * m.x();
+      w[3 * i + 1] += p[2 * k + 1] * m.y();
+    }
+  }
+
+ private:
+  KinematicModel nominal_;
+  Lumps lumps_;  // empty: the nominal masses
+};
+
+}  // namespace
+
+std::shared_ptr<const ErrorTerm> MakeLateralCompliance(const TermInput& in) {
+  const std::string prefix = JointPrefix(in.robot, in.spec.joint) + ".lateral_compliance";
+  std::vector<TermParameter> params;
+  Lumps lumps;
+  if (HasMasses(in.nominal)) {
+    // Scale: 1 rad per typical moment, the weight of the arm at half its reach.
+    double mass = 0.0;
+    for (const Link& l : in.nominal.links) mass += l.inertia.mass;
+    const double tau_ref =
+        std::max(1.0, kStandardGravity * mass * 0.5 * NominalReach(in.nominal));
+    params = {{prefix + "_x", "rad/(N m)", 1.0 / tau_ref},
+              {prefix + "_y", "rad/(N m)", 1.0 / tau_ref}};
+  } else {
+    // Scale: 1 rad per lever of the arm's reach.
+    lumps = LumpsBeyond(in.nominal, in.spec.joint);
+    const double scale = 1.0 / NominalReach(in.nominal);
+    for (const std::string& name : lumps.names) {
+      params.push_back({prefix + "_x_weight_at_" + name, "rad/m", scale});
+      params.push_back({prefix + "_y_weight_at_" + name, "rad/m", scale});
+    }
+  }
+  return std::make_shared<LateralCompliance>(in.spec, params, in.nominal, std::move(lumps));
+}
+
+}  // namespace twin::terms
