@@ -12,6 +12,7 @@ const char* ToString(DiscoveryVerdict verdict) {
     case DiscoveryVerdict::kConsistentWithNoise: return "consistent_with_noise";
     case DiscoveryVerdict::kEffectsAdded: return "effects_added";
     case DiscoveryVerdict::kUnexplained: return "unexplained";
+    case DiscoveryVerdict::kPartlyExplained: return "partly_explained";
   }
   return "?";
 }
@@ -70,7 +71,8 @@ void StateSearchVerdict(double heldout_rms_discovered_m, DiscoveryResult* out) {
        << Mm(r.noise.sigma_m) << " per coordinate) and no candidate effect passes";
     r.reason = os.str();
   } else {
-    r.verdict = DiscoveryVerdict::kEffectsAdded;
+    r.verdict = r.test_after.systematic ? DiscoveryVerdict::kPartlyExplained
+                                        : DiscoveryVerdict::kEffectsAdded;
     std::ostringstream os;
     os << r.effects_added.size() << " effect(s) added; region-disjoint held-out RMS "
        << Mm(r.heldout_rms_start_m) << " -> " << Mm(r.heldout_rms_discovered_m)
@@ -189,7 +191,9 @@ std::string DiscoveryResult::BriefReport() const {
                           : "; unidentifiable from the data: " + unseen)
        << "\n";
   }
-  if (verdict == DiscoveryVerdict::kUnexplained && !evidence.empty()) {
+  if ((verdict == DiscoveryVerdict::kUnexplained ||
+       verdict == DiscoveryVerdict::kPartlyExplained) &&
+      !evidence.empty()) {
     os << "  strongest residual correlations:";
     for (std::size_t k = 0; k < evidence.size() && k < 4; ++k) {
       char buf[64];

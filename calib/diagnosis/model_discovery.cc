@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <functional>
 #include <map>
+#include <numeric>
 #include <utility>
 
 #include "calib/common/cpus.h"
@@ -14,6 +15,7 @@
 #include "calib/diagnosis/discovery_folds.h"
 #include "calib/diagnosis/discovery_result.h"
 #include "calib/diagnosis/evidence.h"
+#include "calib/diagnosis/harmonic_orders.h"
 #include "calib/diagnosis/selection.h"
 #include "calib/identification/dormant_restart.h"
 
@@ -134,13 +136,41 @@ bool AcceptTerm(const Search& search, DiscoveryStep s, int best, RobotModel* cur
   return r.test_after.systematic;
 }
 
+// Harmonic orders per joint that the candidates try (harmonic_orders.h): at most this many, the
+// strongest in the residual of the model each step starts from. Two: a gear's fundamental beside its strongest
+// other order (an eccentric output and an elliptic wave generator, orders 1 and 2, in the
+// commonest case); each further order costs a candidate fit per joint and per periodic term.
+constexpr int kOrdersPerJoint = 2;
+
+// The default candidates (CandidateTermSpecs) with each joint's harmonic orders from the
+// spectrum of `model`'s residual, fitted on all the data, over that joint's readings.
+std::vector<TermSpec> SpectrumCandidates(const Data& data, const RobotModel& model) {
+  const Fit fit = data.FitOn(model, {}, "starting model, all data (the residual's spectrum)");
+  std::vector<int> all(data.size());
+  std::iota(all.begin(), all.end(), 0);
+  CrossValidation cv;
+  cv.Resize(data.size());
+  data.HeldOut(fit, all, &cv);
+  std::vector<const MeasurementContext*> contexts(data.size());
+  for (int i = 0; i < data.size(); ++i) contexts[i] = &data.context(i);
+  const int joints = model.chain.num_joints();
+  return CandidateTermSpecs(
+      model.chain, SpectrumOrders(cv.e, contexts, joints, MaxHarmonicOrder(), kOrdersPerJoint));
+}
+
 // Forward selection (header, step 3): one term per step added to `current`, until none is
-// accepted, the residual is consistent with the noise, or max_effects are in.
+// accepted, the residual is consistent with the noise, or max_effects are in. Without a user's
+// candidate list, each step's periodic candidates take their orders from the spectrum of the
+// residual that step starts from (the previous step's term may have been what dominated it).
 void SelectTerms(const Search& search, RobotModel* current, CrossValidation* current_region,
                  DiscoveryResult* r) {
   for (int step = 1; step <= search.o.max_effects; ++step) {
+    Search step_search = search;
+    if (search.o.candidates.empty() && step > 1) {
+      step_search.all_specs = SpectrumCandidates(search.data, *current);
+    }
     // Every candidate scored beside the current model.
-    DiscoveryStep s = ScoreStep(search, *current, *current_region, step);
+    DiscoveryStep s = ScoreStep(step_search, *current, *current_region, step);
     // The choice among them, accepted or not.
     const int best =
         ChooseCandidate({search.o, search.region, search.folds, search.start}, &s);
@@ -149,7 +179,7 @@ void SelectTerms(const Search& search, RobotModel* current, CrossValidation* cur
       break;
     }
     // The extended model; stop once its residual is noise.
-    if (!AcceptTerm(search, std::move(s), best, current, current_region, r)) break;
+    if (!AcceptTerm(step_search, std::move(s), best, current, current_region, r)) break;
   }
 }
 
@@ -166,7 +196,7 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
   RobotModel current = WakeDormantTerms(data, start, say);
   // The candidates, the parallelism and the rest of what every stage reads.
   const Search search{data, start, random, random_folds, region, folds, random_rule, o,
-                      o.candidates.empty() ? CandidateTermSpecs(start.chain) : o.candidates,
+                      o.candidates.empty() ? SpectrumCandidates(data, current) : o.candidates,
                       o.jobs > 0 ? o.jobs : UsableCpuCount(), say};
   // Step 2: the residual test of the starting model, and its region cross-validation.
   CrossValidation current_region = TestStartingModel(search, current, &r);

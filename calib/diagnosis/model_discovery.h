@@ -275,11 +275,15 @@ struct ResidualMap {
 /// The diagnosis's verdict (header, step 4).
 enum class DiscoveryVerdict {
   kConsistentWithNoise,  ///< the residual test passes: nothing searched
-  kEffectsAdded,         ///< one or more terms accepted
+  kEffectsAdded,         ///< one or more terms accepted, and the residual is then noise
   kUnexplained,          ///< systematic, and no candidate passes
+  /// one or more terms accepted, and the residual after the last accepted step is still
+  /// systematic (its test and evidence say how much is left)
+  kPartlyExplained,
 };
 
-/// "consistent_with_noise", "effects_added", "unexplained" (the report's words).
+/// "consistent_with_noise", "effects_added", "unexplained", "partly_explained" (the report's
+/// words).
 const char* ToString(DiscoveryVerdict verdict);
 
 /// The kind of data diagnosed.

@@ -31,7 +31,10 @@ nlohmann::json Identify(const std::string& file, int seed, const std::string& va
     args.push_back("--validate");
     args.push_back((kData / validate).string());
   }
-  const testing::ProcessRun r = testing::TwinbenchArgs(args, 300);
+  // 900 s: with the stage-5 candidates (issue 39) a diagnosis of these files takes 1-3 min alone
+  // on 2 cores, up to twice that beside the other tests of a parallel ctest; a hang is still
+  // caught.
+  const testing::ProcessRun r = testing::TwinbenchArgs(args, 900);
   EXPECT_EQ(r.code, 0) << r.output;
   std::ifstream in(out / "report.json");
   return nlohmann::json::parse(in, nullptr, false);
@@ -102,18 +105,20 @@ TEST(RealTrackerData, MotomanDiagnosisGivesAVerdictWithItsEvidenceOnBothFiles) {
     std::printf("[ measured ] %s: %s, region-disjoint held-out RMS %.4f -> %.4f mm\n", file,
                 verdict.c_str(), start, found);
     ASSERT_TRUE(verdict == "consistent_with_noise" || verdict == "effects_added" ||
-                verdict == "unexplained") << verdict;
+                verdict == "partly_explained" || verdict == "unexplained")
+        << verdict;
     EXPECT_FALSE(d["reason"].get<std::string>().empty());
     EXPECT_GT(d["noise_floor_mm"].get<double>(), 0.0);
     EXPECT_FALSE(d["candidates"].empty());
-    if (verdict == "effects_added") {
+    if (verdict == "effects_added" || verdict == "partly_explained") {
       EXPECT_FALSE(d["effects_added"].empty());
       EXPECT_LE(found, start);
       for (const auto& e : d["effects_added"]) EXPECT_TRUE(e["accepted"].get<bool>());
       if (std::string(file) == "right_arm_wide.csv") {
         EXPECT_LE(found, 0.8 * start);
       }
-    } else if (verdict == "unexplained") {
+    }
+    if (verdict == "unexplained" || verdict == "partly_explained") {
       EXPECT_FALSE(d["unexplained_evidence"].empty());
       EXPECT_FALSE(d["residual_maps"].empty());
     }

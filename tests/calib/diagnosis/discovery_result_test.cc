@@ -48,6 +48,14 @@ TEST(DiscoveryResult, TheSearchVerdictAndItsReason) {
   EXPECT_EQ(r.reason,
             "1 effect(s) added; region-disjoint held-out RMS 0.5 mm -> 0.02 mm; the residual is "
             "then consistent with noise (p = 0.4)");
+  // The same step with a residual still systematic after it: partly explained.
+  DiscoveryResult partly = OneEffect();
+  partly.test_after.systematic = true;
+  partly.test_after.p_value = 1e-6;
+  discovery::StateSearchVerdict(0.02e-3, &partly);
+  EXPECT_EQ(partly.verdict, DiscoveryVerdict::kPartlyExplained);
+  EXPECT_STREQ(ToString(partly.verdict), "partly_explained");
+  EXPECT_NE(partly.reason.find("still systematic (p = 1e-06)"), std::string::npos) << partly.reason;
   r.effects_added.clear();
   discovery::StateSearchVerdict(0.5e-3, &r);
   EXPECT_EQ(r.verdict, DiscoveryVerdict::kUnexplained);

@@ -1,0 +1,34 @@
+// Which harmonic orders model discovery tries for the periodic terms (transmission error, axis
+// wobble) of each joint (model_discovery.h, step 3): the orders the residual's spectrum over that
+// joint's reading shows most of, up to the highest its sampled range resolves, rather than a
+// fixed list. Internal to calib/diagnosis.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "calib/model/measurement_context.h"
+
+namespace twin::discovery {
+
+/// The highest order the readings `q` of one joint resolve: their spacing over the range they
+/// cover, R / (m - 1) with m distinct readings, samples a sinusoid of order h at least twice a
+/// period (h <= pi (m - 1) / R), at most `max_order`; 0 for a joint that does not move.
+int ResolvedOrder(const std::vector<double>& q, int max_order);
+
+/// Per order h = 1..ResolvedOrder, the residual's power at that order over the joint's reading:
+/// the sum over the residual's components of what a least-squares fit of a + b sin(h q) +
+/// c cos(h q) explains beyond the mean [m^2]. `residuals[i]` is unit i's residual (any length,
+/// the same for every unit), `q[i]` its reading.
+std::vector<double> HarmonicPower(const std::vector<Eigen::VectorXd>& residuals,
+                                  const std::vector<double>& q, int max_order);
+
+/// The orders to try for each joint: the `per_joint` orders of largest HarmonicPower (the lower
+/// order on a tie), ascending; none for a joint that does not move. `contexts[i]` holds unit i's
+/// readings.
+std::vector<std::vector<int>> SpectrumOrders(const std::vector<Eigen::VectorXd>& residuals,
+                                             const std::vector<const MeasurementContext*>& contexts,
+                                             int joints, int max_order, int per_joint);
+
+}  // namespace twin::discovery
