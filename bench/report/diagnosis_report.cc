@@ -64,6 +64,7 @@ json CandidateJson(const CandidateScore& c, int step) {
                                         ? json(c.versus_leader_p_value)
                                         : json(nullptr)},
           {"preferred_over", c.preferred_over.empty() ? json(nullptr) : json(c.preferred_over)},
+          {"indistinguishable_from", c.indistinguishable_from},
           {"restarted", c.restarted},
           {"accepted", c.accepted},
           {"note", c.note}};

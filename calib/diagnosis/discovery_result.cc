@@ -79,6 +79,12 @@ void StateSearchVerdict(double heldout_rms_discovered_m, DiscoveryResult* out) {
        << "; the residual is then " << (r.test_after.systematic ? "still systematic" :
                                                                   "consistent with noise")
        << " (p = " << r.test_after.p_value << ")";
+    for (const CandidateScore& c : r.effects_added) {
+      if (c.indistinguishable_from.empty()) continue;
+      os << "; " << c.label;
+      for (const std::string& other : c.indistinguishable_from) os << " and " << other;
+      os << " are indistinguishable on these data";
+    }
     r.reason = os.str();
   }
 }
@@ -113,6 +119,15 @@ std::string StepLine(const DiscoveryStep& s) {
     os << buf;
   } else {
     os << "none testable";
+  }
+  for (const CandidateScore& c : s.candidates) {
+    if (!c.accepted || c.indistinguishable_from.empty()) continue;
+    os << " (" << (best != &c ? c.label + " accepted; " : std::string())
+       << "indistinguishable on these data from";
+    for (std::size_t k = 0; k < c.indistinguishable_from.size(); ++k) {
+      os << (k == 0 ? " " : ", ") << c.indistinguishable_from[k];
+    }
+    os << ")";
   }
   os << "; region held-out RMS " << FixedMm(s.heldout_rms_before_m) << " -> "
      << FixedMm(s.heldout_rms_after_m) << "\n";

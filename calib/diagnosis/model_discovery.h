@@ -234,6 +234,11 @@ struct CandidateScore {
   /// the later steps.
   bool restarted = false;
   bool accepted = false;
+  /// Of the accepted candidate: the other candidates of its step that would be accepted on
+  /// their own (Judge) and whose held-out loss the region folds do not tell from its own
+  /// (one-sided sign-flip p of its being lower, summed per fold, >= alpha): the data explain
+  /// the residual about equally well with any of them, and the verdict names them together.
+  std::vector<std::string> indistinguishable_from;
   std::vector<DiscoveredParameter> parameters;  ///< identified on every point
 };
 

@@ -269,6 +269,40 @@ void DecideOnChoice(const DiscoveryOptions& o, const std::vector<int>& tested, i
   AddNote(why.str(), &c);
 }
 
+// Honest names (model_discovery.h, CandidateScore::indistinguishable_from): the accepted term
+// and every other acceptable candidate the region folds do not tell from it.
+void NameIndistinguishable(const SelectionContext& x, const std::vector<int>& tested, int best,
+                           DiscoveryStep* step) {
+  DiscoveryStep& s = *step;
+  if (best < 0 || !s.candidates[best].accepted) return;
+  CandidateScore& chosen = s.candidates[best];
+  if (chosen.heldout_loss.size() != x.region.size()) return;
+  for (int k : tested) {
+    CandidateScore& c = s.candidates[k];
+    if (k == best || Judge(c, x.o) != Refusal::kNone ||
+        c.heldout_loss.size() != x.region.size()) {
+      continue;
+    }
+    const double p = FoldSignFlipP(c, chosen, x.region, x.folds);
+    if (p < x.o.alpha) continue;
+    chosen.indistinguishable_from.push_back(c.label);
+    std::ostringstream why;
+    why << "indistinguishable on these data from the accepted " << chosen.label
+        << " (held-out gain " << c.gain_percent << " % against " << chosen.gain_percent
+        << " %, sign-flip p over the region folds = " << p << " >= " << x.o.alpha << ")";
+    AddNote(why.str(), &c);
+  }
+  if (!chosen.indistinguishable_from.empty()) {
+    std::string names;
+    for (const std::string& n : chosen.indistinguishable_from) {
+      names += (names.empty() ? "" : ", ") + n;
+    }
+    AddNote("the region folds do not tell it from " + names +
+                ": the data explain the residual about equally well with either",
+            &chosen);
+  }
+}
+
 int ChooseCandidate(const SelectionContext& x, DiscoveryStep* step) {
   // Holm-adjusted p-values, and the largest gain among those with a size.
   const Selection sel = SelectLargestGain(x.o, step);
@@ -280,6 +314,8 @@ int ChooseCandidate(const SelectionContext& x, DiscoveryStep* step) {
   best = PreferEstimatedShape(x, sel.tested, best, step, &shape_choice);
   // Accepted or refused, with the reason.
   DecideOnChoice(x.o, sel.tested, best, shape_choice, step);
+  // The others the data cannot tell from it, named with it.
+  NameIndistinguishable(x, sel.tested, best, step);
   return best;
 }
 

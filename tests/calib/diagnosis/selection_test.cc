@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "calib/common/errors.h"
+#include "calib/diagnosis/discovery_result.h"
 #include "test_models.h"
 
 namespace twin::discovery {
@@ -134,6 +135,51 @@ TEST(Selection, AClockDrivenLeaderGivesWayToAMeasuredDriverTheFoldsCannotTellApa
   EXPECT_FALSE(s.candidates[0].accepted);
   // Sign-flip over the fold sums (1, -1): 3 of 4 assignments reach 0.
   EXPECT_DOUBLE_EQ(s.candidates[1].versus_leader_p_value, 0.75);
+}
+
+// Honest names: a second acceptable candidate whose held-out loss the region folds cannot tell
+// from the accepted one's is named with it; one worse in every fold is not.
+TEST(Selection, CandidatesTheFoldsCannotTellApartAreNamedTogether) {
+  const DiscoveryOptions o;
+  DiscoveryStep s;
+  s.candidates = {Acceptable("lateral_compliance (joint 1)", 40.0),
+                  Acceptable("joint_compliance (joint 2)", 38.0),
+                  Acceptable("mount_deflection", 30.0)};
+  for (CandidateScore& c : s.candidates) c.spec = {"thermal_growth", -1, {}};  // no shape
+  // Five folds of two units. The second candidate is better than the first in two folds and
+  // worse in three (fold sums -0.2, -0.2, +0.3, +0.3, +0.3): the sign flips reach its sum
+  // often (p >= 0.05). The third is worse in every fold: p = 1/32 < 0.05.
+  s.candidates[0].heldout_loss = {1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0};
+  s.candidates[1].heldout_loss = {0.9, 0.9, 0.9, 0.9, 1.15, 1.15, 1.15, 1.15, 1.15, 1.15};
+  s.candidates[2].heldout_loss = {1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5, 1.5};
+  const std::vector<int> region{0, 0, 1, 1, 2, 2, 3, 3, 4, 4};
+  const RobotModel start = MakeRobotModel(testing::ReinovoLikeModel(1));
+  const SelectionContext x{o, region, 5, start};
+  const int best = ChooseCandidate(x, &s);
+  ASSERT_EQ(best, 0);
+  EXPECT_TRUE(s.candidates[0].accepted);
+  EXPECT_EQ(s.candidates[0].indistinguishable_from,
+            std::vector<std::string>{"joint_compliance (joint 2)"});
+  EXPECT_NE(s.candidates[1].note.find("indistinguishable on these data from the accepted "
+                                      "lateral_compliance (joint 1)"),
+            std::string::npos)
+      << s.candidates[1].note;
+  EXPECT_TRUE(s.candidates[2].indistinguishable_from.empty());
+  EXPECT_EQ(s.candidates[2].note.find("indistinguishable"), std::string::npos);
+  // The verdict names both.
+  DiscoveryResult r;
+  r.test_after.systematic = true;
+  r.steps = {s};
+  r.effects_added = {s.candidates[0]};
+  StateSearchVerdict(1e-3, &r);
+  EXPECT_NE(r.reason.find("lateral_compliance (joint 1) and joint_compliance (joint 2) are "
+                          "indistinguishable on these data"),
+            std::string::npos)
+      << r.reason;
+  EXPECT_NE(r.BriefReport().find("indistinguishable on these data from joint_compliance "
+                                 "(joint 2)"),
+            std::string::npos)
+      << r.BriefReport();
 }
 
 }  // namespace
