@@ -10,7 +10,7 @@
 namespace twin {
 namespace {
 
-constexpr int kMinContacts = 4;
+constexpr int kMinTipContacts = 4;
 
 // Contact residual (3): X_B1F1 (t1 + a0 u + a1 v) - (R p2 + p), p2 = X_B2F2 (t2 + dt2), with
 // the rotation R of X_B1B2 as a quaternion (Ceres order w, x, y, z).
@@ -71,8 +71,8 @@ TipRefinementResult RefineBaseAndTips(const std::vector<Transform>& X_B1F1,
                "tips, tip axis and initial transform must be finite (and the axis non-zero)");
   TipRefinementResult out;
   const int n = static_cast<int>(X_B1F1.size());
-  if (n < kMinContacts) {
-    out.reason = "tip refinement needs at least " + std::to_string(kMinContacts) +
+  if (n < kMinTipContacts) {
+    out.reason = "tip refinement needs at least " + std::to_string(kMinTipContacts) +
                  " contacts, got " + std::to_string(n);
     return out;
   }

@@ -24,7 +24,8 @@ bool DeflectedEndPointJacobian(const RobotModel& model) {
 
 namespace {
 
-// Autodiff columns [begin, end) of J (kJetStride at a time); p the end point.
+// Autodiff columns begin_col.. of J (kJetStride at a time; J sized by the caller); p the end
+// point.
 void AutodiffColumns(const RobotModel& model, const double* params, const MeasurementContext& c,
                      int begin_col, Vector3* p, PointJacobian* J) {
   const int n = model.num_parameters();
@@ -81,21 +82,8 @@ void DeflectedJacobian(const RobotModel& model, const double* params, const Meas
 
 void EndPointJacobianAutodiff(const RobotModel& model, const double* params,
                               const MeasurementContext& c, Vector3* p, PointJacobian* J) {
-  const int n = model.num_parameters();
-  J->resize(3, n);
-  std::vector<Jet> x(n);
-  for (int i = 0; i < n; ++i) x[i] = Jet(params[i]);
-  for (int begin = 0; begin < n; begin += kJetStride) {
-    const int end = std::min(n, begin + kJetStride);
-    for (int i = begin; i < end; ++i) x[i].v[i - begin] = 1.0;
-    const RigidT<Jet> X = RobotEndPoseT<Jet>(model, x.data(), c);
-    for (int r = 0; r < 3; ++r) {
-      for (int i = begin; i < end; ++i) (*J)(r, i) = X.p(r).v[i - begin];
-      (*p)(r) = X.p(r).a;
-    }
-    for (int i = begin; i < end; ++i) x[i].v[i - begin] = 0.0;
-  }
-  if (n == 0) *p = RobotEndPoseT<double>(model, params, c).p;
+  J->resize(3, model.num_parameters());
+  AutodiffColumns(model, params, c, 0, p, J);
 }
 
 void EndPointJacobian(const RobotModel& model, const double* params, const MeasurementContext& c,

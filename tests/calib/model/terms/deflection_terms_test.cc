@@ -195,7 +195,6 @@ TEST(DeflectionTerms, LumpedComplianceRecoversComplianceTimesEachLumpsWeight) {
   Eigen::MatrixXd A(3 * poses, m);
   Eigen::VectorXd b(3 * poses);
   const Eigen::VectorXd p0 = GetParameters(model);
-  const int g = massless.num_parameters();
   for (int i = 0; i < poses; ++i) {
     const MeasurementContext c = Context(RandomJoints(massless, rng));
     Vector3 p;
@@ -212,7 +211,6 @@ TEST(DeflectionTerms, LumpedComplianceRecoversComplianceTimesEachLumpsWeight) {
     // linearisation (sags of 1e-3 rad) stay well inside it. A wrong lever or sign is 100 %.
     EXPECT_NEAR(a(k), expected, 0.02 * expected) << lumps.names[k];
   }
-  (void)g;
 }
 
 }  // namespace
