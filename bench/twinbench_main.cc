@@ -27,6 +27,7 @@
 #include "bench/runs/tracker_identify_run.h"
 #include "bench/io/tracker_file.h"
 #include "bench/io/model_loader.h"
+#include "bench/io/data_dir.h"
 #include "bench/io/output_files.h"
 #include "bench/runs/twin_commands.h"
 #include "bench/io/urdf_model.h"
@@ -213,7 +214,7 @@ int RunDemo(const std::string& model_dir, int samples, unsigned seed) {
 
 // The values of every verb's options, bound to the command line by the Add*Verb(s) functions.
 struct CliValues {
-  std::string model, q, xyz, rpy = "0,0,0", seed, out, model_dir = "models";
+  std::string model, q, xyz, rpy = "0,0,0", seed, out, model_dir;
   bool position_only = false;
   int samples = 200;
   ModelLinks links;  // the chain of a URDF model: one pair for every verb that takes a model file
@@ -511,7 +512,10 @@ int RunVerb(const Verbs& verbs, CliValues* v) {
   if (*verbs.fk) return RunFk(v->model, v->links, v->q);
   if (*verbs.ik) return RunIk(v->model, v->links, v->xyz, v->rpy, v->seed, v->position_only);
   if (*verbs.export_urdf) return RunExportUrdf(v->model, v->links, v->out);
-  if (*verbs.demo) return RunDemo(v->model_dir, v->samples, v->rng_seed);
+  if (*verbs.demo) {
+    return RunDemo(v->model_dir.empty() ? DataFile("models") : v->model_dir, v->samples,
+                   v->rng_seed);
+  }
   if (*verbs.render) return RunRender(v->render_options);
   if (*verbs.bench) return RunTwinBenchmark(v->bench_options);
   if (*verbs.run) {

@@ -16,6 +16,7 @@ PACKAGES=(
   time jq   # jq: scripts/discovery_table.sh
   ccache           # scripts/build.sh and test_sanitizers.sh compile through it (cmake/Ccache.cmake)
   universal-ctags  # scripts/function_lengths.sh
+  dpkg-dev file    # the packaging test: cpack -G DEB derives Depends with dpkg-shlibdeps
 )
 
 missing=()
