@@ -28,6 +28,7 @@
 #include "bench/io/tracker_file.h"
 #include "bench/io/model_loader.h"
 #include "bench/io/data_dir.h"
+#include "bench/cli_completion.h"
 #include "bench/io/output_files.h"
 #include "bench/runs/twin_commands.h"
 #include "bench/io/urdf_model.h"
@@ -574,6 +575,8 @@ int main(int argc, char** argv) {
   AddCheckVerb(&app, &values, &verbs);
   AddIdentifyVerb(&app, &values, &verbs);
   AddModelBenchmarkVerbs(&app, &values, &verbs);
+  std::string completion_shell;
+  CLI::App* completion = AddCompletionVerb(&app, &completion_shell);
 
   try {
     app.parse(argc, argv);
@@ -581,6 +584,10 @@ int main(int argc, char** argv) {
     if (e.get_exit_code() == 0) return app.exit(e);  // --help
     std::fprintf(stderr, "error: command line: %s (see twinbench --help)\n", e.what());
     return kExitUserError;
+  }
+  if (*completion) {
+    std::fputs(BashCompletion(app).c_str(), stdout);
+    return 0;
   }
   try {
     // Every output path checked, every input noted, before anything runs.

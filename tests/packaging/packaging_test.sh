@@ -107,6 +107,19 @@ rc=0; TWINBENCH_DATA_DIR=$tmp/nowhere "$tb" demo --samples 1 >"$tmp/env.log" 2>&
   { cat "$tmp/env.log"; fail "TWINBENCH_DATA_DIR naming no folder: exit status $rc"; }
 TWINBENCH_DATA_DIR=$data run "$tmp/env.log" "$tmp/bare/bin/twinbench" demo --samples 1
 
+step "installed bash completion"
+completion=$usr/share/bash-completion/completions/twinbench
+[ -f "$completion" ] || fail "the package lacks ${completion#"$tmp/root"}"
+# complete WORD...: what _twinbench offers for the last word of `twinbench WORD...`.
+complete_words() {
+  bash -c 'source "$1"; shift; COMP_WORDS=(twinbench "$@"); COMP_CWORD=$#; _twinbench;
+           echo "${COMPREPLY[*]}"' _ "$completion" "$@"
+}
+[ "$(complete_words ch)" = check ] || fail "completion of 'twinbench ch': '$(complete_words ch)'"
+[[ " $(complete_words run s.yaml --)" == *" --out "* ]] ||
+  fail "completion of 'twinbench run s.yaml --' lacks --out: '$(complete_words run s.yaml --)'"
+[[ " $(complete_words --)" == *" --version"* ]] || fail "completion of 'twinbench --' lacks --version"
+
 step "a program built against the exported package (find_package(twinbench CONFIG))"
 run "$tmp/consumer-configure.log" cmake -S "$src/tests/packaging/consumer" -B "$tmp/consumer" \
   -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$usr" -DCMAKE_FIND_PACKAGE_NO_PACKAGE_REGISTRY=ON
