@@ -8,7 +8,7 @@ namespace {
 
 // The names of `app`'s own options ("-h --help --out ..."); `with_value` keeps only those that
 // take a value (not flags).
-std::string OptionNames(const CLI::App& app, bool with_value) {
+std::string CompletionOptionNames(const CLI::App& app, bool with_value) {
   std::string names;
   for (const CLI::Option* opt : app.get_options()) {
     if (!opt->nonpositional() || (with_value && opt->get_expected_min() == 0)) continue;
@@ -18,13 +18,13 @@ std::string OptionNames(const CLI::App& app, bool with_value) {
   return names;
 }
 
-std::vector<const CLI::App*> Verbs(const CLI::App& app) {
+std::vector<const CLI::App*> VisibleVerbs(const CLI::App& app) {
   return app.get_subcommands([](const CLI::App* sub) { return !sub->get_group().empty(); });
 }
 
 // One case of the verb's options: `  fk) opts="..."; takes="...";;`
-void WriteCase(std::ostringstream& out, const std::string& pattern, const std::string& opts,
-               const std::string& takes) {
+void WriteCompletionCase(std::ostringstream& out, const std::string& pattern,
+                         const std::string& opts, const std::string& takes) {
   out << "    " << pattern << ") opts=\"" << opts << "\"; takes=\"" << takes << "\";;\n";
 }
 
@@ -38,10 +38,12 @@ CLI::App* AddCompletionVerb(CLI::App* app, std::string* shell) {
 }
 
 std::string BashCompletion(const CLI::App& app) {
-  const std::vector<const CLI::App*> verbs = Verbs(app);
+  const std::vector<const CLI::App*> verbs = VisibleVerbs(app);
   std::string verb_names;
-  for (const CLI::App* verb : verbs) verb_names += (verb_names.empty() ? "" : "|") + verb->get_name();
-  std::string top = OptionNames(app, false);
+  for (const CLI::App* verb : verbs) {
+    verb_names += (verb_names.empty() ? "" : "|") + verb->get_name();
+  }
+  std::string top = CompletionOptionNames(app, false);
   for (const CLI::App* verb : verbs) top += " " + verb->get_name();
 
   std::ostringstream out;
@@ -57,9 +59,10 @@ std::string BashCompletion(const CLI::App& app) {
          "    esac\n"
          "  done\n"
          "  case \"$verb\" in\n";
-  WriteCase(out, "\"\"", top, OptionNames(app, true));
+  WriteCompletionCase(out, "\"\"", top, CompletionOptionNames(app, true));
   for (const CLI::App* verb : verbs) {
-    WriteCase(out, verb->get_name(), OptionNames(*verb, false), OptionNames(*verb, true));
+    WriteCompletionCase(out, verb->get_name(), CompletionOptionNames(*verb, false),
+                        CompletionOptionNames(*verb, true));
   }
   out << "  esac\n"
          "  if [[ -n \"$takes\" && \" $takes \" == *\" $prev \"* ]]; then\n"
