@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The model-discovery table of the README ("Model discovery"): a seeded study of every
+# The model-discovery table (docs/results/; the terms it counts are explained in
+# docs/explanation/discovery-statistics.md): a seeded study of every
 # scenario in scenarios/discovery/ (20 trials each by default; each trial a different truth and
 # estimator seed), then per scenario: how often the injected (undeclared) effect was named,
 # how often something else was added, and the physical-truth RMS (rigid gauge, the twin's
