@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The identification benchmark (README, "Speed"): `twinbench identify` on synthetic
+# The identification benchmark (the engine: docs/explanation/architecture.md): `twinbench identify` on synthetic
 # optical-axis measurement files of ROWS rows each (default 5000 and 20000; 5 axes, the true
 # geometry and the noise drawn by `twinbench synthesize-measurements`), printing the wall time
 # and the peak resident memory of each run (GNU time's %e and %M).

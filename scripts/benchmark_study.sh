@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The speed figures of item 4 of the Monte Carlo study work (README, "Fast trials"), measured
+# The speed of study trials (docs/explanation/studies.md, "Speed of trials"), measured
 # on this machine with the built twinbench:
 #   1. one run of scenarios/paper_reinovo.yaml, planning included (its timing line, frames per
 #      aligned pose); it also fills a plan cache;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Accuracy of two studies of an optical-axis scenario on the same seeds, side by side (README,
-# "Speed of trials": accuracy before and after). Per range of trials: the seeds whose robots
+# Accuracy of two studies of an optical-axis scenario on the same seeds, side by side
+# (docs/explanation/studies.md: accuracy before and after a change). Per range of trials: the seeds whose robots
 # all meet the truth targets (rigid RMS <= 0.3 mm and similarity RMS <= 0.1 mm, "Over other
 # seeds"), the median and worst rigid, similarity and validation (misaligned, held-out axes)
 # errors, the scale error (estimated / true - 1) RMS and worst; then, over the trials both

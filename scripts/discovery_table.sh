@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The model-discovery table of the README ("Model discovery"): a seeded study of every
+# The model-discovery table (docs/results/; the terms it counts are explained in
+# docs/explanation/discovery-statistics.md): a seeded study of every
 # scenario in scenarios/discovery/ (20 trials each by default; each trial a different truth and
 # estimator seed), then per scenario: how often the injected (undeclared) effect was named,
 # how often something else was added, and the physical-truth RMS (rigid gauge, the twin's
@@ -26,6 +27,10 @@ declare -A INJECTED=(
   [tracker_thermal_drift]="thermal_"   # thermal_drift or thermal_warmup (any time constant)
   [tracker_thermal_drift_sensed]="thermal_"   # the same with the arm's temperature sensor
   [tracker_thermal_drift_declared]=""   # the same warm-up declared (the estimator's warm-up)
+  [tracker_lateral_compliance_j2]="lateral_compliance (joint 2)"
+  [tracker_base_compliance]="lateral_compliance (joint 1)"   # the estimator's base tilt
+  [tracker_axis_wobble_j1]="axis_wobble (joint 1, order 2)"
+  [tracker_transmission_j2_order3]="transmission_error (joint 2, order 3)"
   [optical_clean]=""
   [optical_clean_reseeded]=""   # the clean truths, other images: the pair scatter of the rows
   [optical_compliance_j2]="joint_compliance (joint 2)"
@@ -35,18 +40,23 @@ declare -A INJECTED=(
   [optical_thermal_drift]="thermal_"   # thermal_drift or thermal_warmup (any time constant)
   [optical_thermal_drift_sensed]="thermal_"   # the same with the arm's temperature sensor
   [optical_mount_deflection]="mount_deflection"
+  [optical_lateral_compliance_j2]="lateral_compliance (joint 2)"
+  [optical_base_compliance]="lateral_compliance (joint 1)"
+  [optical_axis_wobble_j1]="axis_wobble (joint 1, order 2)"
 )
 case "$PROCEDURE" in
   tracker)
     ORDER=(tracker_clean tracker_compliance_j2 tracker_transmission_j1 tracker_backlash_j3
            tracker_thermal_drift tracker_thermal_drift_sensed tracker_thermal_drift_declared
-           tracker_compliance_j2_declared)
+           tracker_compliance_j2_declared tracker_lateral_compliance_j2 tracker_base_compliance
+           tracker_axis_wobble_j1 tracker_transmission_j2_order3)
     PREFIX="" ;;
   optical)
     ORDER=(optical_clean optical_clean_reseeded optical_compliance_j2 optical_transmission_j3
            optical_backlash_j3
            optical_thermal_drift optical_thermal_drift_sensed optical_mount_deflection
-           optical_compliance_j2_declared)
+           optical_compliance_j2_declared optical_lateral_compliance_j2 optical_base_compliance
+           optical_axis_wobble_j1)
     PREFIX="robots.r2." ;;
   *) echo "discovery_table: procedure must be tracker or optical, got '$PROCEDURE'" >&2; exit 2 ;;
 esac
@@ -68,6 +78,14 @@ rows() {
      "$OUT/$1/trials.jsonl" | sort -t$'\t' -k1,1
 }
 rows "$CLEAN" > "$OUT/clean.tsv"
+# Provenance (docs/results/ tables are written by this script, never by hand).
+printf '# Model discovery on the twin, %s procedure\n\n' "$PROCEDURE"
+printf -- '- date: %s\n- commit: %s\n- machine: %s, %s cores, %s GiB\n' "$(date -u '+%Y-%m-%d %H:%M UTC')" \
+  "$(git rev-parse --short HEAD)$(git diff --quiet HEAD -- calib sim bench || echo ' (with uncommitted changes)')" \
+  "$(uname -m)" "$(nproc)" "$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)"
+printf -- '- command: `%sscripts/discovery_table.sh %s %s %s`\n' \
+  "${SCENARIOS:+SCENARIOS=\"$SCENARIOS\" }" "$TRIALS" "$OUT" "$PROCEDURE"
+printf -- '- %s trials a scenario: trial t draws the truth from the scenario's seeds.truth + t and the estimator's randomness from seeds.estimator + t (`twinbench study`)\n\n' "$TRIALS"
 printf '| scenario | injected (undeclared) | named | something else added | truth RMS geometric-only [mm] | discovered [mm] | effect-free [mm] | discovered <= 1.2 x effect-free | covered region: geometric-only / discovered / effect-free [mm] | covered: within 1.2 x |\n'
 printf '|---|---|---|---|---|---|---|---|---|---|\n'
 for s in "${ORDER[@]}"; do

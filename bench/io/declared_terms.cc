@@ -23,6 +23,15 @@ RobotModel DeclaredModel(const Scenario& sc, int robot, const KinematicModel& no
     } else if (e.type == "transmission_error") {
       const auto h = e.params.find("harmonic");
       per_joint(e.type, {h != e.params.end() ? static_cast<int>(std::lround(h->second)) : 1});
+    } else if (e.type == "lateral_compliance") {
+      per_joint(e.type, {});
+    } else if (e.type == "base_compliance") {
+      // The whole arm tilting at its base under the gravity moment there: the estimator's
+      // lateral compliance of joint 1, whose tilt includes the base's (terms/lateral_compliance).
+      specs.push_back({"lateral_compliance", 0, {}});
+    } else if (e.type == "axis_wobble") {
+      const auto h = e.params.find("order");
+      per_joint(e.type, {h != e.params.end() ? static_cast<int>(std::lround(h->second)) : 2});
     } else if (e.type == "mount_deflection") {
       specs.push_back({e.type, -1, {}});
     } else if (e.type == "thermal_drift") {

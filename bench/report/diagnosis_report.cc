@@ -56,6 +56,7 @@ json CandidateJson(const CandidateScore& c, int step) {
           {"size_test",
            {{"statistic", c.size_statistic}, {"dof", c.size_dof}, {"p_value", c.size_p_value}}},
           {"max_geometry_correlation", c.max_geometry_correlation},
+          {"min_geometry_correlation", c.min_geometry_correlation},
           {"correlated_with", c.correlated_with},
           {"driver", c.driver == TermDriver::kMeasured         ? "measured"
                      : c.driver == TermDriver::kClockLevelling ? "clock_levelling"
@@ -292,13 +293,14 @@ std::string DiagnosisHtml(const json& d) {
   }
   os << "<h3>Decision chain</h3><table><tr><th>step</th><th>candidate</th><th>tested</th>"
         "<th>held-out gain [%]</th><th>p</th><th>Holm p</th><th>size p (Wald)</th>"
-        "<th>max |rho| geometry</th><th>accepted</th><th>note</th></tr>";
+        "<th>|rho| geometry (least, most)</th><th>accepted</th><th>note</th></tr>";
   for (const json& c : d["candidates"]) {
     os << "<tr><td>" << c["step"] << "</td><td>" << Esc(c["label"]) << "</td><td>"
        << (c["tested"].get<bool>() ? "yes" : "no") << "</td><td>"
        << Fmt(c["heldout_gain_percent"], "%.1f") << "</td><td>" << Fmt(c["p_value"], "%.2g")
        << "</td><td>" << Fmt(c["p_adjusted"], "%.2g") << "</td><td>"
        << Fmt(c["size_test"]["p_value"], "%.2g") << "</td><td>"
+       << Fmt(c["min_geometry_correlation"], "%.3f") << ", "
        << Fmt(c["max_geometry_correlation"], "%.3f") << "</td><td>"
        << (c["accepted"].get<bool>() ? "<b>yes</b>" : "") << "</td><td style=\"text-align:left\">"
        << Esc(c["note"]) << "</td></tr>";
@@ -308,7 +310,7 @@ std::string DiagnosisHtml(const json& d) {
     os << "<h3>Candidates screened (the residual is consistent with the noise: fitted on all the "
           "data, none tested or added)</h3><table><tr><th>candidate</th><th>applicable</th>"
           "<th>identifiable</th><th>parameters (estimate &plusmn; 1 sigma)</th>"
-          "<th>max |rho| geometry</th><th>note</th></tr>";
+          "<th>|rho| geometry (least, most)</th><th>note</th></tr>";
     for (const json& c : d["screened"]) {
       std::string params;
       for (const json& p : c["parameters"]) {
@@ -319,7 +321,8 @@ std::string DiagnosisHtml(const json& d) {
       os << "<tr><td>" << Esc(c["label"]) << "</td><td>"
          << (c["applicable"].get<bool>() ? "yes" : "no") << "</td><td>"
          << (c["identifiable"].get<bool>() ? "yes" : "<b>no</b>") << "</td><td>" << params
-         << "</td><td>" << Fmt(c["max_geometry_correlation"], "%.5f")
+         << "</td><td>" << Fmt(c["min_geometry_correlation"], "%.5f") << ", "
+         << Fmt(c["max_geometry_correlation"], "%.5f")
          << "</td><td style=\"text-align:left\">" << Esc(c["note"]) << "</td></tr>";
     }
     os << "</table>";

@@ -126,6 +126,9 @@ void MeasureGeometryDisguise(const CandidateFit& f, int base_rank, CandidateScor
     if (skip < static_cast<int>(d.canonical_correlations.size())) {
       c->max_geometry_correlation = d.canonical_correlations[skip];
       c->correlated_with = d.nearest_geometric[skip];
+      c->geometry_correlations.assign(d.canonical_correlations.begin() + skip,
+                                      d.canonical_correlations.end());
+      c->min_geometry_correlation = c->geometry_correlations.back();
     }
   }
 }

@@ -146,14 +146,14 @@ std::string CandidateLine(const CandidateScore& c) {
     char buf[200];
     std::snprintf(buf, sizeof buf,
                   " held-out RMS %.4f mm, gain %.1f %%, p = %.3g, Holm p = %.3g, size p = "
-                  "%.3g, max |rho| geometry %.5f",
+                  "%.3g, |rho| geometry %.5f-%.5f",
                   1e3 * c.heldout_rms_m, c.gain_percent, c.p_value, c.p_adjusted,
-                  c.size_p_value, c.max_geometry_correlation);
+                  c.size_p_value, c.min_geometry_correlation, c.max_geometry_correlation);
     os << buf;
   } else {
     char buf[120];
-    std::snprintf(buf, sizeof buf, " not tested, size p = %.3g, max |rho| geometry %.5f",
-                  c.size_p_value, c.max_geometry_correlation);
+    std::snprintf(buf, sizeof buf, " not tested, size p = %.3g, |rho| geometry %.5f-%.5f",
+                  c.size_p_value, c.min_geometry_correlation, c.max_geometry_correlation);
     os << buf;
   }
   os << (c.accepted ? " [accepted]" : "") << "\n";

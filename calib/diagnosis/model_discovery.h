@@ -200,9 +200,16 @@ struct CandidateScore {
   bool identifiable = true;         ///< its parameters raise the rank
   std::string note;                 ///< why not applicable / identifiable / accepted
   /// Largest canonical correlation of its rank-raising directions with the geometric columns
-  /// (DiscoveryOptions::correlation_limit) [-]
+  /// [-]: 1, one combination of its parameters moves the measurements as a geometric
+  /// correction does (it trades with the geometry, its parameters are not its own there).
   double max_geometry_correlation = 0;
   std::string correlated_with;      ///< the geometric parameter most aligned with that direction
+  /// Smallest canonical correlation of its rank-raising directions [-]: the direction least
+  /// like the geometry. The term is a disguise of the geometry (refused) only where this is at
+  /// least DiscoveryOptions::correlation_limit: every direction it adds is the geometry's.
+  double min_geometry_correlation = 0;
+  /// The canonical correlations of its rank-raising directions, descending [-].
+  std::vector<double> geometry_correlations;
   double heldout_rms_m = 0;         ///< region-disjoint held-out RMS with the term [m]
   double gain_percent = 0;          ///< held-out sum-of-squares reduction vs the step's base [%]
   double p_value = 1, p_adjusted = 1;  ///< Wilcoxon one-sided, and after Holm

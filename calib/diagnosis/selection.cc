@@ -31,7 +31,10 @@ Refusal Judge(const CandidateScore& c, const DiscoveryOptions& o) {
   if (c.size_p_value >= o.alpha) return Refusal::kSizeNotShown;
   if (c.p_adjusted >= o.alpha) return Refusal::kNotSignificant;
   if (c.gain_percent < o.min_gain_percent) return Refusal::kGainTooSmall;
-  if (c.max_geometry_correlation >= o.correlation_limit) return Refusal::kGeometryDisguise;
+  // Per direction: refused only where every direction it adds is the geometry's. One that
+  // also adds a direction of its own is judged by its held-out gain; its directions that are
+  // the geometry's trade with it (noted by SelectLargestGain).
+  if (c.min_geometry_correlation >= o.correlation_limit) return Refusal::kGeometryDisguise;
   return Refusal::kNone;
 }
 
@@ -62,8 +65,9 @@ std::string RefusalText(Refusal refusal, const CandidateScore& c, const Discover
       why << c.gain_percent << " % < the " << o.min_gain_percent << " % worth a term";
       break;
     case Refusal::kGeometryDisguise:
-      why << "a disguise of the geometry: |rho| = " << c.max_geometry_correlation << " with "
-          << c.correlated_with;
+      why << "a disguise of the geometry: each of its " << c.geometry_correlations.size()
+          << " direction(s) moves the measurements as a geometric correction does (|rho| >= "
+          << c.min_geometry_correlation << ", the nearest " << c.correlated_with << ")";
       break;
   }
   return why.str();
@@ -74,6 +78,20 @@ namespace {
 // Appends `text` to the candidate's note ("; " between).
 void AddNote(const std::string& text, CandidateScore* c) {
   c->note = c->note.empty() ? text : c->note + "; " + text;
+}
+
+// A term with some but not all of its directions the geometry's: those combinations of its
+// parameters trade with the geometric ones (their values are not the term's own).
+void NotePartlyGeometry(const DiscoveryOptions& o, CandidateScore* c) {
+  int disguised = 0;
+  for (double r : c->geometry_correlations) disguised += r >= o.correlation_limit ? 1 : 0;
+  if (disguised == 0 || disguised == static_cast<int>(c->geometry_correlations.size())) return;
+  std::ostringstream why;
+  why << disguised << " of its " << c->geometry_correlations.size()
+      << " directions move the measurements as the geometry does (|rho| = "
+      << c->max_geometry_correlation << " with " << c->correlated_with
+      << "): those combinations trade with the geometry";
+  AddNote(why.str(), c);
 }
 
 }  // namespace
@@ -267,6 +285,7 @@ void DecideOnChoice(const DiscoveryOptions& o, const std::vector<int>& tested, i
         << " candidates";
   }
   AddNote(why.str(), &c);
+  if (c.accepted) NotePartlyGeometry(o, &c);
 }
 
 // Honest names (model_discovery.h, CandidateScore::indistinguishable_from): the accepted term

@@ -21,7 +21,8 @@ CandidateScore Acceptable(const std::string& label, double gain) {
   c.size_p_value = 0.001;
   c.p_value = c.p_adjusted = 0.001;
   c.gain_percent = gain;
-  c.max_geometry_correlation = 0.5;
+  c.max_geometry_correlation = c.min_geometry_correlation = 0.5;
+  c.geometry_correlations = {0.5};
   return c;
 }
 
@@ -29,7 +30,14 @@ TEST(Selection, JudgeNamesEachRefusalInItsOrder) {
   const DiscoveryOptions o;
   CandidateScore c = Acceptable("a", 20.0);
   EXPECT_EQ(Judge(c, o), Refusal::kNone);
-  c.max_geometry_correlation = 0.99999;  // the limit itself refuses (>=)
+  // One direction the geometry's, the other its own: judged by its gain, not refused.
+  c.geometry_correlations = {0.999999, 0.9};
+  c.max_geometry_correlation = 0.999999;
+  c.min_geometry_correlation = 0.9;
+  EXPECT_EQ(Judge(c, o), Refusal::kNone);
+  // Every direction the geometry's; the limit itself refuses (>=).
+  c.geometry_correlations = {0.999999, 0.99999};
+  c.min_geometry_correlation = 0.99999;
   EXPECT_EQ(Judge(c, o), Refusal::kGeometryDisguise);
   c.gain_percent = 4.9;
   EXPECT_EQ(Judge(c, o), Refusal::kGainTooSmall);
@@ -51,13 +59,16 @@ TEST(Selection, RefusalTextGivesTheDecidingFigures) {
   CandidateScore c = Acceptable("a", 3.5);
   c.p_adjusted = 0.25;
   c.correlated_with = "r1.link2.a";
-  c.max_geometry_correlation = 0.999995;
+  c.max_geometry_correlation = 0.999998;
+  c.min_geometry_correlation = 0.999995;
+  c.geometry_correlations = {0.999998, 0.999995};
   EXPECT_EQ(RefusalText(Refusal::kNone, c, o, 4), "");
   EXPECT_EQ(RefusalText(Refusal::kNotSignificant, c, o, 4),
             "not significant: Holm-adjusted p = 0.25 >= 0.05 over 4 candidates");
   EXPECT_EQ(RefusalText(Refusal::kGainTooSmall, c, o, 4), "3.5 % < the 5 % worth a term");
   EXPECT_EQ(RefusalText(Refusal::kGeometryDisguise, c, o, 4),
-            "a disguise of the geometry: |rho| = 0.999995 with r1.link2.a");
+            "a disguise of the geometry: each of its 2 direction(s) moves the measurements as "
+            "a geometric correction does (|rho| >= 0.999995, the nearest r1.link2.a)");
   c.size_statistic = 1.5;
   c.size_dof = 2;
   c.size_p_value = 0.5;
@@ -89,6 +100,24 @@ TEST(Selection, TheLargestGainWithASizeIsChosenAndHolmCorrectsOverTheTested) {
   EXPECT_FALSE(s.candidates[0].accepted);
   EXPECT_EQ(s.candidates[2].note.rfind("accepted: largest held-out gain (30 %)", 0), 0u)
       << s.candidates[2].note;
+}
+
+TEST(Selection, AnAcceptedTermPartlyTheGeometrysSaysWhichDirections) {
+  const DiscoveryOptions o;
+  DiscoveryStep s;
+  s.candidates = {Acceptable("wobble", 40.0)};
+  CandidateScore& c = s.candidates[0];
+  c.geometry_correlations = {1.0, 0.97, 0.6};
+  c.max_geometry_correlation = 1.0;
+  c.min_geometry_correlation = 0.6;
+  c.correlated_with = "r1.link1.theta";
+  const Selection sel = SelectLargestGain(o, &s);
+  DecideOnChoice(o, sel.tested, sel.best, "", &s);
+  EXPECT_TRUE(c.accepted);
+  EXPECT_NE(c.note.find("; 1 of its 3 directions move the measurements as the geometry does "
+                        "(|rho| = 1 with r1.link1.theta)"),
+            std::string::npos)
+      << c.note;
 }
 
 TEST(Selection, ARefusedChoiceIsNotAcceptedAndItsNoteSaysWhy) {
