@@ -539,7 +539,7 @@ std::string NewScenarioText(const NewScenarioOptions& o) {
                                 "or more from every joint limit)");
   }
   std::string last_error;
-  for (std::size_t k = 0; k < cells.size() && k < 4; ++k) {
+  for (std::size_t k = 0; k < cells.size(); ++k) {
     const Texts t{o, a1, a2, cells[k]};
     const std::string text = o.procedure == "tracker"     ? TrackerText(t)
                              : o.procedure == "handclasp" ? HandclaspText(t)
