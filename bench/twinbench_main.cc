@@ -31,6 +31,7 @@
 #include "bench/cli_completion.h"
 #include "bench/io/output_files.h"
 #include "bench/runs/twin_commands.h"
+#include "bench/scaffold/new_scenario.h"
 #include "bench/io/urdf_model.h"
 #include "bench/io/yaml_util.h"
 #include "calib/common/errors.h"
@@ -234,6 +235,7 @@ struct CliValues {
   TrackerIdentifyOptions tracker_options;
   SynthesizeOptions synth_options;
   KinematicsBenchmarkOptions kb_options;
+  NewScenarioOptions new_scenario;
 };
 
 // The verbs (subcommands) of the command line, owned by the CLI::App.
@@ -253,6 +255,7 @@ struct Verbs {
   CLI::App* identify = nullptr;
   CLI::App* synth = nullptr;
   CLI::App* kbench = nullptr;
+  CLI::App* new_scenario = nullptr;
 };
 
 // The chain of a URDF model: one pair for every verb that takes a model file.
@@ -367,6 +370,21 @@ void AddCheckVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
   check->add_option("scenario", v->check_scenario, "scenario file")->required();
 }
 
+// new-scenario: a commented scenario file for any arm (bench/scaffold/new_scenario.h).
+void AddNewScenarioVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
+  NewScenarioOptions& o = v->new_scenario;
+  auto* sub = app->add_subcommand(
+      "new-scenario", "write a valid, commented scenario for an arm (bases from its reach, "
+                      "initial joints by IK), checked as `check` checks; never overwrites");
+  verbs->new_scenario = sub;
+  sub->add_option("--robot", o.robot, "robot 1's model (.yaml or .urdf): the camera robot")
+      ->required();
+  AddLinkOptions(sub, &o.links);
+  sub->add_option("--second", o.second, "robot 2's model (default: the same as --robot)");
+  sub->add_option("--procedure", o.procedure, "optical-axis, tracker or handclasp")->required();
+  sub->add_option("--out", o.out, "the scenario file to write (must not exist)")->required();
+}
+
 // identify: a robot's parameters from optical-axis measurements or a tracker file.
 void AddIdentifyVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
   IdentifyOptions& identify_options = v->identify_options;
@@ -447,7 +465,8 @@ void CheckOutputsBeforeRun(const CLI::App& app, const Verbs& verbs, const CliVal
        {&v.model, &v.render_options.scenario, &v.bench_options.scenario, &run_options.scenario,
         &v.planning_options.scenario, &study_options.scenario, &v.check_scenario,
         &v.identify_options.model, &v.identify_options.measurements,
-        &v.tracker_options.validate, &v.synth_options.model, &v.kb_options.model}) {
+        &v.tracker_options.validate, &v.synth_options.model, &v.kb_options.model,
+        &v.new_scenario.robot, &v.new_scenario.second}) {
     NoteInput(*input);
   }
   for (const std::string& dir : v.merge_options.dirs) NoteInput(dir, true);
@@ -530,6 +549,7 @@ int RunVerb(const Verbs& verbs, CliValues* v) {
     return RunStudy(v->study_options);
   }
   if (*verbs.merge) return RunStudyMerge(v->merge_options);
+  if (*verbs.new_scenario) return RunNewScenario(v->new_scenario);
   if (*verbs.bench_planning) return RunPlanningBenchmark(v->planning_options);
   if (*verbs.identify) return RunIdentifyVerb(*verbs.identify, v);
   if (*verbs.synth) {
@@ -573,6 +593,7 @@ int main(int argc, char** argv) {
   AddTwinVerbs(&app, &values, &verbs);
   AddStudyVerbs(&app, &values, &verbs);
   AddCheckVerb(&app, &values, &verbs);
+  AddNewScenarioVerb(&app, &values, &verbs);
   AddIdentifyVerb(&app, &values, &verbs);
   AddModelBenchmarkVerbs(&app, &values, &verbs);
   std::string completion_shell;

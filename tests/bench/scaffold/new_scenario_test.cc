@@ -1,0 +1,179 @@
+// `twinbench new-scenario` (bench/scaffold/new_scenario.h), through the built binary: on each
+// shipped arm and on an arm the repository does not ship (tests/data/ur5e.urdf), the written
+// file passes `twinbench check`, and at its initial joints the camera on r1's flange and the
+// board on r2's face each other at the working distance. That is computed here, from the
+// file as the scenario parser reads it and forward kinematics of its models, not from the
+// generator's IK. An existing --out is refused and left as it was; bad input exits 2.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "bench/io/scenario.h"
+#include "calib/kinematics/forward_kinematics.h"
+#include "tests/bench/cli_run.h"
+
+namespace twin {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::CliRun;
+using testing::Twinbench;
+
+const std::string kSource = TWIN_SOURCE_DIR;
+
+// Stated tolerances of the face-to-face start pose: the generator solves IK exactly (1e-7 m)
+// and writes joints to 0.01 deg, which moves a 1 m arm's flange by ~0.2 mm and turns it by
+// ~0.03 deg.
+constexpr double kMaxAxisAngleDeg = 0.5;    // board normal against the reversed optical axis
+constexpr double kMaxOffAxisMm = 3.0;       // board centre from the optical axis
+constexpr double kWorkingDistanceMm = 400;  // camera to board along the axis, +- kMaxOffAxisMm
+
+fs::path TempDir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("twinbench_new_scenario_" + name);
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::string ReadText(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+CliRun NewScenario(const std::string& model, const std::string& procedure, const fs::path& out) {
+  return Twinbench("new-scenario --robot " + kSource + "/" + model + " --procedure " + procedure +
+                   " --out " + out.string());
+}
+
+// Camera and board of the scenario's cell at its initial joints, in the world.
+struct FacingFigures {
+  double axis_angle_deg = 0, off_axis_mm = 0, distance_mm = 0;
+};
+
+FacingFigures Facing(const fs::path& file) {
+  const Scenario sc = LoadScenario(file.string());
+  const TwinSpec& t = sc.twin;
+  const RobotSpec& r1 = t.robots[t.camera.robot];
+  const RobotSpec& r2 = t.robots[t.board.robot];
+  const Transform X_WC =
+      r1.X_WB * ForwardKinematics(r1.model, r1.q_initial).flange() * t.camera.X_FC;
+  const Transform X_WT =
+      r2.X_WB * ForwardKinematics(r2.model, r2.q_initial).flange() * t.board.X_FT;
+  const Vector3 axis = X_WC.linear().col(2);           // the optical axis (OpenCV z)
+  const Vector3 normal = X_WT.linear().col(2);         // the board's outward normal
+  const Vector3 d = X_WT.translation() - X_WC.translation();
+  FacingFigures f;
+  f.axis_angle_deg = RadToDeg(std::acos(std::clamp(-axis.dot(normal), -1.0, 1.0)));
+  f.distance_mm = 1e3 * d.dot(axis);
+  f.off_axis_mm = 1e3 * (d - d.dot(axis) * axis).norm();
+  return f;
+}
+
+class NewScenarioOnArm : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(NewScenarioOnArm, OpticalAxisFilePassesCheckWithCameraAndBoardFaceToFace) {
+  const std::string model = GetParam();
+  const fs::path dir = TempDir(fs::path(model).stem().string());
+  const fs::path out = dir / "cell.yaml";
+  const CliRun made = NewScenario(model, "optical-axis", out);
+  ASSERT_EQ(made.code, 0) << made.output;
+  const CliRun checked = Twinbench("check " + out.string());
+  EXPECT_EQ(checked.code, 0) << checked.output;
+  EXPECT_NE(checked.output.find("valid; `twinbench run` would run the optical-axis calibration"),
+            std::string::npos)
+      << checked.output;
+  const std::string text = ReadText(out);
+  for (const char* comment : {"# How the values were derived:", "# - reach R:", "# - cell:",
+                              "# - initial joints:", "# - told versus true"}) {
+    EXPECT_NE(text.find(comment), std::string::npos) << comment;
+  }
+  const FacingFigures f = Facing(out);
+  EXPECT_LT(f.axis_angle_deg, kMaxAxisAngleDeg);
+  EXPECT_LT(f.off_axis_mm, kMaxOffAxisMm);
+  EXPECT_NEAR(f.distance_mm, kWorkingDistanceMm, kMaxOffAxisMm);
+  fs::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(ShippedArmsAndAFixture, NewScenarioOnArm,
+                         ::testing::Values("models/reinovo_r1.yaml", "models/reinovo_r2.yaml",
+                                           "models/abb_irb2400.urdf",
+                                           "models/kuka_kr6r900sixx.urdf",
+                                           "models/motoman_sda10_right.yaml",
+                                           "tests/data/ur5e.urdf"));
+
+// The other two procedures, on an arm whose flange frame points out of the face (Reinovo) and
+// one whose points into the wrist (KUKA), and with two different arms.
+TEST(NewScenario, TrackerAndHandclaspFilesPassCheck) {
+  const fs::path dir = TempDir("procedures");
+  for (const char* model : {"models/reinovo_r1.yaml", "models/kuka_kr6r900sixx.urdf"}) {
+    for (const char* procedure : {"tracker", "handclasp"}) {
+      const fs::path out = dir / (fs::path(model).stem().string() + "_" + procedure + ".yaml");
+      const CliRun made = NewScenario(model, procedure, out);
+      ASSERT_EQ(made.code, 0) << model << " " << procedure << ": " << made.output;
+      const CliRun checked = Twinbench("check " + out.string());
+      EXPECT_EQ(checked.code, 0) << checked.output;
+      EXPECT_NE(checked.output.find(procedure == std::string("tracker") ? "laser-tracker"
+                                                                        : "handclasp"),
+                std::string::npos)
+          << checked.output;
+    }
+  }
+  const fs::path two = dir / "two_arms.yaml";
+  const CliRun made = Twinbench("new-scenario --robot " + kSource + "/models/reinovo_r1.yaml" +
+                                " --second " + kSource + "/models/reinovo_r2.yaml" +
+                                " --procedure optical-axis --out " + two.string());
+  ASSERT_EQ(made.code, 0) << made.output;
+  EXPECT_NE(ReadText(two).find("reinovo_r2.yaml"), std::string::npos);
+  EXPECT_EQ(Twinbench("check " + two.string()).code, 0);
+  fs::remove_all(dir);
+}
+
+TEST(NewScenario, RefusesAnExistingOutLeavingItUnchanged) {
+  const fs::path dir = TempDir("exists");
+  const fs::path out = dir / "mine.yaml";
+  const std::string mine = "# my own scenario, hand-tuned\nscenario: {name: mine}\n";
+  std::ofstream(out) << mine;
+  const CliRun r = NewScenario("models/reinovo_r1.yaml", "optical-axis", out);
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("error: --out"), std::string::npos) << r.output;
+  EXPECT_EQ(ReadText(out), mine);
+  // Nothing else appeared beside it (no temporary file left behind).
+  int files = 0;
+  for (const auto& e : fs::directory_iterator(dir)) files += e.is_regular_file();
+  EXPECT_EQ(files, 1);
+  fs::remove_all(dir);
+}
+
+TEST(NewScenario, BadInputExitsTwoWithTheOptionNamedAndWritesNothing) {
+  const fs::path dir = TempDir("bad");
+  const fs::path out = dir / "s.yaml";
+  struct Case {
+    std::string args, expected;
+  } cases[] = {
+      {"--robot " + kSource + "/models/no_such_arm.urdf --procedure optical-axis",
+       "error: --robot: "},
+      {"--robot " + kSource + "/models/reinovo_r1.yaml --procedure laser",
+       "error: --procedure: expected optical-axis, tracker or handclasp"},
+      {"--robot " + kSource + "/README.md --procedure tracker", "error: "},
+      {"--robot " + kSource + "/models/reinovo_r1.yaml --second " + kSource +
+           "/models/none.yaml --procedure tracker",
+       "error: --second: "},
+  };
+  for (const Case& c : cases) {
+    const CliRun r = Twinbench("new-scenario " + c.args + " --out " + out.string());
+    EXPECT_EQ(r.code, 2) << c.args << ": " << r.output;
+    EXPECT_NE(r.output.find(c.expected), std::string::npos) << c.args << ": " << r.output;
+    EXPECT_FALSE(fs::exists(out)) << c.args;
+  }
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace twin
