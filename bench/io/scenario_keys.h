@@ -83,7 +83,7 @@ struct ScenarioSection {
   /// Keys not in `keys` are accepted when they hold a number (an effect's parameters).
   bool extra_numbers = false;
   /// Exactly one key of each group must be present (a pose's rotation).
-  std::vector<std::vector<std::string>> exactly_one_of;
+  std::vector<std::vector<std::string>> exactly_one_of = {};
 };
 
 /// Every section, the root (name "root", the file itself) first.

@@ -23,15 +23,21 @@ using Json = nlohmann::ordered_json;
 // The key's description with its unit and default: "side of one square [mm]; default 10".
 std::string Describe(const ScenarioKey& k) {
   std::string d = k.description;
+  if (!d.empty() && d.back() == '.') d.pop_back();
   if (!k.unit.empty()) d += " [" + k.unit + "]";
   if (!k.default_text.empty()) d += "; default " + k.default_text;
   if (k.required) d += "; required";
   return d;
 }
 
+// A bound as JSON: a whole number without a fraction (2, not 2.0).
+Json Bound(double v) {
+  return v == std::floor(v) && std::abs(v) < 1e15 ? Json(static_cast<std::int64_t>(v)) : Json(v);
+}
+
 void AddRange(const ScenarioKey& k, Json* s) {
-  if (k.minimum) (*s)[k.exclusive_minimum ? "exclusiveMinimum" : "minimum"] = *k.minimum;
-  if (k.maximum) (*s)["maximum"] = *k.maximum;
+  if (k.minimum) (*s)[k.exclusive_minimum ? "exclusiveMinimum" : "minimum"] = Bound(*k.minimum);
+  if (k.maximum) (*s)["maximum"] = Bound(*k.maximum);
 }
 
 Json Ref(const std::string& section) { return Json{{"$ref", "#/definitions/" + section}}; }
@@ -143,6 +149,8 @@ void Convert(const YAML::Node& node, bool quoted_are_strings, const std::string&
       const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "?";
       const std::string child = path.empty() ? key : path + "." + key;
       Convert(kv.second, quoted_are_strings, child, marks, &(*out)[key]);
+      // A map's entry is located at its key (an unknown key, a block map's first line).
+      if (marks) (*marks)[child] = kv.first.Mark();
     }
   } else if (node.IsSequence()) {
     *out = Json::array();

@@ -15,7 +15,8 @@ namespace twin {
 /// The JSON Schema of scenario files, generated from ScenarioSections().
 nlohmann::ordered_json ScenarioSchema();
 
-/// A YAML document as JSON, with the mark of every value by its key path ("scenario.robots[0]",
+/// A YAML document as JSON, with the mark of every value (of a map entry: its key) by its key
+/// path ("scenario.robots[0]",
 /// "" the document) in `marks` (if given). Plain scalars are typed as YAML's core schema reads
 /// them (null, true/false and the YAML 1.1 yes/no/on/off, whole numbers, finite numbers, else a
 /// string); a quoted scalar is a string when `quoted_are_strings`, else typed like a plain one

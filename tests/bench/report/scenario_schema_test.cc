@@ -94,7 +94,7 @@ TEST(ScenarioSchema, RefusesABrokenScenarioNamingTheKey) {
        "expected a sequence of 2 items, got a sequence of 1 items"},
       {"two_rotations", "hand_eye: {xyz_mm: [0, 0, 50], rpy_deg: [0, 0, 0]}",
        "hand_eye: {xyz_mm: [0, 0, 50], rpy_deg: [0, 0, 0], zyz_deg: [0, 0, 0]}",
-       "zyz_deg", "scenario.camera.hand_eye", "expected exactly one of the keys rpy_deg, zyz_deg, got 2"},
+       "rpy_deg: [0, 0, 0], zyz_deg", "scenario.camera.hand_eye", "expected exactly one of the keys rpy_deg, zyz_deg, got 2"},
       {"angle", "hand_eye: {xyz_mm: [0, 0, 50], rpy_deg: [0, 0, 0]}",
        "hand_eye: {xyz_mm: [0, 0, 50], rpy_deg: [0, 400, 0]}",
        "400", "scenario.camera.hand_eye.rpy_deg[1]", "expected a value <= 360, got 400"},
