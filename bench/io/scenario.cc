@@ -547,7 +547,9 @@ int ScenarioFormatOf(const YAML::Node& root, const std::string& source) {
   const YamlReader r(source);
   const YamlField f{root["scenario"]["format"], "scenario.format"};
   const int format = r.Integer(f);
-  if (format < 1) r.Fail(f, "expected a scenario format version >= 1, got " + std::to_string(format));
+  if (format < 1) {
+    r.Fail(f, "expected a scenario format version >= 1, got " + std::to_string(format));
+  }
   if (format > kScenarioFormat) {
     r.Fail(f, "scenario format " + std::to_string(format) + " is newer than this twinbench "
               "knows (newest: " + std::to_string(kScenarioFormat) + "); use a newer twinbench");

@@ -22,7 +22,8 @@ std::vector<ScenarioKey> PlateKeys() {
   return {
       K("squares", T::kIntegers).Required().Count(2).Min(2).Doc("[x, y] squares of the chessboard"),
       K("square_mm", T::kNumber).Required().Unit("mm").Above(0).Doc("side of one square"),
-      K("margin_mm", T::kNumber).Unit("mm").Default("10").Min(0).Doc("white margin around the squares"),
+      K("margin_mm", T::kNumber).Unit("mm").Default("10").Min(0)
+          .Doc("white margin around the squares"),
       K("thickness_mm", T::kNumber).Unit("mm").Default("4").Above(0).Doc("plate thickness"),
       K("mass_kg", T::kNumber).Unit("kg").Default("0.2").Min(0).Doc("plate mass"),
   };
