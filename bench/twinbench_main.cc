@@ -18,6 +18,7 @@
 #include <CLI/CLI.hpp>
 
 #include "bench/report/acceptance.h"
+#include "bench/report/scenario_schema.h"
 #include "bench/runs/calibration_run.h"
 #include "bench/runs/kinematics_benchmark.h"
 #include "bench/runs/planning_benchmark.h"
@@ -231,6 +232,7 @@ struct CliValues {
   bool study_quiet = false;
   StudyMergeOptions merge_options;
   std::string check_scenario;
+  std::string schema_out;
   IdentifyOptions identify_options;
   TrackerIdentifyOptions tracker_options;
   SynthesizeOptions synth_options;
@@ -252,6 +254,7 @@ struct Verbs {
   CLI::App* study = nullptr;
   CLI::App* merge = nullptr;
   CLI::App* check = nullptr;
+  CLI::App* schema = nullptr;
   CLI::App* identify = nullptr;
   CLI::App* synth = nullptr;
   CLI::App* kbench = nullptr;
@@ -368,6 +371,9 @@ void AddCheckVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
       "check", "validate a scenario as `run` would (sections, acceptance, the cell), run nothing");
   verbs->check = check;
   check->add_option("scenario", v->check_scenario, "scenario file")->required();
+  verbs->schema = app->add_subcommand(
+      "schema", "write the scenario format as a JSON Schema (schemas/scenario.schema.json)");
+  verbs->schema->add_option("--out", v->schema_out, "file to write (default: stdout)");
 }
 
 // new-scenario: a commented scenario file for any arm (bench/scaffold/new_scenario.h).
@@ -528,6 +534,7 @@ int RunIdentifyVerb(const CLI::App& identify, CliValues* v) {
 // Runs the verb given on the command line; kExitInternalError when none ran.
 int RunVerb(const Verbs& verbs, CliValues* v) {
   if (*verbs.check) return CheckScenario(v->check_scenario);
+  if (*verbs.schema) return RunSchemaVerb(v->schema_out);
   if (*verbs.info) return RunInfo(v->model, v->links);
   if (*verbs.fk) return RunFk(v->model, v->links, v->q);
   if (*verbs.ik) return RunIk(v->model, v->links, v->xyz, v->rpy, v->seed, v->position_only);

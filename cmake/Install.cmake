@@ -2,6 +2,7 @@
 # top-level CMakeLists.txt after its subdirectories. Layout under the prefix (/usr in the .deb):
 #   bin/twinbench
 #   share/twinbench/{models,scenarios}      read by twinbench (bench/io/data_dir.h)
+#   share/twinbench/schemas/                the scenario format as a JSON Schema
 #   include/twinbench/calib/...             the estimator's headers
 #   lib/<arch>/libtwinbench_calib.a         twinbench::calib
 #   lib/<arch>/cmake/twinbench/             twinbenchConfig.cmake and friends
@@ -12,7 +13,10 @@ set(TWINBENCH_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/twinbench)
 
 # The data the binary reads: the shipped models (YAML, URDF) and scenarios, whose model paths
 # are relative to the scenario file (../models/...), so both keep their places.
+# The scenario format as a JSON Schema (`twinbench schema` writes it; the test
+# schema_up_to_date keeps the file current), for editors and tools: share/twinbench/schemas/.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/models ${PROJECT_SOURCE_DIR}/scenarios
+                  ${PROJECT_SOURCE_DIR}/schemas
         DESTINATION ${TWINBENCH_INSTALL_DATADIR} COMPONENT twinbench)
 foreach(_doc LICENSE CITATION.cff)
   if(EXISTS ${PROJECT_SOURCE_DIR}/${_doc})

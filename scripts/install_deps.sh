@@ -14,6 +14,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev
   slurmctld slurmd slurm-client munge
   time jq   # jq: scripts/discovery_table.sh
+  python3-jsonschema python3-yaml  # tests/docs/scenario_schema_jsonschema_test.py (skipped without)
   ccache           # scripts/build.sh and test_sanitizers.sh compile through it (cmake/Ccache.cmake)
   universal-ctags  # scripts/function_lengths.sh
   dpkg-dev file    # the packaging test: cpack -G DEB derives Depends with dpkg-shlibdeps

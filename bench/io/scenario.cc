@@ -4,12 +4,16 @@
 #include <array>
 #include <cstddef>
 #include <filesystem>
+#include <cstdio>
 #include <map>
+#include <mutex>
+#include <set>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "bench/io/model_loader.h"
+#include "bench/io/scenario_keys.h"
 #include "bench/io/yaml_util.h"
 #include "calib/identification/base_calibration.h"
 #include "calib/common/errors.h"
@@ -20,31 +24,22 @@ namespace {
 
 using Keys = YamlKeys;
 
-const Keys kRootKeys = {"scenario"};
-const Keys kScenarioKeys = {"name",    "seed",        "seeds",     "robots",
-                            "camera",  "board",       "tips",      "physics",
-                            "effects", "calibration", "handclasp", "acceptance",
-                            "tracker", "tracker_calibration", "intrinsics_target"};
-const Keys kTrackerKeys = {"robot",    "pose",           "reflector_mm",  "sigma_mm",
-                           "sigma_um_per_m", "drift_mm_per_h", "max_range_m"};
-const Keys kSeedsKeys = {"truth", "estimator"};
-const Keys kRobot1Keys = {"name", "model", "base_link", "tip_link", "installation", "base",
-                          "initial_joints_deg", "temperature_sensor"};
-const Keys kRobot2Keys = {"name", "model", "base_link", "tip_link", "installation",
-                          "base_from_robot1", "initial_joints_deg", "temperature_sensor"};
-const Keys kTemperatureSensorKeys = {"ambient_C", "sigma_K"};
-const Keys kCameraKeys = {"robot", "hand_eye", "resolution", "fx",      "fy",    "cx",
-                          "cy",    "distortion", "msaa",     "near_mm", "far_mm"};
-const Keys kBoardKeys = {"robot",        "squares", "square_mm", "margin_mm",
-                         "thickness_mm", "mass_kg", "mount"};
-const Keys kTargetKeys = {"squares", "square_mm", "margin_mm", "thickness_mm", "mass_kg",
-                          "mount"};
-const Keys kPoseKeys = {"xyz_mm", "rpy_deg", "zyz_deg"};
-const Keys kTipKeys = {"xyz_mm", "rpy_deg", "zyz_deg", "length_mm", "radius_mm"};
-const Keys kPhysicsKeys = {"timestep_s",   "stiffness_Nm_per_rad", "armature_kgm2",
-                           "max_joint_speed_deg_s", "settle_speed_deg_s", "settle_steps",
-                           "max_steps",    "gravity"};
-const Keys kEffectKeys = {"type", "declared", "robot", "joint"};  // any other key: a parameter
+// The allowed keys of each map: the tables of bench/io/scenario_keys.h (one source with the
+// JSON Schema of `twinbench schema`).
+const Keys kRootKeys = ScenarioKeyNames("root");
+const Keys kScenarioKeys = ScenarioKeyNames("scenario");
+const Keys kTrackerKeys = ScenarioKeyNames("tracker");
+const Keys kSeedsKeys = ScenarioKeyNames("seeds");
+const Keys kRobot1Keys = ScenarioKeyNames("robot1");
+const Keys kRobot2Keys = ScenarioKeyNames("robot2");
+const Keys kTemperatureSensorKeys = ScenarioKeyNames("temperature_sensor");
+const Keys kCameraKeys = ScenarioKeyNames("camera");
+const Keys kBoardKeys = ScenarioKeyNames("board");
+const Keys kTargetKeys = ScenarioKeyNames("intrinsics_target");
+const Keys kPoseKeys = ScenarioKeyNames("pose");
+const Keys kTipKeys = ScenarioKeyNames("tip");
+const Keys kPhysicsKeys = ScenarioKeyNames("physics");
+const Keys kEffectKeys = ScenarioKeyNames("effect");  // any other key: a parameter
 
 double MmToM(double mm) { return mm / 1000.0; }  // division: the nearest double to mm/1000
 
@@ -88,6 +83,7 @@ class ScenarioParser {
 
   Scenario Parse(const std::string& text) {
     const YAML::Node root = LoadYamlText(text, r_.source());
+    out_.format = ScenarioFormatOf(root, r_.source());  // first: a newer file's new keys
     const YamlMap top(r_, YamlField{root, ""}, kRootKeys);
     const YamlMap m(r_, top.Get("scenario"), kScenarioKeys);
     out_.path = r_.source();
@@ -536,6 +532,31 @@ class ScenarioParser {
 
 }  // namespace
 
+void PrintFormatNotice(const std::string& path, int format) {
+  // Once per file and process: a study loads its scenario once per trial.
+  static std::mutex mutex;
+  static std::set<std::string> noticed;
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (!noticed.insert(path).second) return;
+  std::fprintf(stderr, "notice: %s: scenario format %d (no scenario.format); %s\n", path.c_str(),
+               format, ScenarioFormatNotice().c_str());
+}
+
+int ScenarioFormatOf(const YAML::Node& root, const std::string& source) {
+  if (!root.IsMap() || !root["scenario"].IsMap() || !root["scenario"]["format"]) return 1;
+  const YamlReader r(source);
+  const YamlField f{root["scenario"]["format"], "scenario.format"};
+  const int format = r.Integer(f);
+  if (format < 1) {
+    r.Fail(f, "expected a scenario format version >= 1, got " + std::to_string(format));
+  }
+  if (format > kScenarioFormat) {
+    r.Fail(f, "scenario format " + std::to_string(format) + " is newer than this twinbench "
+              "knows (newest: " + std::to_string(kScenarioFormat) + "); use a newer twinbench");
+  }
+  return format;
+}
+
 Scenario ParseScenario(const std::string& text, const std::string& source,
                        const std::string& base_dir) {
   return ScenarioParser(source, base_dir).Parse(text);
@@ -546,6 +567,7 @@ Scenario LoadScenario(const std::string& path) {
   Scenario scenario =
       ParseScenario(text, path, std::filesystem::path(path).parent_path().string());
   PrintWarnings(scenario.warnings);
+  if (scenario.format < kScenarioFormat) PrintFormatNotice(path, scenario.format);
   return scenario;
 }
 

@@ -3,6 +3,8 @@
 // are relative to the folder of the scenario file. Example (scenarios/twin_demo.yaml):
 //
 //   scenario:
+//     format: 2                            # optional (default 1): the format version; see
+//                                          # bench/io/scenario_keys.h for what 2 changed
 //     name: twin_demo                      # required
 //     seed: 7                              # optional (default 1): the seed of both random
 //                                          # streams below (truth and estimator)
@@ -128,6 +130,7 @@ struct ScenarioSeeds {
 struct Scenario {
   std::string name;                                  ///< scenario.name
   std::string path;                                  ///< the file it was read from (source)
+  int format = 1;                                    ///< scenario.format (1 where absent)
   TwinSpec twin;                                     ///< the cell, in SI units, validated;
                                                      ///< twin.seed == seeds.truth
   ScenarioSeeds seeds;                               ///< seeds of this trial
@@ -155,8 +158,19 @@ struct Scenario {
 Scenario ParseScenario(const std::string& text, const std::string& source,
                        const std::string& base_dir);
 
+/// The format version of a scenario file's YAML (scenario.format, bench/io/scenario_keys.h): 1
+/// where the key is absent (or the file is not a scenario map; the parser says why). Throws
+/// InputError naming the file for a version that is not a whole number >= 1 or is newer than
+/// kScenarioFormat (the message names the version and the newest known).
+int ScenarioFormatOf(const YAML::Node& root, const std::string& source);
+
+/// Prints, once per path and process, the notice for a scenario of an older format: which
+/// version it was read as and what format 2 changed (ScenarioFormatNotice).
+void PrintFormatNotice(const std::string& path, int format);
+
 /// Reads and parses a scenario file; model paths are relative to the file's folder. A missing
-/// or unreadable file is an InputError naming it. Prints the warnings to stderr.
+/// or unreadable file is an InputError naming it. Prints the warnings to stderr, and the format
+/// notice for a file without scenario.format (PrintFormatNotice).
 Scenario LoadScenario(const std::string& path);
 
 /// Makes `scenario` trial `trial` of a study: both seeds become the file's seeds + trial

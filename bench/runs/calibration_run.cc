@@ -29,6 +29,7 @@
 #include "bench/io/model_yaml.h"
 #include "bench/io/output_files.h"
 #include "bench/report/acceptance.h"
+#include "bench/report/scenario_schema.h"
 #include "bench/report/calibration_report.h"
 #include "bench/io/scenario.h"
 #include "bench/io/yaml_util.h"
@@ -789,6 +790,8 @@ int RunCalibrationScenario(const RunOptions& o) {
 }
 
 int CheckScenario(const std::string& scenario_path) {
+  // The schema first (schemas/scenario.schema.json): a wrong key or value by its key path.
+  ValidateScenarioSchema(scenario_path);
   const Scenario sc = LoadScenario(scenario_path);
   const bool calibration = IsPresent(sc.calibration), handclasp = IsPresent(sc.handclasp);
   if (calibration) ParseCalibrationConfig(sc);

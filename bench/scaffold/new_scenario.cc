@@ -17,6 +17,7 @@
 #include "bench/io/calibration_config.h"
 #include "bench/io/output_files.h"
 #include "bench/io/scenario.h"
+#include "bench/io/scenario_keys.h"
 #include "bench/io/yaml_util.h"
 #include "bench/report/acceptance.h"
 #include "bench/runs/handclasp_run.h"
@@ -398,7 +399,8 @@ std::string OpticalAxisText(const Texts& t) {
   std::ostringstream s;
   s << Header(t, "Optical-axis self-calibration (Zhu et al. 2019) of two arms: " +
                      t.a1.model.name + " (r1, camera) and " + t.a2.model.name + " (r2, board).")
-    << "scenario:\n  name: " << fs::path(t.o.out).stem().string() << "\n"
+    << "scenario:\n  format: " << kScenarioFormat << "   # the scenario format version\n"
+    << "  name: " << fs::path(t.o.out).stem().string() << "\n"
     << "  seed: 2019                        # truth and estimator seeds (`run --trial t`: + t)\n"
     << "  robots:\n" << RobotEntries(t) << CameraAndBoard(t, false)
     << "  # Joint speed of the motion program: the figures do not depend on it (paper_reinovo.yaml).\n"
@@ -455,7 +457,8 @@ std::string TrackerText(const Texts& t) {
     << "# The scenario format needs two robots, a camera and a board even for a tracker-only\n"
     << "# calibration (issue 41): r1, the camera and the board are the optical-axis cell's and\n"
     << "# take no part; the board stays on r2 as its payload.\n"
-    << "scenario:\n  name: " << fs::path(t.o.out).stem().string() << "\n"
+    << "scenario:\n  format: " << kScenarioFormat << "   # the scenario format version\n"
+    << "  name: " << fs::path(t.o.out).stem().string() << "\n"
     << "  seeds: {truth: 2019, estimator: 2019}\n"
     << "  robots:\n" << RobotEntries(t) << CameraAndBoard(t, true)
     << "  effects:\n    - type: geometry_errors\n      sigma_length_mm: 2.0\n"
@@ -491,7 +494,8 @@ std::string HandclaspText(const Texts& t) {
                      " (r1) and " + t.a2.model.name + " (r2).")
     << "# Geometry errors: a factory-calibrated arm's (sigma 0.5 mm and 0.05 deg per DH\n"
     << "# parameter, as scenarios/gan2014_*.yaml); the operator aligns the tips to 0.5 mm.\n"
-    << "scenario:\n  name: " << fs::path(t.o.out).stem().string() << "\n  seed: 11\n"
+    << "scenario:\n  format: " << kScenarioFormat << "   # the scenario format version\n"
+    << "  name: " << fs::path(t.o.out).stem().string() << "\n  seed: 11\n"
     << "  robots:\n" << RobotEntries(t) << CameraAndBoard(t, false)
     << "  # Measuring tips " << Num(tip_mm, 0) << " mm out of each flange (w / 2: they meet "
        "mid-cell), beyond the camera and the board.\n"

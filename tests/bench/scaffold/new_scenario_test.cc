@@ -86,6 +86,8 @@ TEST_P(NewScenarioOnArm, OpticalAxisFilePassesCheckWithCameraAndBoardFaceToFace)
   ASSERT_EQ(made.code, 0) << made.output;
   const CliRun checked = Twinbench("check " + out.string());
   EXPECT_EQ(checked.code, 0) << checked.output;
+  // Written in the newest format: no notice of an older one.
+  EXPECT_EQ(checked.output.find("notice:"), std::string::npos) << checked.output;
   EXPECT_NE(checked.output.find("valid; `twinbench run` would run the optical-axis calibration"),
             std::string::npos)
       << checked.output;
