@@ -85,7 +85,7 @@ printf -- '- date: %s\n- commit: %s\n- machine: %s, %s cores, %s GiB\n' "$(date 
   "$(uname -m)" "$(nproc)" "$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)"
 printf -- '- command: `%sscripts/discovery_table.sh %s %s %s`\n' \
   "${SCENARIOS:+SCENARIOS=\"$SCENARIOS\" }" "$TRIALS" "$OUT" "$PROCEDURE"
-printf -- '- %s trials a scenario: trial t draws the truth from the scenario's seeds.truth + t and the estimator's randomness from seeds.estimator + t (`twinbench study`)\n\n' "$TRIALS"
+printf -- '- %s trials a scenario: trial t draws the truth from seeds.truth + t and the estimator randomness from seeds.estimator + t of the scenario (twinbench study)\n\n' "$TRIALS"
 printf '| scenario | injected (undeclared) | named | something else added | truth RMS geometric-only [mm] | discovered [mm] | effect-free [mm] | discovered <= 1.2 x effect-free | covered region: geometric-only / discovered / effect-free [mm] | covered: within 1.2 x |\n'
 printf '|---|---|---|---|---|---|---|---|---|---|\n'
 for s in "${ORDER[@]}"; do

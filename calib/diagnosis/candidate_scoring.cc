@@ -143,6 +143,13 @@ void TestHeldOut(const Data& data, const RobotModel& model, const std::vector<in
   for (std::size_t i = 0; i < d.size(); ++i) d[i] = base_cv.loss[i] - cv.loss[i];
   c->p_value = stats::WilcoxonSignedRankGreater(d).p_value;
   c->heldout_loss = cv.loss;
+  c->heldout_change.clear();
+  for (std::size_t i = 0; i < cv.e.size() && i < base_cv.e.size(); ++i) {
+    if (cv.e[i].size() != base_cv.e[i].size()) continue;
+    for (Eigen::Index r = 0; r < cv.e[i].size(); ++r) {
+      c->heldout_change.push_back(base_cv.e[i](r) - cv.e[i](r));
+    }
+  }
   c->tested = true;
 }
 

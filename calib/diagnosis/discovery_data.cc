@@ -89,6 +89,15 @@ void TrackerData::HeldOut(const Fit& fit, const std::vector<int>& test,
   }
 }
 
+bool TrackerData::ResidualsInBase(const Fit& fit, std::vector<Eigen::VectorXd>* e) const {
+  // HeldOut's e = X_TB p_B - p_T is in the tracker frame T.
+  const Matrix3 R_BT = fit.X_TB.linear().transpose();
+  for (Eigen::VectorXd& v : *e) {
+    if (v.size() == 3) v = R_BT * Vector3(v);
+  }
+  return true;
+}
+
 Components TrackerData::ResidualComponents(const CrossValidation& cv) const {
   Components out{{"x", {}}, {"y", {}}, {"z", {}}, {"norm", {}}};
   for (const Eigen::VectorXd& e : cv.e) {

@@ -76,6 +76,14 @@ class Data {
   virtual void HeldOut(const Fit& fit, const std::vector<int>& test, CrossValidation* cv) const = 0;
   /// Named per-unit components of the residual for the evidence.
   virtual Components ResidualComponents(const CrossValidation& cv) const = 0;
+  /// The units' residuals `e` (of HeldOut with `fit`) turned into the robot's base frame B, in
+  /// place; false (e unchanged) where a residual is not a vector in a frame of the cell (an
+  /// optical axis's distance from its line).
+  virtual bool ResidualsInBase(const Fit& fit, std::vector<Eigen::VectorXd>* e) const {
+    (void)fit;
+    (void)e;
+    return false;
+  }
   /// Whether the residual test is the adjustment's global test (InSample) rather than
   /// held-out (model_discovery.h, "Optical axes").
   virtual bool GlobalTest() const { return false; }
@@ -112,6 +120,7 @@ class TrackerData : public Data {
   double Rows(const std::vector<int>& train) const override { return 3.0 * train.size(); }
   void HeldOut(const Fit& fit, const std::vector<int>& test, CrossValidation* cv) const override;
   Components ResidualComponents(const CrossValidation& cv) const override;
+  bool ResidualsInBase(const Fit& fit, std::vector<Eigen::VectorXd>* e) const override;
 
   /// The point's stated sigma, else the set's default [m].
   double Sigma(int i) const;

@@ -51,11 +51,19 @@ std::vector<double> HarmonicPower(const std::vector<Eigen::VectorXd>& residuals,
 std::vector<std::vector<int>> SpectrumOrders(const std::vector<Eigen::VectorXd>& residuals,
                                              const std::vector<const MeasurementContext*>& contexts,
                                              int joints, int max_order, int per_joint) {
+  return SpectrumOrdersPerJoint(std::vector<std::vector<Eigen::VectorXd>>(joints, residuals),
+                                contexts, max_order, per_joint);
+}
+
+std::vector<std::vector<int>> SpectrumOrdersPerJoint(
+    const std::vector<std::vector<Eigen::VectorXd>>& residuals,
+    const std::vector<const MeasurementContext*>& contexts, int max_order, int per_joint) {
+  const int joints = static_cast<int>(residuals.size());
   std::vector<std::vector<int>> orders(joints);
   for (int j = 0; j < joints; ++j) {
     std::vector<double> q(contexts.size());
     for (std::size_t i = 0; i < contexts.size(); ++i) q[i] = contexts[i]->q(j);
-    const std::vector<double> power = HarmonicPower(residuals, q, max_order);
+    const std::vector<double> power = HarmonicPower(residuals[j], q, max_order);
     std::vector<int> h(power.size());
     std::iota(h.begin(), h.end(), 1);
     std::stable_sort(h.begin(), h.end(), [&](int a, int b) { return power[a - 1] > power[b - 1]; });

@@ -31,4 +31,12 @@ std::vector<std::vector<int>> SpectrumOrders(const std::vector<Eigen::VectorXd>&
                                              const std::vector<const MeasurementContext*>& contexts,
                                              int joints, int max_order, int per_joint);
 
+/// The same with each joint's own residuals: `residuals[j][i]` unit i's residual as joint j's
+/// spectrum reads it (in the frame of link j, which turns with the joint: an error of joint j
+/// at order h, seen through a lever arm that turns with the joint, is then at order h, not at
+/// h - 1 and h + 1 as in a fixed frame).
+std::vector<std::vector<int>> SpectrumOrdersPerJoint(
+    const std::vector<std::vector<Eigen::VectorXd>>& residuals,
+    const std::vector<const MeasurementContext*>& contexts, int max_order, int per_joint);
+
 }  // namespace twin::discovery

@@ -1,6 +1,7 @@
 #include "calib/diagnosis/model_discovery.h"
 
 #include <algorithm>
+#include <array>
 #include <functional>
 #include <map>
 #include <numeric>
@@ -18,6 +19,7 @@
 #include "calib/diagnosis/harmonic_orders.h"
 #include "calib/diagnosis/selection.h"
 #include "calib/identification/dormant_restart.h"
+#include "calib/kinematics/forward_kinematics.h"
 
 // The stages of the search (model_discovery.h, steps 2-4) on any kind of data; the parts live
 // beside this file by concept: the data and its noise floor (discovery_data.h), the folds
@@ -144,6 +146,27 @@ constexpr int kOrdersPerJoint = 2;
 
 // The default candidates (CandidateTermSpecs) with each joint's harmonic orders from the
 // spectrum of `model`'s residual, fitted on all the data, over that joint's readings.
+// Per joint j, each unit's residual (in B) turned into the frame of link j after the joint
+// turns, at the fitted model's link angles (stages 1-3; the small deflections of stage 5 left
+// out: they turn the frame by ~1e-4 rad).
+std::vector<std::vector<Eigen::VectorXd>> ResidualsInLinkFrames(
+    const Data& data, const RobotModel& model, const std::vector<Eigen::VectorXd>& e_B) {
+  const int n = model.chain.num_joints();
+  const Eigen::VectorXd params = GetParameters(model);
+  std::vector<std::vector<Eigen::VectorXd>> out(n, e_B);
+  std::array<RigidT<double>, kMaxJoints + 2> X;
+  for (int i = 0; i < data.size(); ++i) {
+    double q[kMaxJoints];
+    double s = 1.0;
+    LinkAnglesT<double>(model, params.data(), data.context(i), q, &s);
+    ChainFramesT<double>(model.chain, params.data(), q, s, X.data());
+    for (int j = 0; j < n; ++j) {
+      if (e_B[i].size() == 3) out[j][i] = X[j + 1].R.transpose() * Vector3(e_B[i]);
+    }
+  }
+  return out;
+}
+
 std::vector<TermSpec> SpectrumCandidates(const Data& data, const RobotModel& model) {
   const Fit fit = data.FitOn(model, {}, "starting model, all data (the residual's spectrum)");
   std::vector<int> all(data.size());
@@ -154,6 +177,12 @@ std::vector<TermSpec> SpectrumCandidates(const Data& data, const RobotModel& mod
   std::vector<const MeasurementContext*> contexts(data.size());
   for (int i = 0; i < data.size(); ++i) contexts[i] = &data.context(i);
   const int joints = model.chain.num_joints();
+  std::vector<Eigen::VectorXd> e_B = cv.e;
+  if (data.ResidualsInBase(fit, &e_B)) {
+    return CandidateTermSpecs(
+        model.chain, SpectrumOrdersPerJoint(ResidualsInLinkFrames(data, fit.result.model, e_B),
+                                            contexts, MaxHarmonicOrder(), kOrdersPerJoint));
+  }
   return CandidateTermSpecs(
       model.chain, SpectrumOrders(cv.e, contexts, joints, MaxHarmonicOrder(), kOrdersPerJoint));
 }

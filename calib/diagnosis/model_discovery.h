@@ -129,6 +129,12 @@ struct DiscoveryOptions {
   /// correlation is at least every pairwise one: on the paper cell a compliance of joint 2
   /// that the optical axes see with 99.7 % held-out gain has R = 0.991-0.9994 (20 trials).
   double correlation_limit = 0.99999;
+  /// Cosine between two acceptable candidates' held-out changes of the residual (what each
+  /// moves, stacked over every unit of the region folds: CandidateScore::heldout_change) from
+  /// which they count as explaining the residual in the same direction, indistinguishable on
+  /// these data whatever their gains [-]. 0.99: less than 14 % (sqrt(1 - 0.99^2)) of either's
+  /// change lies outside the other's direction.
+  double parallel_limit = 0.99;
   /// Candidates to try; empty: every registered term at every joint / order it applies to.
   std::vector<TermSpec> candidates;
   /// Noise of each joint reading (encoder), per joint [rad]; 0: not stated, the floor is the
@@ -228,6 +234,10 @@ struct CandidateScore {
   /// Per unit of data (a point, an axis sample), its held-out loss in the region folds, in the
   /// units' order; what the paired tests compare.
   std::vector<double> heldout_loss;
+  /// Per unit, its residual's held-out change against the step's base (base minus candidate),
+  /// the units' components stacked in their order [m]: the direction in which it explains
+  /// the residual (DiscoveryOptions::parallel_limit).
+  std::vector<double> heldout_change;
   /// The driver preference (header, step 3). Where the step's leader is clock-driven and this
   /// candidate, with a driver earlier in TermDriver's order, would be accepted on its own: the
   /// one-sided sign-flip p (stats::SignFlipTestGreater) of the leader's held-out loss being
@@ -242,9 +252,11 @@ struct CandidateScore {
   bool restarted = false;
   bool accepted = false;
   /// Of the accepted candidate: the other candidates of its step that would be accepted on
-  /// their own (Judge) and whose held-out loss the region folds do not tell from its own
-  /// (one-sided sign-flip p of its being lower, summed per fold, >= alpha): the data explain
-  /// the residual about equally well with any of them, and the verdict names them together.
+  /// their own (Judge) and either whose held-out loss the region folds do not tell from its
+  /// own (one-sided sign-flip p of its being lower, summed per fold, >= alpha) or whose
+  /// held-out change is nearly parallel to its own (cosine >= parallel_limit): the data
+  /// explain the residual about equally well with any of them, and the verdict names them
+  /// together.
   std::vector<std::string> indistinguishable_from;
   std::vector<DiscoveredParameter> parameters;  ///< identified on every point
 };

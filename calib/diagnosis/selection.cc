@@ -1,5 +1,6 @@
 #include "calib/diagnosis/selection.h"
 
+#include <cmath>
 #include <sstream>
 
 #include "calib/common/errors.h"
@@ -103,6 +104,19 @@ const char* DriverText(TermDriver d) {
     case TermDriver::kClockUnbounded: return "the clock, without bound";
   }
   return "?";
+}
+
+double ChangeCosine(const CandidateScore& a, const CandidateScore& b) {
+  if (a.heldout_change.empty() || a.heldout_change.size() != b.heldout_change.size()) {
+    return 0.0;
+  }
+  double ab = 0, aa = 0, bb = 0;
+  for (std::size_t i = 0; i < a.heldout_change.size(); ++i) {
+    ab += a.heldout_change[i] * b.heldout_change[i];
+    aa += a.heldout_change[i] * a.heldout_change[i];
+    bb += b.heldout_change[i] * b.heldout_change[i];
+  }
+  return aa > 0 && bb > 0 ? ab / std::sqrt(aa * bb) : 0.0;
 }
 
 double FoldSignFlipP(const CandidateScore& c, const CandidateScore& better,
@@ -303,12 +317,20 @@ void NameIndistinguishable(const SelectionContext& x, const std::vector<int>& te
       continue;
     }
     const double p = FoldSignFlipP(c, chosen, x.region, x.folds);
-    if (p < x.o.alpha) continue;
+    const double cosine = ChangeCosine(c, chosen);
+    const bool parallel = cosine >= x.o.parallel_limit;
+    if (p < x.o.alpha && !parallel) continue;
     chosen.indistinguishable_from.push_back(c.label);
     std::ostringstream why;
     why << "indistinguishable on these data from the accepted " << chosen.label
         << " (held-out gain " << c.gain_percent << " % against " << chosen.gain_percent
-        << " %, sign-flip p over the region folds = " << p << " >= " << x.o.alpha << ")";
+        << " %, sign-flip p over the region folds = " << p
+        << (p >= x.o.alpha ? " >= " : " < ") << x.o.alpha;
+    if (parallel) {
+      why << "; their held-out changes of the residual are nearly parallel: cosine " << cosine
+          << " >= " << x.o.parallel_limit;
+    }
+    why << ")";
     AddNote(why.str(), &c);
   }
   if (!chosen.indistinguishable_from.empty()) {

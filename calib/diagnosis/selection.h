@@ -39,6 +39,10 @@ std::string RefusalText(Refusal refusal, const CandidateScore& c, const Discover
 /// TermDriver in words, for the notes.
 const char* DriverText(TermDriver d);
 
+/// Cosine between two candidates' held-out changes of the residual (heldout_change); 0 where
+/// either is empty or zero, or their sizes differ.
+double ChangeCosine(const CandidateScore& a, const CandidateScore& b);
+
 /// The one-sided sign-flip p (stats::SignFlipTestGreater) of `better`'s region-fold held-out
 /// loss being below `c`'s: their loss differences summed per fold (`region`: each unit's
 /// fold, 0..folds-1). Requires both losses of region's size.

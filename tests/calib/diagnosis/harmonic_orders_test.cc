@@ -54,5 +54,32 @@ TEST(HarmonicOrders, TheSpectrumPicksTheOrdersInTheResidual) {
   EXPECT_LT(power[0], 0.1 * power[2]);
 }
 
+// A joint-angle error of order 3, dq = A sin(3 q), seen at a point a lever arm L from the
+// axis, which turns with the joint: in the fixed frame the point moves by L dq (-sin q, cos q),
+// products of order 3 and order 1, so the fixed-frame spectrum shows orders 2 and 4 (3 - 1 and
+// 3 + 1), not 3. In the link's frame, which turns with the joint, the same residual is
+// L dq (0, 1): order 3 alone. (Why discovery reads each joint's spectrum in its link's frame.)
+TEST(HarmonicOrders, InTheLinksFrameAnErrorTurningWithTheJointKeepsItsOrder) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> angle(-2.5, 2.5);
+  const double A = 1e-4, L = 0.8;
+  std::vector<Eigen::VectorXd> fixed, link;
+  std::vector<MeasurementContext> contexts(300);
+  std::vector<const MeasurementContext*> pointers;
+  for (MeasurementContext& c : contexts) {
+    const double q = angle(rng);
+    c.q = JointVector::Zero(1);
+    c.q(0) = q;
+    const double dq = A * std::sin(3 * q + 0.4);
+    fixed.push_back(Eigen::Vector3d(-L * dq * std::sin(q), L * dq * std::cos(q), 0.0));
+    link.push_back(Eigen::Vector3d(0.0, L * dq, 0.0));
+    pointers.push_back(&c);
+  }
+  EXPECT_EQ(SpectrumOrders(fixed, pointers, 1, 8, 2), (std::vector<std::vector<int>>{{2, 4}}));
+  // Order 3 is the strongest in the link's frame: alone with per_joint 1.
+  EXPECT_EQ(SpectrumOrdersPerJoint({link}, pointers, 8, 1),
+            (std::vector<std::vector<int>>{{3}}));
+}
+
 }  // namespace
 }  // namespace twin::discovery

@@ -1,5 +1,6 @@
 #include "calib/diagnosis/selection.h"
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -209,6 +210,40 @@ TEST(Selection, CandidatesTheFoldsCannotTellApartAreNamedTogether) {
                                  "(joint 2)"),
             std::string::npos)
       << r.BriefReport();
+}
+
+// The other criterion of honest names: a candidate the folds do tell apart (worse in every
+// fold, p = 1/32) but whose held-out change of the residual points the same way as the
+// accepted one's (cosine 0.995 >= 0.99) is named with it; one at cosine 0.9 is not.
+TEST(Selection, NearlyParallelHeldOutChangesAreNamedIndistinguishable) {
+  const DiscoveryOptions o;
+  DiscoveryStep s;
+  s.candidates = {Acceptable("lateral_compliance (joint 1)", 40.0),
+                  Acceptable("joint_compliance (joint 2)", 30.0),
+                  Acceptable("mount_deflection", 30.0)};
+  for (CandidateScore& c : s.candidates) c.spec = {"thermal_growth", -1, {}};  // no shape
+  s.candidates[0].heldout_loss = std::vector<double>(10, 1.0);
+  s.candidates[1].heldout_loss = std::vector<double>(10, 1.5);
+  s.candidates[2].heldout_loss = std::vector<double>(10, 1.5);
+  // Changes in the plane of two unit vectors u, v: cos(angle) with the chosen's u.
+  const auto at = [](double cosine) {
+    const double sine = std::sqrt(1.0 - cosine * cosine);
+    return std::vector<double>{2 * cosine, 2 * sine, 0.0, 0.0};
+  };
+  s.candidates[0].heldout_change = {1.0, 0.0, 0.0, 0.0};
+  s.candidates[1].heldout_change = at(0.995);
+  s.candidates[2].heldout_change = at(0.9);
+  EXPECT_NEAR(ChangeCosine(s.candidates[1], s.candidates[0]), 0.995, 1e-12);
+  const std::vector<int> region{0, 0, 1, 1, 2, 2, 3, 3, 4, 4};
+  const RobotModel start = MakeRobotModel(testing::ReinovoLikeModel(1));
+  const SelectionContext x{o, region, 5, start};
+  ASSERT_EQ(ChooseCandidate(x, &s), 0);
+  EXPECT_EQ(s.candidates[0].indistinguishable_from,
+            std::vector<std::string>{"joint_compliance (joint 2)"});
+  EXPECT_NE(s.candidates[1].note.find("nearly parallel: cosine 0.995 >= 0.99"),
+            std::string::npos)
+      << s.candidates[1].note;
+  EXPECT_EQ(s.candidates[2].note.find("indistinguishable"), std::string::npos);
 }
 
 }  // namespace
