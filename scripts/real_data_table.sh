@@ -11,7 +11,8 @@ data=../shared/data/motoman_leica
 [ -f "$data/right_arm_wide.csv" ] || { echo "error: $data/right_arm_wide.csv: not found" >&2; exit 2; }
 out="${1:-$(mktemp -d /tmp/twinbench-real-data.XXXXXX)}"
 mkdir -p "$out"
-tb=build/bin/twinbench
+tb="${TWINBENCH:-build/bin/twinbench}"   # TWINBENCH: another build (e.g. a copy while rebuilding)
+[ -x "$tb" ] || { echo "error: $tb: not built (scripts/build.sh)" >&2; exit 2; }
 commands=()
 run() {  # NAME FILE VALIDATE [ARGS...]
   local name=$1 file=$2 validate=$3
@@ -26,11 +27,11 @@ run() {  # NAME FILE VALIDATE [ARGS...]
 run wide right_arm_wide.csv right_arm_cube.csv
 run wide_max8 right_arm_wide.csv right_arm_cube.csv --diagnosis-max-effects 8
 run cube right_arm_cube.csv right_arm_wide.csv
-python3 - "$out" "$(git rev-parse --short HEAD)" "${commands[@]}" >docs/results/real_data_discovery.md <<'PY'
+python3 - "$out" "$(git rev-parse --short HEAD)" "$("$tb" --version)" "$(uname -m), $(nproc) cores, $(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo) GiB" "${commands[@]}" >docs/results/real_data_discovery.md <<'PY'
 import json, sys, datetime
-out, commit, cmds = sys.argv[1], sys.argv[2], sys.argv[3:]
+out, commit, version, machine, cmds = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4], sys.argv[5:]
 print("# Model discovery on the real Motoman tracker files\n")
-print(f"Written by `scripts/real_data_table.sh` on {datetime.date.today()} at commit {commit}.")
+print(f"Written by `scripts/real_data_table.sh` on {datetime.date.today()} at commit {commit} ({version}), on {machine}.")
 print("Region: the diagnosis's region-disjoint held-out RMS (5 k-means blocks of the points).")
 print("Second session: the other file, the tracker pose refitted on a random half and the other")
 print("half scored, mean +- sd over 20 halvings. Lengths in mm. Commands:\n")
