@@ -16,6 +16,18 @@ namespace {
 // data identify is the compliance times each lump's weight:
 //   w_x += sum_k a_xk ((P_k - o_i) x g_B)_x,   w_y += sum_k a_yk ((P_k - o_i) x g_B)_y
 // with a_k = c m_k g [rad/m]. Joint 1 is the base's tilt under the arm's moment about it.
+//
+// With masses, the term also carries the tilt of true gravity against the model's g_B (the
+// base is levelled to a fraction of a degree, and nothing the arm measures tells it): the
+// moment across an axis that carries a large moment along it (joint 2's drive torque, tens of
+// N m, against a bending moment of a few N m) changes by that torque times the tilt. Gravity
+// g (g_B + gamma_1 e_1 + gamma_2 e_2), e_1, e_2 the unit vectors across g_B (e_1 from x of B),
+// gives the moment M + gamma_1 M_1 + gamma_2 M_2, M_k the moment under g e_k; with one
+// compliance c for the tilt's part the term stays linear in its parameters u_k = c gamma_k
+// [rad/(N m)]:
+//   w_x += c_x M_x + u_1 M_1x + u_2 M_2x,   w_y += c_y M_y + u_1 M_1y + u_2 M_2y
+// (twin, tracker_lateral_compliance_j2: a base tilted 0.2 deg left 0.023 mm RMS at the
+// reflector that c_x, c_y cannot take and the geometry cannot either).
 class LateralCompliance : public ErrorTermT<LateralCompliance> {
  public:
   LateralCompliance(TermSpec spec, std::vector<TermParameter> parameters,
@@ -33,6 +45,16 @@ class LateralCompliance : public ErrorTermT<LateralCompliance> {
       const Vec3T<T> m = NominalGravityMoment(nominal_, in, i);
       w[3 * i] += p[0] * m.x();
       w[3 * i + 1] += p[1] * m.y();
+      // The gravity tilt's parts: e_1, e_2 across g_B.
+      const Vector3 g = in.g_B.normalized();
+      Vector3 e1 = Vector3::UnitX() - Vector3::UnitX().dot(g) * g;
+      if (e1.norm() < 0.5) e1 = Vector3::UnitY() - Vector3::UnitY().dot(g) * g;
+      e1.normalize();
+      const Vector3 e2 = g.cross(e1);
+      const Vec3T<T> m1 = NominalGravityMoment(nominal_, in, i, Vector3(in.gravity * e1));
+      const Vec3T<T> m2 = NominalGravityMoment(nominal_, in, i, Vector3(in.gravity * e2));
+      w[3 * i] += p[2] * m1.x() + p[3] * m2.x();
+      w[3 * i + 1] += p[2] * m1.y() + p[3] * m2.y();
       return;
     }
     const int n = nominal_.num_joints();
@@ -62,8 +84,11 @@ std::shared_ptr<const ErrorTerm> MakeLateralCompliance(const TermInput& in) {
     for (const Link& l : in.nominal.links) mass += l.inertia.mass;
     const double tau_ref =
         std::max(1.0, kStandardGravity * mass * 0.5 * NominalReach(in.nominal));
+    // The gravity tilt's parts: a compliance times a tilt of 0.01 rad.
     params = {{prefix + "_x", "rad/(N m)", 1.0 / tau_ref},
-              {prefix + "_y", "rad/(N m)", 1.0 / tau_ref}};
+              {prefix + "_y", "rad/(N m)", 1.0 / tau_ref},
+              {prefix + "_times_gravity_tilt_1", "rad/(N m)", 0.01 / tau_ref},
+              {prefix + "_times_gravity_tilt_2", "rad/(N m)", 0.01 / tau_ref}};
   } else {
     // Scale: 1 rad per lever of the arm's reach.
     lumps = LumpsBeyond(in.nominal, in.spec.joint);

@@ -57,19 +57,27 @@ const Vec3T<T>& LumpPoint(const DeflectionInputT<T>& in, int index, int num_join
 
 /// The gravity moment about the origin of X_BL[joint] [N m], in that frame's axes, of the
 /// nominal masses of the links joint turns (links joint..N, each at its centre of mass; the
-/// tool link's with the flange link, as GravityTorquesT).
+/// tool link's with the flange link, as GravityTorquesT), under the acceleration `g_B`
+/// [m/s^2, in B] (the moment is linear in it).
 template <typename T>
 Vec3T<T> NominalGravityMoment(const KinematicModel& chain, const DeflectionInputT<T>& in,
-                              int joint) {
+                              int joint, const Vector3& g_B) {
   const int n = chain.num_joints();
   const RigidT<T>& X = in.X_BL[joint];
-  const Vec3T<T> g = (in.gravity * in.g_B).template cast<T>();
+  const Vec3T<T> g = g_B.template cast<T>();
   Vec3T<T> moment = Vec3T<T>::Zero();
   for (int j = joint; j <= n; ++j) {
     const Vec3T<T> com = in.X_BL[j + 1] * chain.links[j].inertia.p_LiCom.template cast<T>();
     moment += (com - X.p).cross(g * T(chain.links[j].inertia.mass));
   }
   return X.R.transpose() * moment;
+}
+
+/// NominalGravityMoment under the model's gravity (in.gravity times in.g_B).
+template <typename T>
+Vec3T<T> NominalGravityMoment(const KinematicModel& chain, const DeflectionInputT<T>& in,
+                              int joint) {
+  return NominalGravityMoment(chain, in, joint, Vector3(in.gravity * in.g_B));
 }
 
 }  // namespace twin::terms

@@ -126,7 +126,7 @@ TEST(DeflectionTerms, LateralComplianceTiltsItsAxisByComplianceTimesTheNominalMo
   // Joint 1: its axis is vertical, so the arm's whole gravity moment bends it.
   model = WithTerm(model, MakeErrorTerm({"lateral_compliance", 0, {}}, chain, "r1"));
   const double cx = 3e-6, cy = -2e-6;  // [rad/(N m)]
-  model.term_values << cx, cy;
+  model.term_values << cx, cy, 0.0, 0.0;  // no gravity tilt
   const JointVector q = (JointVector(6) << 0.4, 0.3, -0.6, 0.8, 0.9, -0.2).finished();
   // The test's own moment about the origin of X_BL[0] of links 1..6 and the tool, each at its
   // centre of mass, in X_BL[0]'s axes.
@@ -142,6 +142,39 @@ TEST(DeflectionTerms, LateralComplianceTiltsItsAxisByComplianceTimesTheNominalMo
   EXPECT_GT(w.norm(), 1e-5);  // the case tilts the axis measurably
   // 1e-12 m: as above.
   EXPECT_LT((EndPose(model, Context(q)).translation() - RotatedAt(chain, q, 0, w)).norm(), 1e-12);
+}
+
+// Gravity tilted against the model's g_B = -z of B by gamma_1 about e_1 = x of B and gamma_2
+// about e_2 = g_B x e_1 = -y: the term with one compliance c and u_k = c gamma_k tilts joint
+// 2's axis by c times the bending moment under the tilted gravity, which the test computes
+// itself. Joint 2 carries its drive torque along its axis, so a tilt of 0.2 deg changes the
+// moment across it by a large part of that moment.
+TEST(DeflectionTerms, LateralComplianceTakesTheTiltOfGravityAgainstTheBase) {
+  const KinematicModel chain = ReinovoLikeModel();
+  RobotModel model = MakeRobotModel(chain);
+  model = WithTerm(model, MakeErrorTerm({"lateral_compliance", 1, {}}, chain, "r1"));
+  ASSERT_EQ(model.term_values.size(), 4);
+  const double c = 5e-4, gamma1 = 3.5e-3, gamma2 = -2e-3;  // [rad/(N m)], [rad]
+  model.term_values << c, c, c * gamma1, c * gamma2;
+  const JointVector q = (JointVector(6) << 0.4, 0.3, -0.6, 0.8, 0.9, -0.2).finished();
+  const Vector3 g =
+      kStandardGravity * (-Vector3::UnitZ() + gamma1 * Vector3::UnitX() - gamma2 * Vector3::UnitY());
+  const FrameSet f = ForwardKinematics(chain, q);
+  const auto across = [&](const Vector3& gravity) {
+    Vector3 moment = Vector3::Zero();
+    for (int j = 1; j <= 6; ++j) {
+      const Vector3 com = f.X_BL[j + 1] * chain.links[j].inertia.p_LiCom;
+      moment += (com - f.X_BL[1].translation()).cross(chain.links[j].inertia.mass * gravity);
+    }
+    const Vector3 m_L = f.X_BL[1].linear().transpose() * moment;
+    return Vector3(m_L.x(), m_L.y(), 0.0);
+  };
+  const Vector3 w = c * across(g);
+  const Vector3 w_level = c * across(-kStandardGravity * Vector3::UnitZ());
+  // The tilt matters here: it moves the end point by far more than the tolerance below.
+  EXPECT_GT((RotatedAt(chain, q, 1, w) - RotatedAt(chain, q, 1, w_level)).norm(), 1e-6);
+  // 1e-12 m: as above.
+  EXPECT_LT((EndPose(model, Context(q)).translation() - RotatedAt(chain, q, 1, w)).norm(), 1e-12);
 }
 
 TEST(DeflectionTerms, LumpsAreTheElbowWristAndEndOfASixAxisArm) {

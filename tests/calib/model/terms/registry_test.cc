@@ -46,11 +46,12 @@ RobotModel ModelWithAllTerms(const KinematicModel& chain, std::mt19937_64& rng) 
   for (const TermSpec& s : ExampleSpecs()) m = WithTerm(m, MakeErrorTerm(s, chain, chain.name));
   // Realistic magnitudes: compliance 1e-5 rad/(N m), gear errors 0.01 deg, backlash 0.005 deg,
   // 1.2e-5 /K, 1e-9 /s, mount deflection 0.05 mm, a warm-up growth of 1e-4 and a time
-  // constant 1.2 times its order, lateral compliance 2e-6 rad/(N m), a wobble of 5e-5 rad.
+  // constant 1.2 times its order, lateral compliance 2e-6 rad/(N m) with gravity tilted by
+  // 0.01 rad, a wobble of 5e-5 rad.
   std::uniform_real_distribution<double> u(0.5, 1.5);
   const double values[] = {1e-5,  2e-4, -1e-4, 1e-4, 5e-5, -9e-5, 1.2e-5,
                            1e-9,  5e-5, -3e-5, 4e-5, 1e-4, 0.18,
-                           2e-6,  -1e-6, 5e-5, -4e-5, 3e-5, 6e-5};
+                           2e-6,  -1e-6, 2e-8,  -1e-8, 5e-5, -4e-5, 3e-5, 6e-5};
   constexpr int kValues = sizeof(values) / sizeof(values[0]);
   EXPECT_EQ(m.term_values.size(), kValues) << "one example value per term parameter";
   for (int i = 0; i < m.term_values.size() && i < kValues; ++i) {
