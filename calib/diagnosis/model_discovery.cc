@@ -177,14 +177,34 @@ std::vector<TermSpec> SpectrumCandidates(const Data& data, const RobotModel& mod
   std::vector<const MeasurementContext*> contexts(data.size());
   for (int i = 0; i < data.size(); ++i) contexts[i] = &data.context(i);
   const int joints = model.chain.num_joints();
-  std::vector<Eigen::VectorXd> e_B = cv.e;
-  if (data.ResidualsInBase(fit, &e_B)) {
-    return CandidateTermSpecs(
-        model.chain, SpectrumOrdersPerJoint(ResidualsInLinkFrames(data, fit.result.model, e_B),
-                                            contexts, MaxHarmonicOrder(), kOrdersPerJoint));
-  }
-  return CandidateTermSpecs(
+  const std::vector<TermSpec> fixed = CandidateTermSpecs(
       model.chain, SpectrumOrders(cv.e, contexts, joints, MaxHarmonicOrder(), kOrdersPerJoint));
+  std::vector<Eigen::VectorXd> e_B = cv.e;
+  if (!data.ResidualsInBase(fit, &e_B)) return fixed;
+  // A periodic error of the joint's angle (transmission error) turns the lever arm with it: its
+  // order is clean in the link's frame. A periodic tilt of the axis (wobble) is not: its
+  // direction is fixed in the parent, and the part of the lever along the axis keeps its order
+  // in a fixed frame only (turned into the link's frame every part moves to h - 1 and h + 1).
+  // Measured on the twin's tracker scenarios, 20 trials each: a joint-2 gear error of order 3
+  // was named 11 of 20 from the fixed frame, 20 of 20 from the link's; a joint-1 wobble of
+  // order 2, 20 of 20 from the fixed frame, 11 of 20 from the link's.
+  const std::vector<TermSpec> link = CandidateTermSpecs(
+      model.chain, SpectrumOrdersPerJoint(ResidualsInLinkFrames(data, fit.result.model, e_B),
+                                          contexts, MaxHarmonicOrder(), kOrdersPerJoint));
+  std::vector<TermSpec> out;
+  for (const TermSpec& spec : link) {
+    const bool periodic = !spec.orders.empty() && spec.joint >= 0;
+    if (!periodic || !MakeErrorTerm(spec, model.chain, model.name())->deflects_axes()) {
+      out.push_back(spec);
+    }
+  }
+  for (const TermSpec& spec : fixed) {
+    const bool periodic = !spec.orders.empty() && spec.joint >= 0;
+    if (periodic && MakeErrorTerm(spec, model.chain, model.name())->deflects_axes()) {
+      out.push_back(spec);
+    }
+  }
+  return out;
 }
 
 // Forward selection (header, step 3): one term per step added to `current`, until none is
