@@ -22,20 +22,6 @@
 #include "calib/common/errors.h"
 
 namespace twin {
-namespace {
-
-// Parses the whole of `text` as a base-10 integer of type T; nullopt if it is not one or
-// does not fit (std::from_chars takes no '+', no spaces and no fraction).
-template <typename T>
-std::optional<T> ParseWhole(const std::string& text) {
-  T v{};
-  const char* end = text.data() + text.size();
-  const auto res = std::from_chars(text.data(), end, v);
-  if (res.ec != std::errc() || res.ptr != end) return std::nullopt;
-  return v;
-}
-
-}  // namespace
 
 std::string JoinNames(const std::vector<std::string>& names) {
   std::string out;

@@ -4,11 +4,13 @@
 // conventions the files use.
 #pragma once
 
+#include <charconv>
 #include <cstddef>
 #include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -19,6 +21,17 @@
 namespace twin {
 
 using YamlKeys = std::vector<std::string>;
+
+/// Parses the whole of `text` as a base-10 integer of type T; nullopt if it is not one or
+/// does not fit (std::from_chars takes no '+', no spaces and no fraction).
+template <typename T>
+std::optional<T> ParseWhole(const std::string& text) {
+  T v{};
+  const char* end = text.data() + text.size();
+  const auto res = std::from_chars(text.data(), end, v);
+  if (res.ec != std::errc() || res.ptr != end) return std::nullopt;
+  return v;
+}
 
 /// "a, b, c" (for messages listing allowed keys or names).
 std::string JoinNames(const std::vector<std::string>& names);

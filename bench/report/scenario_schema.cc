@@ -113,15 +113,6 @@ Json SectionSchema(const ScenarioSection& section) {
   return s;
 }
 
-template <typename T>
-std::optional<T> ParseWhole(const std::string& text) {
-  T v{};
-  const char* end = text.data() + text.size();
-  const auto res = std::from_chars(text.data(), end, v);
-  if (res.ec != std::errc() || res.ptr != end) return std::nullopt;
-  return v;
-}
-
 // A plain scalar as YAML's core schema types it (with YAML 1.1's yes/no/on/off, as yaml-cpp
 // and the parsers read booleans).
 Json TypedScalar(const std::string& text) {
