@@ -1,7 +1,7 @@
-// twinbench: the command-line entry point. Exit codes (README, "Exit codes"): 0 success; 2 bad
-// input or a refused procedure, with `error: <where>: <what>` on stderr; 3 a run that missed
-// its acceptance criteria; 1 only for our own bugs (`internal error: ...`). An interrupted run
-// (SIGINT, SIGTERM, SIGHUP) removes its staging folder and ends by the signal.
+// twinbench: the command-line entry point. Exit codes (docs/reference/exit-codes-and-safety.md): 0
+// success; 2 bad input or a refused procedure, with `error: <where>: <what>` on stderr; 3 a run
+// that missed its acceptance criteria; 1 only for our own bugs (`internal error: ...`). An
+// interrupted run (SIGINT, SIGTERM, SIGHUP) removes its staging folder and ends by the signal.
 #include <malloc.h>
 
 #include <cmath>
@@ -584,8 +584,8 @@ int main(int argc, char** argv) {
   // once (trimmed only above 256 MiB; mmap only for blocks of 64 MiB and more). The planner's
   // threads allocate and free their Jacobians and SVD work thousands of times a second; with
   // the defaults each round trip to the system cost page faults (benchmark-planning of
-  // paper_reinovo.yaml: 13.0 s of system time in 54.5 s before, 0.2 s after; README "Speed of
-  // trials"). What a process holds at its peak stays with it until it exits.
+  // paper_reinovo.yaml: 13.0 s of system time in 54.5 s before, 0.2 s after; README.md of e5af83d,
+  // "Speed of trials"). What a process holds at its peak stays with it until it exits.
   mallopt(M_MMAP_THRESHOLD, 64 << 20);
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
   CLI::App app{"twinbench: digital-twin test bench for dual-robot kinematic calibration"};

@@ -1,6 +1,6 @@
 // What the estimator is told of the twin's effects: a scenario effect with `declared: true`
-// says that the effect exists (its term type and joint), never its magnitude (README, "Model
-// discovery"). Shared by the tracker and the optical-axis runs.
+// says that the effect exists (its term type and joint), never its magnitude
+// (docs/explanation/discovery-statistics.md). Shared by the tracker and the optical-axis runs.
 #pragma once
 
 #include <string>

@@ -32,8 +32,8 @@ namespace twin {
 /// Limits of a measurements file (plausibility, issue 14): a hardware session records 50 to a
 /// few hundred aligned poses, a Monte Carlo or accumulated data set tens of thousands; 100,000
 /// rows, 1,000 axes and 64 MiB keep the identification's memory and time bounded (linear in
-/// the rows, measured: README "Speed"; its dense Jacobian has a column per unknown, so it grows
-/// with rows times axes), 4096 characters a line.
+/// the rows, measured: README.md of e5af83d, "Speed"; its dense Jacobian has a column per unknown,
+/// so it grows with rows times axes), 4096 characters a line.
 constexpr int kMaxMeasurementRows = 100000;
 constexpr int kMaxMeasurementAxes = 1000;
 constexpr std::uintmax_t kMaxMeasurementBytes = std::uintmax_t{64} << 20;

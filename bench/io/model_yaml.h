@@ -1,5 +1,6 @@
 // Robot model files in YAML (models/*.yaml): the edge where text becomes a KinematicModel.
-// The format is documented in README.md ("Adding a robot") and by models/reinovo_r1.yaml.
+// The format is documented in docs/reference/file-formats.md, "Robot models" and by
+// models/reinovo_r1.yaml.
 #pragma once
 
 #include <string>

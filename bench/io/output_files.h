@@ -2,10 +2,10 @@
 // become parts of file names, and the clean-up of staging folders and temporary files when the
 // process is interrupted (SIGINT, SIGTERM, SIGHUP).
 //
-// Contract (README, "Exit codes"): nothing is written before the inputs are validated; a run
-// writes into a staging folder `OUT.partial` and renames it onto OUT only when complete; a
-// refused or interrupted run leaves neither. SIGKILL cannot be caught: its `OUT.partial` stays
-// until the next run with the same --out removes it (CreateStagingDirectory).
+// Contract (docs/reference/exit-codes-and-safety.md): nothing is written before the inputs are
+// validated; a run writes into a staging folder `OUT.partial` and renames it onto OUT only when
+// complete; a refused or interrupted run leaves neither. SIGKILL cannot be caught: its
+// `OUT.partial` stays until the next run with the same --out removes it (CreateStagingDirectory).
 #pragma once
 
 #include <functional>
@@ -22,10 +22,10 @@ bool WriteAll(int fd, const std::string& text);
 /// InputError naming the file.
 void WriteTextFile(const std::string& path, const std::string& text);
 
-/// The output-safety rule (README, "Exit codes"): a verb writes only into a folder it creates,
-/// into an empty folder, or into one it marked as its own in an earlier run; it deletes nothing
-/// it did not create, and no output overlaps an input. The mark is this file in the folder, a
-/// JSON object {"written_by": "twinbench", "verb": VERB}.
+/// The output-safety rule (docs/reference/exit-codes-and-safety.md): a verb writes only into a
+/// folder it creates, into an empty folder, or into one it marked as its own in an earlier run; it
+/// deletes nothing it did not create, and no output overlaps an input. The mark is this file in the
+/// folder, a JSON object {"written_by": "twinbench", "verb": VERB}.
 inline constexpr const char* kOutputMarker = ".twinbench-output";
 
 /// The verb whose outputs this process writes ("run", "identify", ...): the marks it writes

@@ -1,6 +1,6 @@
 // Laser-tracker measurement files: one row per measured pose, the joint readings of the robot
-// and the reflector's position in the tracker's own frame (README, "Calibrating from a laser
-// tracker file"). The header names the columns, with units in the names:
+// and the reflector's position in the tracker's own frame (docs/reference/file-formats.md, "Tracker
+// files"). The header names the columns, with units in the names:
 //   pose                         optional pose id (kept for messages)
 //   q_<joint>_rad | q_<joint>_deg   one per joint of the model, <joint> the model's link name
 //                                (q_S_rad) or its 1-based number (q3_deg)

@@ -1,8 +1,8 @@
 // report.json of the optical-axis calibration (`twinbench run` on a scenario with a
 // `calibration:` section), the calibration keys the dual-arm workflow's report shares
 // (bench/report/workflow_report.h), and identification.json of `twinbench identify`. The keys
-// are in the README ("Report"). Lengths in mm, angles in deg; a figure that was not computed
-// (NaN, infinite, no samples) is null.
+// are in docs/reference/report-json.md. Lengths in mm, angles in deg; a figure that was not
+// computed (NaN, infinite, no samples) is null.
 #pragma once
 
 #include <string>

@@ -1,6 +1,7 @@
 // The `diagnosis` section of a report (model discovery, calib/diagnosis/model_discovery.h),
 // shared by `twinbench identify` on tracker files and the twin's tracker runs. Every key is in
-// the README ("Model discovery"). Lengths in mm, angles in deg, other units as the term states.
+// docs/explanation/discovery-statistics.md. Lengths in mm, angles in deg, other units as the term
+// states.
 #pragma once
 
 #include <string>

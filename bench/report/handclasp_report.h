@@ -1,6 +1,6 @@
 // report.json of the handclasp base-frame calibration (`twinbench run` on a scenario with a
 // `handclasp:` section alone) and the handclasp stage's section that the dual-arm workflow
-// embeds (bench/report/workflow_report.h). The keys are in the README ("Handclasp report").
+// embeds (bench/report/workflow_report.h). The keys are in docs/reference/report-json.md.
 // Lengths in mm, angles in deg (ZYZ Euler angles for rotations).
 #pragma once
 

@@ -530,7 +530,8 @@ struct HandclaspRunInputs {
   Acceptance acceptance;
 };
 
-// Everything is validated before anything runs or is written (exit-code contract, README).
+// Everything is validated before anything runs or is written
+// (docs/reference/exit-codes-and-safety.md).
 HandclaspRunInputs LoadAndValidate(const std::string& scenario_path, const std::string& out_dir,
                                    int trial, const std::string& junit) {
   Scenario scenario = LoadScenario(scenario_path);
@@ -559,7 +560,8 @@ HandclaspBatchResult RunTrials(const Scenario& scenario, const HandclaspConfig& 
     HandclaspStageResult stage = RunHandclaspStage(cell, scenario, nominal, progress);
     stage.seed = spec.seed;
     if (!stage.ok()) {
-      // A refused procedure is exit 2 with its reason (README, exit codes); nothing is written.
+      // A refused procedure is exit 2 with its reason (docs/reference/exit-codes-and-safety.md);
+      // nothing is written.
       ++b.failures;
       throw InputError(scenario.path + " scenario.handclasp",
                        "the handclasp procedure refused in trial " + std::to_string(t + 1) + "/" +

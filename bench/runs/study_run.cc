@@ -317,7 +317,7 @@ StudyInputs LoadStudyInputs(const StudyOptions& o) {
   in.hash = ScenarioHash(in.sc);
   in.executable = o.executable.empty() ? SelfExecutable() : o.executable;
   // Trials are not confined to CPUs of their own: two trials each held to one of 2 CPUs ran
-  // no faster than two free ones (README, "Speed of trials").
+  // no faster than two free ones (README.md of e5af83d, "Speed of trials").
   in.jobs = o.jobs > 0 ? o.jobs : UsableCpuCount();
   in.scenario_path = fs::absolute(o.scenario).lexically_normal().string();
   return in;

@@ -1,6 +1,6 @@
 // `twinbench identify` on a laser-tracker file (bench/io/tracker_file.h): the identification
 // with held-out scoring of calib/procedures/tracker_calibration.h, written as report.json and
-// the identified model (README, "Calibrating from a laser tracker file").
+// the identified model (docs/reference/file-formats.md, "Tracker files").
 #pragma once
 
 #include <cstdint>

@@ -1,6 +1,6 @@
 // `twinbench run` of a scenario with a `tracker_calibration:` section: the laser-tracker
 // procedure (calib/procedures/tracker_procedure.h) on the twin's tracker (`tracker:`), scored
-// against the truth (README, "Laser tracker on the twin").
+// against the truth (docs/explanation/methods.md, "Laser tracker on the twin").
 //
 // tracker_calibration keys (told values and the procedure's settings; the truth is `tracker:`):
 //   robot: r2                        # the robot carrying the reflector

@@ -155,7 +155,8 @@ void RunCalibratedHandclasp(const WorkflowContext& ctx,
   }
 }
 
-// A refused stage is exit 2 with its reason (README, exit codes); nothing is written.
+// A refused stage is exit 2 with its reason (docs/reference/exit-codes-and-safety.md); nothing is
+// written.
 void ThrowIfRefused(const Scenario& sc, const WorkflowResult& state) {
   if (state.failure.empty()) return;
   std::string detail;

@@ -172,8 +172,9 @@ namespace {
 // model (Ceres formulation, scale measurement included when recorded; the first pass's
 // Jacobian, no solve: the split compares the plans' geometry; one Jacobian per subset instead
 // of a full identification per subset took the paper scenario's identification stage from
-// 16.5 s to 0.8 s per trial, README "Speed of trials"); 0 when nothing is identifiable.
-// The identifiable rank and the smallest identifiable singular value of `samples` at `model`.
+// 16.5 s to 0.8 s per trial, README.md of e5af83d, "Speed of trials"); 0 when nothing is
+// identifiable. The identifiable rank and the smallest identifiable singular value of `samples` at
+// `model`.
 std::pair<int, double> IdentifiableRankAndSmallest(const KinematicModel& model,
                                                    const std::vector<AxisSample>& samples,
                                                    const NonlinearIdentificationOptions& options) {
@@ -843,7 +844,7 @@ void SplitRobotAxes(const ProcedureContext& ctx, std::vector<int>* cal_axes,
   // at the fit of every usable axis, rank first: that mended one validation miss at twice
   // Table 3's errors, 0.051 -> 0.011 mm, but on the ABB it picked subsets whose higher rank
   // came from weakly seen directions, and their six-axis models missed the held-out axes by
-  // 0.1-0.2 mm in most calibrations; README, "Reverted".)
+  // 0.1-0.2 mm in most calibrations; README.md of e5af83d, "Reverted".)
   const KinematicModel& split_at = rc->nominal;
   rc->split_at = "nominal model";
   SplitAxes(split_at, rc->samples, num_axes, ctx.options, cal_axes, val_axes,
@@ -922,7 +923,8 @@ OpticalAxisResult RunOpticalAxisCalibration(Cell& cell, const CellKnowledge& kno
   // target the operator swaps it onto the board's bracket first and back afterwards: Zhang's
   // method then sees many corners over a large part of the image in every view, where the
   // feature board gives it 3 x 3 corners over a few per cent of the image, which leaves the
-  // focal length, and with it the scale of every measured depth, 1e-4..1e-3 off (README).
+  // focal length, and with it the scale of every measured depth, 1e-4..1e-3 off (README.md of
+  // e5af83d).
   CalibrateCameraIntrinsics(ctx, &out);
 
   // 2-5. Each robot to calibrate in turn: plan, servo, split, identify.

@@ -73,7 +73,7 @@ struct OpticalAxisOptions {
   /// index: the weakest identifiable combination is determined best). The Jacobians are taken
   /// at the nominal model (RobotCalibration::split_at; taken at the fit of every usable axis,
   /// the rank-first rule picked subsets that reach a higher rank through weakly seen
-  /// directions, and on the ABB their models missed the held-out axes, README).
+  /// directions, and on the ABB their models missed the held-out axes, README.md of e5af83d).
   enum class Split { kFirst, kBestConditioned };
   Split split = Split::kBestConditioned;
   /// After the hold-out validation (the paper's metric, eq. 46, on the validation axes), the
@@ -85,8 +85,8 @@ struct OpticalAxisOptions {
   /// step measured (chi-square, 2 N - 6 degrees of freedom). A corner the detector misplaced
   /// (an occluding edge, a highlight) bends the pose: its depth and its offset from the axis
   /// are then wrong by far more than their stated sigmas, and one such pose can move the
-  /// identified scale by 1e-3 (README). A pose whose p-value is below this is left out
-  /// (FailedPose "board_pose_inconsistent"); 0 keeps every pose.
+  /// identified scale by 1e-3 (README.md of e5af83d). A pose whose p-value is below this is left
+  /// out (FailedPose "board_pose_inconsistent"); 0 keeps every pose.
   double board_pose_test_p = 1e-6;
   /// Start each position of an axis with the correction the servo found at the previous one
   /// (the kinematic error changes little over 20 mm), so the servo starts close.

@@ -109,7 +109,7 @@ struct IntrinsicsViewSpec {
 /// 0.16 / s of the default directions (so the target stays in view), tilts 40-60 deg. For a
 /// 14 x 10 target of 20 mm squares (0.28 m): 0.4-0.6 m, +-9.7 x 6.9 deg. On the twin, 40 such
 /// views gave fx within 1.5e-4 of the truth over 41 paper-scenario trials, the 4 x 4 board's
-/// 40 views within 1.7e-3 (README, "Figures on the paper scenario").
+/// 40 views within 1.7e-3 (README.md of e5af83d, "Figures on the paper scenario").
 IntrinsicsViewSpec IntrinsicsViewSpecFor(const BoardGeometry& plate);
 
 /// n board poses designed in the camera frame for Zhang's method: board centres spread over

@@ -6,7 +6,7 @@
 # pass the scenario's acceptance section (truth RMS rigid <= 0.3 mm and similarity <= 0.1 mm,
 # validation misaligned error <= 0.05 mm and >= 95 % decrease, both robots); prints the
 # fraction that did and the worst figures. The full check is the documented study command
-# (README, "Figures on the paper scenario": 41 trials).
+# (README.md of e5af83d, "Figures on the paper scenario": 41 trials).
 #   tests/accuracy/paper_seeds_test.sh TWINBENCH [TRIALS]   (default 3)
 set -euo pipefail
 

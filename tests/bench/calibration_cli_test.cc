@@ -84,7 +84,8 @@ TEST(CalibrationCli, RunDiagnosesEachCalibratedRobotUnlessTold) {
             std::string::npos)
       << d["noise_floor"].dump();
   EXPECT_GT(d["noise_floor"]["depth_sigma_mm"].get<double>(), 0.0);
-  // Screened candidates exactly when nothing was searched (README "Model discovery").
+  // Screened candidates exactly when nothing was searched
+  // (docs/explanation/discovery-statistics.md).
   ASSERT_TRUE(d["screened"].is_array()) << d.dump();
   EXPECT_EQ(d["screened"].empty(), verdict != "consistent_with_noise") << verdict;
   for (const nlohmann::json& c : d["screened"]) {

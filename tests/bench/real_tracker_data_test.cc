@@ -1,6 +1,6 @@
 // The real laser-tracker data of ../shared/data/motoman_leica/ (not in the repository: the
-// public ctu-vras/multirobot-calibration repository has it; README, "Calibrating from a laser
-// tracker file"). Skipped with a message when the files are absent.
+// public ctu-vras/multirobot-calibration repository has it; docs/reference/file-formats.md,
+// "Tracker files"). Skipped with a message when the files are absent.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -70,9 +70,10 @@ TEST(RealTrackerData, MotomanCubeHeldOutRandomRmsIsWithinTarget) {
   }
 }
 
-// The wide file is reported the same way; its figures (README) show what the geometric model
-// misses there. The cube file trained and the wide one held out across sessions: a calibrated
-// model that is worse on a held-out part must carry the flag and the warning.
+// The wide file is reported the same way; its figures (docs/results/real_data_discovery.md) show
+// what the geometric model misses there. The cube file trained and the wide one held out across
+// sessions: a calibrated model that is worse on a held-out part must carry the flag and the
+// warning.
 TEST(RealTrackerData, MotomanWideIsReportedAndWorseHeldOutPartsAreFlagged) {
   if (!fs::exists(kData / "right_arm_wide.csv")) {
     GTEST_SKIP() << "real tracker data absent: " << kData.string();

@@ -53,7 +53,7 @@ TEST(Acceptance, ParsesCriteriaWithNamesAndBounds) {
   EXPECT_TRUE(ParseAcceptance(ParseScenario(ReadFile(kScenarioDir + "/twin_demo.yaml"),
                                             "d.yaml", kScenarioDir))
                   .criteria.empty());
-  // The shipped scenarios' criteria parse (their targets, README).
+  // The shipped scenarios' criteria parse (their targets: the scenarios' comments).
   EXPECT_EQ(ParseAcceptance(ParseScenario(ReadFile(kScenarioDir + "/paper_reinovo.yaml"),
                                           "p.yaml", kScenarioDir))
                 .criteria.size(),

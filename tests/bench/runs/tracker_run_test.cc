@@ -162,8 +162,8 @@ TEST(TrackerRun, ADeclaredEffectIsInTheModelFromTheStartAndNotDiscoveredAgain) {
 // session's own held-out regions it comes within 0.03 mm (the effect-free figure is about
 // 0.021 mm: tracker noise of 3 coordinates); on the physical truth, measured after the
 // session, it must still beat the geometric model (a linear drift extrapolates the
-// exponential badly: README, Model discovery). Declared, the term is there from the start:
-// the estimator's warm-up, whose time constant is estimated.
+// exponential badly: docs/explanation/discovery-statistics.md). Declared, the term is there from
+// the start: the estimator's warm-up, whose time constant is estimated.
 TEST(TrackerRun, AnArmWarmingUpIsDiscoveredAsThermalDriftOrDeclared) {
   const fs::path dir = Folder("discovery_thermal");
   const std::string text = DiscoveryScenario(
@@ -244,7 +244,8 @@ TEST(TrackerRun, AWarmingArmWithATemperatureSensorIsDiscoveredAsThermalGrowth) {
   EXPECT_EQ(d["effects_added"][0]["driver"], "measured");
   // The aluminium's 2.3e-5 /K within 10 % (its sigma is about 6e-7 /K: 4 sigma). While the
   // estimator's term also grew the reflector's bracket (the tool link), which the twin does
-  // not, it came out 3-11 % low in the 11 of 20 trials of the study that chose it (README).
+  // not, it came out 3-11 % low in the 11 of 20 trials of the study that chose it (README.md of
+  // e5af83d).
   EXPECT_NEAR(d["effects_added"][0]["parameters"][0]["estimated"].get<double>(), 2.3e-5,
               0.1 * 2.3e-5);
   const double calibrated = j["truth_position_error_mm_physical"]["calibrated_model"]["rigid"]["rms"];

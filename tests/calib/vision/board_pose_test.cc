@@ -77,9 +77,9 @@ TEST(BoardPoseTest, CovarianceIsHonestAndCleanPosesPassTheTest) {
 }
 
 TEST(BoardPoseTest, OneMisplacedCornerIsRefused) {
-  // The failure measured on the twin (README): one corner pulled by about half a pixel, the
-  // pose then puts the feature point 0.1-0.2 mm off the axis and its depth off by far more
-  // than its sigma. Half a pixel is 12 sigma of the corner noise.
+  // The failure measured on the twin (README.md of e5af83d): one corner pulled by about half a
+  // pixel, the pose then puts the feature point 0.1-0.2 mm off the axis and its depth off by far
+  // more than its sigma. Half a pixel is 12 sigma of the corner noise.
   const double sigma = 0.04;
   const BoardGeometry board;
   std::mt19937_64 rng(11);

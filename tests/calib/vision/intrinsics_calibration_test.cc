@@ -126,7 +126,8 @@ TEST(CalibrateFromCorners, AWrongViewIsDroppedAndTheFocalLengthRecovered) {
   const double e_robust = std::abs(robust.intrinsics.fx / kFx - 1);
   std::cout << "fx relative error: every view " << e_all << " (RMS " << all.rms_px
             << " px), outlier dropped " << e_robust << " (RMS " << robust.rms_px << " px)\n";
-  // 1e-4: the 14 x 10 target's fx accuracy on the twin (README: within 1.5e-4 over 41 trials).
+  // 1e-4: the 14 x 10 target's fx accuracy on the twin (README.md of e5af83d: within 1.5e-4 over 41
+  // trials).
   EXPECT_LT(e_robust, 1e-4);
   EXPECT_GT(e_all, 2.0 * e_robust);
 }

@@ -112,9 +112,9 @@ TEST_F(IntrinsicsCalibrationTest, RecoversIntrinsicsWithRadialDistortion) {
 
 // The dedicated target (Cell::MountTarget): a 14 x 10 chessboard of 20 mm squares swapped
 // onto the board's bracket, 40 views planned for its size (IntrinsicsViewSpecFor). Over the
-// paper scenario's 21 study trials (README) fx came within 1e-4 of the truth every time; 3e-4
-// is stated here for another cell (fx != fy, off-centre) and seed, still 3 to 30 times below
-// what the 4 x 4 board gives (1e-3..1e-2 with 25 views, RecoversPinholeIntrinsics).
+// paper scenario's 21 study trials (README.md of e5af83d) fx came within 1e-4 of the truth every
+// time; 3e-4 is stated here for another cell (fx != fy, off-centre) and seed, still 3 to 30 times
+// below what the 4 x 4 board gives (1e-3..1e-2 with 25 views, RecoversPinholeIntrinsics).
 TEST_F(IntrinsicsCalibrationTest, AnIntrinsicsTargetPinsTheFocalLength) {
   TwinSpec spec = SpecWithIntrinsics(0.0, 0.0);
   spec.intrinsics_target = testing::IntrinsicsTarget(spec.board);
