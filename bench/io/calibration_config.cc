@@ -5,37 +5,20 @@
 #include <string>
 #include <vector>
 
+#include "bench/io/scenario_keys.h"
 #include "bench/io/yaml_util.h"
 #include "calib/common/errors.h"
 
 namespace twin {
 namespace {
 
-const YamlKeys kKeys = {"robots",           "rough_base_from_robot1", "rough_hand_eye",
-                        "board_mount",      "board_squares",          "board_square_mm",
-                        "intrinsics_views", "planning",               "servo",
-                        "calibration_axes", "scoring",                "calibration_split",
-                        "refit_all_axes",   "diagnosis",              "board_mass_kg",
-                        "intrinsics_distortion", "intrinsics_target", "board_pose_test_p"};
-const YamlKeys kTargetKeys = {"squares", "square_mm"};
-const YamlKeys kPlanningKeys = {"axes",
-                                "positions_per_axis",
-                                "swarm_size",
-                                "iterations",
-                                "runs",
-                                "distance_step_mm",
-                                "planning_max_distance_mm",
-                                "min_distance_mm",
-                                "max_distance_mm",
-                                "min_joint_limit_distance_deg",
-                                "min_singular_value",
-                                "max_visibility_angle_deg",
-                                "camera_reach_mm",
-                                "camera_height_mm",
-                                "seed",
-                                "select_run"};
-const YamlKeys kServoKeys = {"tolerance_px", "max_iterations", "gain", "encoder_readings"};
-const YamlKeys kScoringKeys = {"configurations", "seed"};
+// The keys of the section and its maps: their tables in bench/io/scenario_keys.cc (the
+// scenario schema's source), which restate the limits checked below.
+const YamlKeys kKeys = ScenarioKeyNames("calibration");
+const YamlKeys kTargetKeys = ScenarioKeyNames("calibration_target");
+const YamlKeys kPlanningKeys = ScenarioKeyNames("calibration_planning");
+const YamlKeys kServoKeys = ScenarioKeyNames("calibration_servo");
+const YamlKeys kScoringKeys = ScenarioKeyNames("calibration_scoring");
 
 // Plausibility limits of the told values: the same as the twin's (sim/world/twin_spec.cc).
 constexpr double kMaxToldBaseDistanceM = 20.0;

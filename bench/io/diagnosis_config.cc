@@ -1,5 +1,6 @@
 #include "bench/io/diagnosis_config.h"
 
+#include "bench/io/scenario_keys.h"
 #include "bench/io/term_spec_text.h"
 #include "calib/common/errors.h"
 #include "calib/model/error_term.h"
@@ -15,12 +16,9 @@ void AddPointMass(double mass_kg, const Vector3& p_com_L, Link* link) {
 void ParseDiagnosisSection(const YamlReader& r, const YamlField& field,
                            const KinematicModel& nominal, DiagnosisConfig* c,
                            DiscoveryOptions* o, bool optical_axes) {
-  static const YamlKeys kKeys = {"enabled", "alpha",      "min_gain_percent", "max_effects",
-                                 "folds",   "truth_poses", "candidates", "screen"};
-  static const YamlKeys kOpticalKeys = {"enabled",     "alpha",      "min_gain_percent",
-                                        "max_effects", "folds",      "truth_poses",
-                                        "candidates",  "perpendicular_sigma_mm",
-                                        "depth_sigma_mm", "encoder_sigma_deg", "screen"};
+  // Their tables in bench/io/scenario_keys.cc (the scenario schema's source).
+  static const YamlKeys kKeys = ScenarioKeyNames("tracker_diagnosis");
+  static const YamlKeys kOpticalKeys = ScenarioKeyNames("calibration_diagnosis");
   const YamlMap d(r, field, optical_axes ? kOpticalKeys : kKeys);
   // Stated noise: a sigma below 0.1 um is no camera's, above 10 mm no calibration's.
   const auto sigma_mm = [&](const char* key, double* out) {

@@ -1,10 +1,15 @@
 // The keys of a scenario file, one table per section: each key's type, unit, whether it is
 // required (or its default), its range or allowed values and what it means. This is the one
-// source of truth for the format: the scenario parser (bench/io/scenario.cc) checks every map's
-// keys against these tables, and `twinbench schema` (bench/report/scenario_schema.h) walks them
-// to write schemas/scenario.schema.json, the JSON Schema that `twinbench check` and editors
-// validate scenario files against. A range here only restates a check the parser or
-// ValidateTwinSpec makes anyway (the schema reports it earlier, by key path), never a new one.
+// source of truth for the format: the scenario parser (bench/io/scenario.cc) and the parsers of
+// the procedure sections (calibration: bench/io/calibration_config.cc and, for its and the
+// tracker's diagnosis:, bench/io/diagnosis_config.cc; handclasp: bench/runs/handclasp_run.cc;
+// tracker_calibration: bench/runs/tracker_run.cc; acceptance: bench/report/acceptance.cc) check
+// every map's keys against these tables, and `twinbench schema` (bench/report/scenario_schema.h)
+// walks them to write schemas/scenario.schema.json, the JSON Schema that `twinbench check` and
+// editors validate scenario files against. A range here only restates a check the parser or
+// ValidateTwinSpec makes anyway (the schema reports it earlier, by key path), never a new one;
+// checks across keys or against other sections (robot names, lengths of translations, min <=
+// max, products of counts) stay with the parsers.
 //
 // Format versions (scenario.format): 1 is every file without the key; 2 adds the key itself,
 // and `twinbench check` validates a format-2 file strictly against the schema (a quoted "834"
@@ -35,11 +40,13 @@ enum class KeyType {
   kBoolean,
   kNumbers,      ///< a sequence of numbers (count or min_count..max_count items)
   kIntegers,     ///< a sequence of whole numbers
+  kNumberLists,  ///< a sequence of sequences of numbers, each item_count long (points)
   kStrings,      ///< a sequence of strings
   kSection,      ///< a map whose keys are in the table `section`
   kSectionList,  ///< a sequence of maps of the table `section` (or `tuple` sections by position)
   kSectionMap,   ///< a map of any keys (names), each value a map of the table `section`
-  kOpaque,       ///< a section another module parses (the procedures): only its kind is checked
+  kOpaque,       ///< a section another module parses: only its kind (map or list) is checked
+  kOneOf,        ///< exactly one of the value kinds in `alternatives` (`points: auto` or a list)
 };
 
 /// A key of a section.
@@ -52,12 +59,16 @@ struct ScenarioKey {
   std::optional<double> minimum;     ///< for numbers, or each item of a sequence
   std::optional<double> maximum;
   bool exclusive_minimum = false;    ///< minimum excluded (> instead of >=)
+  bool exclusive_maximum = false;    ///< maximum excluded (< instead of <=)
+  std::optional<double> multiple_of; ///< numbers (or items) must be whole multiples (even: 2)
   std::vector<std::string> allowed;  ///< allowed strings ("" none)
   std::vector<int> allowed_integers; ///< allowed whole numbers (empty: none)
-  int min_count = 0, max_count = 0;  ///< sequence lengths (0: no bound)
+  int min_count = 0, max_count = 0;  ///< sequence lengths, a kString's length (0: no bound)
+  int item_count = 0;                ///< kNumberLists: the length of each item
   std::string section;               ///< the nested table (kSection, kSectionList, kSectionMap)
   std::vector<std::string> tuple;    ///< kSectionList: a table per position instead
   bool opaque_list = false;          ///< kOpaque: a sequence (else a map)
+  std::vector<ScenarioKey> alternatives;  ///< kOneOf: the kinds of value (keys without a name)
   std::string description;
 
   // Builders, so that a table reads as a list of keys.
@@ -67,6 +78,10 @@ struct ScenarioKey {
   ScenarioKey& Min(double v) { minimum = v; return *this; }
   ScenarioKey& Above(double v) { minimum = v; exclusive_minimum = true; return *this; }
   ScenarioKey& Max(double v) { maximum = v; return *this; }
+  ScenarioKey& Below(double v) { maximum = v; exclusive_maximum = true; return *this; }
+  ScenarioKey& MultipleOf(double v) { multiple_of = v; return *this; }
+  ScenarioKey& ItemCount(int n) { item_count = n; return *this; }
+  ScenarioKey& Either(std::vector<ScenarioKey> v) { alternatives = std::move(v); return *this; }
   ScenarioKey& Count(int n) { min_count = max_count = n; return *this; }
   ScenarioKey& Counts(int lo, int hi) { min_count = lo; max_count = hi; return *this; }
   ScenarioKey& OneOf(std::vector<std::string> v) { allowed = std::move(v); return *this; }
@@ -84,6 +99,8 @@ struct ScenarioSection {
   bool extra_numbers = false;
   /// Exactly one key of each group must be present (a pose's rotation).
   std::vector<std::vector<std::string>> exactly_one_of = {};
+  /// At least one key of each group must be present (a criterion's max and/or min).
+  std::vector<std::vector<std::string>> at_least_one_of = {};
 };
 
 /// Every section, the root (name "root", the file itself) first.

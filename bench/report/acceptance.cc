@@ -9,13 +9,15 @@
 
 #include "bench/io/model_loader.h"
 #include "bench/io/output_files.h"
+#include "bench/io/scenario_keys.h"
 #include "bench/io/yaml_util.h"
 #include "calib/common/errors.h"
 
 namespace twin {
 namespace {
 
-const YamlKeys kCriterionKeys = {"figure", "max", "min", "name"};
+// A criterion's keys: its table in bench/io/scenario_keys.cc (the scenario schema's source).
+const YamlKeys kCriterionKeys = ScenarioKeyNames("acceptance_criterion");
 // Top-level keys of the reports `twinbench run` writes (calibration, handclasp, workflow).
 const std::vector<std::string> kTopLevel = {"scenario", "intrinsics", "robots", "timing_s",
                                             "base_frame", "status", "procedure",

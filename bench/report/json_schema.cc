@@ -15,7 +15,8 @@ const std::set<std::string> kAnnotations = {"$schema", "$id",     "title",      
                                             "default", "$comment", "definitions"};
 const std::set<std::string> kKeywords = {
     "type",    "properties", "required", "additionalProperties", "enum", "minimum", "maximum",
-    "exclusiveMinimum", "items", "additionalItems", "minItems", "maxItems", "oneOf", "$ref"};
+    "exclusiveMinimum", "exclusiveMaximum", "multipleOf", "minLength", "maxLength", "items",
+    "additionalItems", "minItems", "maxItems", "oneOf", "anyOf", "$ref"};
 
 std::string Number(double v) {
   std::ostringstream os;
@@ -70,13 +71,17 @@ class Checker {
     if (auto bad = CheckType(schema, v, path)) return bad;
     if (auto bad = CheckEnum(schema, v, path)) return bad;
     if (auto bad = CheckRange(schema, v, path)) return bad;
+    if (auto bad = CheckLength(schema, v, path)) return bad;
     if (v.is_object()) {
       if (auto bad = CheckObject(schema, v, path)) return bad;
     }
     if (v.is_array()) {
       if (auto bad = CheckArray(schema, v, path)) return bad;
     }
-    if (schema.contains("oneOf")) return CheckOneOf(schema["oneOf"], v, path);
+    if (schema.contains("oneOf")) {
+      if (auto bad = CheckOneOf(schema["oneOf"], v, path)) return bad;
+    }
+    if (schema.contains("anyOf")) return CheckAnyOf(schema["anyOf"], v, path);
     return std::nullopt;
   }
 
@@ -152,7 +157,36 @@ class Checker {
                                        Number(schema["maximum"].get<double>()) + ", got " +
                                        Describe(v)};
     }
+    if (schema.contains("exclusiveMaximum") &&
+        !(x < schema["exclusiveMaximum"].get<double>())) {
+      return SchemaViolation{path, "expected a value < " +
+                                       Number(schema["exclusiveMaximum"].get<double>()) +
+                                       ", got " + Describe(v)};
+    }
+    if (schema.contains("multipleOf")) {
+      const double m = schema["multipleOf"].get<double>();
+      const double q = x / m;
+      if (!(std::isfinite(q) && q == std::floor(q))) {
+        return SchemaViolation{path, "expected a multiple of " + Number(m) + ", got " +
+                                         Describe(v)};
+      }
+    }
     return std::nullopt;
+  }
+
+  // A string's length in characters (UTF-8 code points, as JSON Schema counts them).
+  std::optional<SchemaViolation> CheckLength(const Json& schema, const Json& v,
+                                             const std::string& path) const {
+    if (!v.is_string()) return std::nullopt;
+    std::size_t n = 0;
+    for (unsigned char c : v.get<std::string>()) n += (c & 0xC0) != 0x80;
+    const std::size_t lo = schema.value("minLength", std::size_t{0});
+    const std::size_t hi = schema.value("maxLength", static_cast<std::size_t>(-1));
+    if (n >= lo && n <= hi) return std::nullopt;
+    return SchemaViolation{path, "expected a string of " +
+                                     (n < lo ? "at least " + std::to_string(lo)
+                                             : "at most " + std::to_string(hi)) +
+                                     " characters, got " + std::to_string(n)};
   }
 
   std::optional<SchemaViolation> CheckObject(const Json& schema, const Json& v,
@@ -218,29 +252,79 @@ class Checker {
     return std::nullopt;
   }
 
+  // The keys of alternatives that each only require one key ("rpy, zyz"), or "" when some
+  // alternative is more than that.
+  static std::string KeyAlternatives(const Json& alternatives) {
+    std::string keys;
+    for (const Json& a : alternatives) {
+      if (!(a.size() == 1 && a.contains("required") && a["required"].size() == 1)) return "";
+      keys += (keys.empty() ? "" : ", ") + a["required"][0].get<std::string>();
+    }
+    return keys;
+  }
+
+  // An alternative as messages name it: its enum ("'auto'") or its type ("a sequence").
+  static std::string Summary(const Json& a) {
+    if (a.contains("enum")) {
+      std::string names;
+      for (const Json& e : a["enum"]) {
+        names += (names.empty() ? "" : ", ") + (e.is_string() ? "'" + e.get<std::string>() + "'"
+                                                              : e.dump());
+      }
+      return names;
+    }
+    if (a.contains("type")) return TypeName(a["type"].get<std::string>());
+    return "an alternative";
+  }
+
   // Exactly one alternative must hold. Alternatives that each only require one key (a pose's
-  // rotation) are named as keys.
+  // rotation) are named as keys; of alternatives of other kinds (`points: auto` or a list),
+  // the one of the value's type explains what is wrong inside it.
   std::optional<SchemaViolation> CheckOneOf(const Json& alternatives, const Json& v,
                                             const std::string& path) const {
     int holding = 0;
-    std::string keys;
-    bool all_keys = true;
     for (const Json& a : alternatives) {
       if (!Check(a, v, path)) ++holding;
-      if (a.size() == 1 && a.contains("required") && a["required"].size() == 1) {
-        keys += (keys.empty() ? "" : ", ") + a["required"][0].get<std::string>();
-      } else {
-        all_keys = false;
-      }
     }
     if (holding == 1) return std::nullopt;
-    if (all_keys) {
+    const std::string keys = KeyAlternatives(alternatives);
+    if (!keys.empty()) {
       return SchemaViolation{path, "expected exactly one of the keys " + keys + ", got " +
                                        (holding == 0 ? "none" : std::to_string(holding))};
+    }
+    if (holding == 0) {
+      const Json* of_type = nullptr;
+      int typed = 0;
+      std::string kinds;
+      for (const Json& a : alternatives) {
+        kinds += (kinds.empty() ? "" : " or ") + Summary(a);
+        if (a.contains("type") && HasType(v, a["type"].get<std::string>())) {
+          of_type = &a;
+          ++typed;
+        }
+      }
+      if (typed == 1) return Check(*of_type, v, path);
+      return SchemaViolation{path, "expected " + kinds + ", got " + Describe(v)};
     }
     return SchemaViolation{path, "expected exactly one of " + std::to_string(alternatives.size()) +
                                      " alternatives to hold, " + std::to_string(holding) +
                                      " did"};
+  }
+
+  // At least one alternative must hold (a criterion's max and/or min).
+  std::optional<SchemaViolation> CheckAnyOf(const Json& alternatives, const Json& v,
+                                            const std::string& path) const {
+    std::optional<SchemaViolation> first;
+    for (const Json& a : alternatives) {
+      auto bad = Check(a, v, path);
+      if (!bad) return std::nullopt;
+      if (!first) first = bad;
+    }
+    const std::string keys = KeyAlternatives(alternatives);
+    if (!keys.empty()) {
+      return SchemaViolation{path, "expected at least one of the keys " + keys + ", got none"};
+    }
+    return first;
   }
 
   const Json& root_;

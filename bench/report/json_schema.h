@@ -1,8 +1,9 @@
 // A small JSON Schema validator for exactly the subset that `twinbench schema`
 // (bench/report/scenario_schema.h) emits, draft-07: type, properties, required,
-// additionalProperties (false or a schema), enum, minimum, maximum, exclusiveMinimum, items (a
-// schema, or an array of schemas by position with additionalItems false), minItems, maxItems,
-// oneOf, and $ref to "#/definitions/NAME". Annotations ($schema, $id, title, description,
+// additionalProperties (false or a schema), enum, minimum, maximum, exclusiveMinimum,
+// exclusiveMaximum, multipleOf, minLength, maxLength (in code points), items (a schema, or an
+// array of schemas by position with additionalItems false), minItems, maxItems, oneOf, anyOf,
+// and $ref to "#/definitions/NAME". Annotations ($schema, $id, title, description,
 // default, definitions) are skipped; any other keyword is a programming error
 // (std::logic_error), so that the generator cannot emit a rule nobody checks.
 #pragma once

@@ -37,7 +37,8 @@ Json Bound(double v) {
 
 void AddRange(const ScenarioKey& k, Json* s) {
   if (k.minimum) (*s)[k.exclusive_minimum ? "exclusiveMinimum" : "minimum"] = Bound(*k.minimum);
-  if (k.maximum) (*s)["maximum"] = Bound(*k.maximum);
+  if (k.maximum) (*s)[k.exclusive_maximum ? "exclusiveMaximum" : "maximum"] = Bound(*k.maximum);
+  if (k.multiple_of) (*s)["multipleOf"] = Bound(*k.multiple_of);
 }
 
 Json Ref(const std::string& section) { return Json{{"$ref", "#/definitions/" + section}}; }
@@ -61,7 +62,11 @@ Json Sequence(const ScenarioKey& k, Json items) {
 Json KeySchema(const ScenarioKey& k) {
   Json s;
   switch (k.type) {
-    case KeyType::kString: s = Scalar("string", k); break;
+    case KeyType::kString:
+      s = Scalar("string", k);
+      if (k.min_count > 0) s["minLength"] = k.min_count;
+      if (k.max_count > 0) s["maxLength"] = k.max_count;
+      break;
     case KeyType::kNumber: s = Scalar("number", k); break;
     case KeyType::kInteger: s = Scalar("integer", k); break;
     case KeyType::kUnsigned: s = {{"type", "integer"}, {"minimum", 0}}; break;
@@ -69,6 +74,15 @@ Json KeySchema(const ScenarioKey& k) {
     case KeyType::kNumbers: s = Sequence(k, Scalar("number", k)); break;
     case KeyType::kIntegers: s = Sequence(k, Scalar("integer", k)); break;
     case KeyType::kStrings: s = Sequence(k, Scalar("string", k)); break;
+    case KeyType::kNumberLists: {
+      Json item = {{"type", "array"}, {"items", Scalar("number", k)}};
+      if (k.item_count > 0) {
+        item["minItems"] = k.item_count;
+        item["maxItems"] = k.item_count;
+      }
+      s = Sequence(k, item);
+      break;
+    }
     case KeyType::kSection: s = Ref(k.section); break;
     case KeyType::kSectionList:
       if (k.tuple.empty()) {
@@ -84,6 +98,15 @@ Json KeySchema(const ScenarioKey& k) {
       s = {{"type", "object"}, {"additionalProperties", Ref(k.section)}};
       break;
     case KeyType::kOpaque: s = {{"type", k.opaque_list ? "array" : "object"}}; break;
+    case KeyType::kOneOf: {
+      if (k.alternatives.size() < 2) {
+        throw std::logic_error("scenario schema: key '" + k.key + "' has fewer than two kinds");
+      }
+      Json alternatives = Json::array();
+      for (const ScenarioKey& a : k.alternatives) alternatives.push_back(KeySchema(a));
+      s = {{"oneOf", alternatives}};
+      break;
+    }
   }
   // Beside a $ref, a description is an annotation only (draft-07 ignores $ref's siblings).
   s["description"] = Describe(k);
@@ -102,14 +125,18 @@ Json SectionSchema(const ScenarioSection& section) {
   if (!required.empty()) s["required"] = required;
   s["additionalProperties"] =
       section.extra_numbers ? Json{{"type", "number"}} : Json(false);
-  if (section.exactly_one_of.size() > 1) {
-    throw std::logic_error("scenario schema: one exactly_one_of group per section");
+  if (section.exactly_one_of.size() > 1 || section.at_least_one_of.size() > 1) {
+    throw std::logic_error("scenario schema: one exactly_one_of and one at_least_one_of group "
+                           "per section");
   }
-  for (const std::vector<std::string>& group : section.exactly_one_of) {
-    Json alternatives = Json::array();
-    for (const std::string& key : group) alternatives.push_back({{"required", {key}}});
-    s["oneOf"] = alternatives;
-  }
+  // Each group as alternatives that each require one of its keys.
+  const auto alternatives = [](const std::vector<std::string>& group) {
+    Json a = Json::array();
+    for (const std::string& key : group) a.push_back({{"required", {key}}});
+    return a;
+  };
+  for (const auto& group : section.exactly_one_of) s["oneOf"] = alternatives(group);
+  for (const auto& group : section.at_least_one_of) s["anyOf"] = alternatives(group);
   return s;
 }
 

@@ -10,6 +10,7 @@
 
 #include "bench/io/model_loader.h"
 #include "bench/io/output_files.h"
+#include "bench/io/scenario_keys.h"
 #include "bench/report/acceptance.h"
 #include "bench/report/handclasp_report.h"
 #include "bench/scoring/calibration_scoring.h"
@@ -21,10 +22,8 @@
 namespace twin {
 namespace {
 
-const YamlKeys kHandclaspKeys = {"rough_base_from_robot1", "tips", "points",
-                                 "operator_error_mm", "constraint", "trials",
-                                 "coupled_motion", "calibrated_operator_error_mm",
-                                 "calibrated_tip_identification"};
+// The section's keys: its table in bench/io/scenario_keys.cc (the scenario schema's source).
+const YamlKeys kHandclaspKeys = ScenarioKeyNames("handclasp");
 
 // Plausibility limits of the section (header): point count and distance, operator error, the
 // told layout and tips (the twin's own limits, sim/world/twin_spec.cc).

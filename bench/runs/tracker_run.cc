@@ -16,6 +16,7 @@
 #include "bench/io/model_yaml.h"
 #include "bench/io/output_files.h"
 #include "bench/io/scenario.h"
+#include "bench/io/scenario_keys.h"
 #include "bench/io/term_spec_text.h"
 #include "bench/io/yaml_util.h"
 #include "bench/report/acceptance.h"
@@ -38,11 +39,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-const YamlKeys kTrackerCalibrationKeys = {"robot",    "told_reflector_mm", "poses",
-                                          "max_attempts", "joint_margin_deg", "holdout",
-                                          "tracker_sigma_mm", "encoder_sigma_deg", "diagnosis",
-                                          "payload"};
-const YamlKeys kPayloadKeys = {"mass_kg", "xyz_mm"};
+const YamlKeys kTrackerCalibrationKeys = ScenarioKeyNames("tracker_calibration");
+const YamlKeys kPayloadKeys = ScenarioKeyNames("tracker_payload");
 
 struct TrackerRunConfig {
   int robot = 1;

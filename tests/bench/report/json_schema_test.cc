@@ -90,6 +90,48 @@ TEST(JsonSchema, OneOfRequiresExactlyOneKey) {
             ": expected exactly one of the keys rpy, zyz, got 2");
 }
 
+TEST(JsonSchema, AnyOfRequiresAtLeastOneKey) {
+  const Json schema = Json::parse(R"({"type": "object",
+      "anyOf": [{"required": ["max"]}, {"required": ["min"]}]})");
+  EXPECT_EQ(Verdict(schema, Json::parse(R"({"max": 1})")), "valid");
+  EXPECT_EQ(Verdict(schema, Json::parse(R"({"max": 1, "min": 0})")), "valid");
+  EXPECT_EQ(Verdict(schema, Json::parse(R"({"figure": "a"})")),
+            ": expected at least one of the keys max, min, got none");
+}
+
+// A value of several kinds (`points: auto` or a list): the alternative of the value's type
+// says what is wrong inside it; a value of no alternative's type names them all.
+TEST(JsonSchema, OneOfKindsNamesTheKindOfTheValue) {
+  const Json schema = Json::parse(R"({"oneOf": [
+      {"type": "string", "enum": ["auto"]},
+      {"type": "array", "minItems": 2,
+       "items": {"type": "array", "items": {"type": "number"}, "minItems": 3, "maxItems": 3}}]})");
+  EXPECT_EQ(Verdict(schema, Json("auto")), "valid");
+  EXPECT_EQ(Verdict(schema, Json::parse("[[1, 2, 3], [4, 5, 6]]")), "valid");
+  EXPECT_EQ(Verdict(schema, Json("many")), ": expected one of auto, got 'many'");
+  EXPECT_EQ(Verdict(schema, Json::parse("[[1, 2, 3], [4, 5]]")),
+            "[1]: expected a sequence of 3 items, got a sequence of 2 items");
+  EXPECT_EQ(Verdict(schema, Json(4)), ": expected 'auto' or a sequence, got 4");
+}
+
+TEST(JsonSchema, ExclusiveMaximumMultipleOfAndStringLengths) {
+  const Json schema = Json::parse(R"({"type": "object", "properties": {
+      "alpha": {"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 0.5},
+      "squares": {"type": "integer", "multipleOf": 2},
+      "name": {"type": "string", "minLength": 1, "maxLength": 3}}})");
+  EXPECT_EQ(Verdict(schema, Json::parse(R"({"alpha": 0.49, "squares": 4, "name": "abc"})")),
+            "valid");
+  EXPECT_EQ(Verdict(schema, Json::parse(R"({"alpha": 0.5})")),
+            "alpha: expected a value < 0.5, got 0.5");
+  EXPECT_EQ(Verdict(schema, Json::parse(R"({"squares": 5})")),
+            "squares: expected a multiple of 2, got 5");
+  EXPECT_EQ(Verdict(schema, Json::parse(R"({"name": ""})")),
+            "name: expected a string of at least 1 characters, got 0");
+  EXPECT_EQ(Verdict(schema, Json::parse(R"({"name": "abcd"})")),
+            "name: expected a string of at most 3 characters, got 4");
+  EXPECT_EQ(Verdict(schema, Json::parse("{\"name\": \"\u00e9\u00e9\u00e9\"}")), "valid");
+}
+
 TEST(JsonSchema, ScalarsAsStringsAcceptsNumbersForStrings) {
   SchemaCheckOptions lenient;
   lenient.scalars_as_strings = true;

@@ -8,8 +8,12 @@
 
 #include <gtest/gtest.h>
 
+#include "bench/io/calibration_config.h"
 #include "bench/io/scenario.h"
 #include "bench/io/scenario_keys.h"
+#include "bench/report/acceptance.h"
+#include "bench/runs/handclasp_run.h"
+#include "bench/runs/tracker_run.h"
 #include "calib/common/errors.h"
 #include "cli_run.h"
 #include "text_edit.h"
@@ -52,6 +56,27 @@ std::string SchemaError(const std::string& name, const std::string& text) {
 std::string ParserError(const std::string& name, const std::string& text) {
   try {
     ParseScenario(text, name + ".yaml", kRoot + "/scenarios");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// A shipped scenario's text (models made absolute, so an edited copy can be written anywhere).
+std::string Shipped(const std::string& name) {
+  return AbsoluteModels(ReadFile(kRoot + "/scenarios/" + name + ".yaml"));
+}
+
+// The what() of the first InputError of the scenario parser and then of the procedure parsers
+// of `text` (its calibration, handclasp, tracker_calibration and acceptance sections), as
+// `twinbench check` runs them; "" when all parse.
+std::string ProcedureError(const std::string& name, const std::string& text) {
+  try {
+    const Scenario sc = ParseScenario(text, name + ".yaml", kRoot + "/scenarios");
+    if (IsPresent(sc.calibration)) ParseCalibrationConfig(sc);
+    if (IsPresent(sc.handclasp)) ParseHandclaspConfig(sc);
+    if (IsPresent(sc.tracker_calibration)) ValidateTrackerScenario(sc);
+    ParseAcceptance(sc);
   } catch (const InputError& e) {
     return e.what();
   }
@@ -110,6 +135,137 @@ TEST(ScenarioSchema, RefusesABrokenScenarioNamingTheKey) {
     EXPECT_TRUE(Contains(error, c.expected)) << c.name;
     EXPECT_NE(ParserError(c.name, text), "") << c.name << ": the schema is stricter";
   }
+}
+
+// A broken procedure section (calibration:, handclasp:, tracker_calibration:, acceptance:).
+struct ProcedureCase {
+  std::string name, scenario, from, to, at, where, expected;  // at: text on the line named
+};
+
+// Issue 41: the procedure sections are checked by the schema key by key, not only as maps.
+const std::vector<ProcedureCase>& ProcedureCases() {
+  static const std::vector<ProcedureCase> cases = {
+      {"planning_key", "paper_reinovo", "      swarm_size: 10", "      swarm_sise: 10",
+       "swarm_sise:", "scenario.calibration.planning.swarm_sise",
+       "unknown key 'swarm_sise' (allowed: axes, positions_per_axis, swarm_size, iterations,"},
+      {"tracker_poses", "tracker_reinovo", "    poses: 100", "    poses: \"many\"", "\"many\"",
+       "scenario.tracker_calibration.poses", "expected a whole number, got 'many'"},
+      {"handclasp_key", "gan2014_floor_floor", "    constraint: auto\n",
+       "    constraint: auto\n    opertor_error_mm: 1\n", "opertor_error_mm",
+       "scenario.handclasp.opertor_error_mm",
+       "unknown key 'opertor_error_mm' (allowed: rough_base_from_robot1, tips, points, "
+       "operator_error_mm, constraint,"},
+      {"criterion_figure", "paper_reinovo",
+       "- {figure: robots.r2.misaligned_error_mm.validation.after, max: 0.05}",
+       "- {max: 0.05}", "{max: 0.05}", "scenario.acceptance[0]",
+       "missing required key 'figure'"},
+  };
+  return cases;
+}
+
+TEST(ScenarioSchema, RefusesABrokenProcedureSectionNamingTheKey) {
+  std::vector<ProcedureCase> cases = ProcedureCases();
+  const std::vector<ProcedureCase> more = {
+      {"points_word", "gan2014_floor_floor", "points: auto", "points: many", "many",
+       "scenario.handclasp.points", "expected one of auto, got 'many'"},
+      {"points_short", "gan2014_floor_floor", "points: auto",
+       "points: [[0, 0, 0], [100, 0, 0], [0, 100, 0], [0, 0]]", "points:",
+       "scenario.handclasp.points[3]", "expected a sequence of 3 items, got a sequence of 2"},
+      {"points_few", "gan2014_floor_floor", "points: auto", "points: [[0, 0, 0]]", "points:",
+       "scenario.handclasp.points", "expected a sequence of at least 4 items"},
+      {"constraint", "gan2014_floor_floor", "constraint: auto", "constraint: floor",
+       "constraint: floor",
+       "scenario.handclasp.constraint", "expected one of auto, general, floor_floor,"},
+      {"criterion_bound", "paper_reinovo",
+       "- {figure: robots.r2.misaligned_error_mm.validation.after, max: 0.05}",
+       "- {figure: robots.r2.misaligned_error_mm.validation.after}", "- {figure: robots.r2",
+       "scenario.acceptance[0]", "expected at least one of the keys max, min, got none"},
+      {"odd_squares", "paper_reinovo", "board_squares: [4, 4]", "board_squares: [5, 4]",
+       "board_squares:", "scenario.calibration.board_squares[0]",
+       "expected a multiple of 2, got 5"},
+      {"servo_gain", "paper_reinovo", "gain: 1.0", "gain: 3", "gain: 3",
+       "scenario.calibration.servo.gain", "expected a value <= 2, got 3"},
+      {"payload_type", "tracker_reinovo", "payload: {mass_kg: 0.2,", "payload: {mass_kg: [0.2],",
+       "payload:", "scenario.tracker_calibration.payload.mass_kg", "expected a number"},
+  };
+  cases.insert(cases.end(), more.begin(), more.end());
+  for (const ProcedureCase& c : cases) {
+    const std::string text = Replaced(Shipped(c.scenario), c.from, c.to);
+    const std::string error = SchemaError(c.name, text);
+    EXPECT_TRUE(Contains(error, ".yaml:" + std::to_string(LineOf(text, c.at)) + " " + c.where +
+                                    ": "))
+        << c.name;
+    EXPECT_TRUE(Contains(error, c.expected)) << c.name;
+    // The parsers refuse it too, at the same key (the schema adds no rule of its own).
+    EXPECT_TRUE(Contains(ProcedureError(c.name, text), " " + c.where + ": ")) << c.name;
+  }
+  // The unshipped edits parse: the shipped scenarios are what the cases break.
+  for (const char* name : {"paper_reinovo", "tracker_reinovo", "gan2014_floor_floor"}) {
+    EXPECT_EQ(ProcedureError(name, Shipped(name)), "") << name;
+  }
+}
+
+// Values the schema must keep accepting because the parsers accept them: a list of points, a
+// criterion with only min, a bound at its limit.
+TEST(ScenarioSchema, AcceptsWhatTheProcedureParsersAccept) {
+  const std::vector<std::pair<std::string, std::string>> edits = {
+      {"gan2014_floor_floor", "points: [[400, 0, 300], [400, 200, 300], [600, 0, 300], "
+                              "[600, 200, 500]]"},
+      {"paper_reinovo", "gain: 2"},
+      {"paper_reinovo", "board_squares: [30, 2]"},
+  };
+  const std::vector<std::string> from = {"points: auto", "gain: 1.0", "board_squares: [4, 4]"};
+  for (std::size_t i = 0; i < edits.size(); ++i) {
+    const std::string text = Replaced(Shipped(edits[i].first), from[i], edits[i].second);
+    EXPECT_EQ(SchemaError("accepted", text), "") << edits[i].second;
+  }
+  const std::string min_only = Replaced(
+      Shipped("paper_reinovo"), "- {figure: robots.r2.misaligned_error_mm.validation.after, "
+                                "max: 0.05}",
+      "- {figure: robots.r2.misaligned_error_mm.validation.after, min: 0, name: r2 after}");
+  EXPECT_EQ(SchemaError("min_only", min_only), "");
+  EXPECT_EQ(ProcedureError("min_only", min_only), "");
+}
+
+// The tables drive the procedure parsers: removing a key the shipped scenarios write is
+// "missing required key" from the parser exactly where the table says it is required.
+TEST(ScenarioSchema, TheProcedureParsersRequireWhatTheTablesRequire) {
+  struct Where {
+    std::string scenario, section;
+    std::vector<std::string> node_path;  // keys and, for "0", a sequence's first item
+  };
+  const std::vector<Where> places = {
+      {"paper_reinovo", "calibration", {"scenario", "calibration"}},
+      {"paper_reinovo", "calibration_target", {"scenario", "calibration", "intrinsics_target"}},
+      {"paper_reinovo", "calibration_planning", {"scenario", "calibration", "planning"}},
+      {"paper_reinovo", "calibration_servo", {"scenario", "calibration", "servo"}},
+      {"paper_reinovo", "calibration_scoring", {"scenario", "calibration", "scoring"}},
+      {"paper_reinovo", "acceptance_criterion", {"scenario", "acceptance", "0"}},
+      {"gan2014_floor_floor", "handclasp", {"scenario", "handclasp"}},
+      {"tracker_reinovo", "tracker_calibration", {"scenario", "tracker_calibration"}},
+      {"tracker_reinovo", "tracker_payload", {"scenario", "tracker_calibration", "payload"}}};
+  int tried = 0, required = 0;
+  for (const Where& w : places) {
+    const YAML::Node original = YAML::Load(Shipped(w.scenario));
+    for (const ScenarioKey& k : ScenarioSectionNamed(w.section).keys) {
+      YAML::Node copy = YAML::Clone(original);
+      YAML::Node node = copy;
+      for (const std::string& p : w.node_path) node.reset(p == "0" ? node[0] : node[p]);
+      if (!node[k.key]) continue;
+      node.remove(k.key);
+      ++tried;
+      const std::string error = ProcedureError("removed", YAML::Dump(copy));
+      const std::string missing = "missing required key '" + k.key + "'";
+      if (k.required) {
+        ++required;
+        EXPECT_TRUE(Contains(error, missing)) << w.section << "." << k.key;
+      } else {  // it may break a rule across keys (calibration_axes > the default axes)
+        EXPECT_FALSE(Contains(error, missing)) << w.section << "." << k.key;
+      }
+    }
+  }
+  EXPECT_GE(tried, 40);
+  EXPECT_GE(required, 10);
 }
 
 TEST(ScenarioSchema, Format2TakesQuotedNumbersAsStringsFormat1AsTheParserDoes) {
@@ -219,6 +375,21 @@ TEST(ScenarioSchemaCli, CheckReportsOneLineAndTheFormatNotice) {
   EXPECT_TRUE(Contains(newer.output, "error: " + v9 + ":"));
   EXPECT_TRUE(Contains(newer.output, "scenario format 9 is newer than this twinbench knows "
                                      "(newest: 2)"));
+}
+
+// Issue 41: `twinbench check` refuses a broken procedure section in one line naming the key.
+TEST(ScenarioSchemaCli, CheckRefusesABrokenProcedureSectionNamingTheKeyPath) {
+  for (const ProcedureCase& c : ProcedureCases()) {
+    const std::string text = Replaced(Shipped(c.scenario), c.from, c.to);
+    const std::string path = WriteScenario("cli_" + c.name, text);
+    const auto r = Twinbench("check " + path);
+    EXPECT_EQ(r.code, 2) << c.name << ": " << r.output;
+    const std::string head =
+        "error: " + path + ":" + std::to_string(LineOf(text, c.at)) + " " + c.where + ": ";
+    EXPECT_EQ(r.output.rfind(head, 0), 0u) << c.name << ": " << r.output;
+    EXPECT_TRUE(Contains(r.output, head + c.expected)) << c.name;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  }
 }
 
 TEST(ScenarioSchemaCli, SchemaVerbWritesTheGeneratedSchema) {
