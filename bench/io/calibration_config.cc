@@ -197,6 +197,14 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
         r.Fail(*g, "must be best_fitness (the paper's 1/O1) or predicted_error, got '" + v + "'");
       }
     }
+    if (const auto g = pm.Find("ik_seed", false)) {
+      const std::string v = r.String(*g);
+      if (v != "mid_range" && v != "start_pose") {
+        r.Fail(*g, "must be mid_range (the joint limits' middle) or start_pose (the set-up "
+                   "pose), got '" + v + "'");
+      }
+      o.plan_from_start_pose = v == "start_pose";
+    }
   }
   if (const auto f = m.Find("servo", false)) {
     const YamlMap sm(r, *f, kServoKeys);

@@ -45,6 +45,10 @@
 //       select_run: best_fitness       # which PSO run's poses: best_fitness (the paper's
 //                                      # 1/O1) or predicted_error (PredictedPositionError,
 //                                      # pose_planner.h)
+//       ik_seed: mid_range             # where each axis's IK starts: mid_range (the joint
+//                                      # limits' middle) or start_pose (the joints read when
+//                                      # the procedure starts; for arms whose joints turn a
+//                                      # full turn or more, e.g. a UR's +-360 deg)
 //     servo: {tolerance_px: 0.1, max_iterations: 10, gain: 1.0,
 //             encoder_readings: 1}     # readings averaged at each aligned pose (at rest)
 //     calibration_axes: 3              # whole axes in the calibration set; the rest validate

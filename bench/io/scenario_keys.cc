@@ -154,7 +154,10 @@ void AddProcedureSections(std::vector<ScenarioSection>* out) {
         K("seed", T::kUnsigned).Default("the scenario's estimator seed (+ trial)")
             .Doc("PSO seed, the same for every trial of a study (one plan per study)"),
         K("select_run", T::kString).OneOf({"best_fitness", "predicted_error"})
-            .Default("best_fitness").Doc("which PSO run's poses")}});
+            .Default("best_fitness").Doc("which PSO run's poses"),
+        K("ik_seed", T::kString).OneOf({"mid_range", "start_pose"}).Default("mid_range")
+            .Doc("where each axis's IK starts: the joint limits' middle or the joints read "
+                 "when the procedure starts (arms whose joints turn a full turn or more)")}});
   s.push_back(
       {"calibration_servo", "The visual servo's options.",
        {K("tolerance_px", T::kNumber).Unit("px").Min(1e-3).Max(100).Default("0.1")

@@ -393,6 +393,28 @@ std::string Header(const Texts& t, const std::string& title) {
   return s.str();
 }
 
+// Whether one of the joints that set the arm's posture (1-3) turns more than a full turn
+// (a UR's +-360 deg): the middle of its range is then no posture. (A +-180 deg base joint
+// turns exactly one turn and keeps its middle.)
+bool PostureJointsTurnFully(const KinematicModel& m) {
+  for (int i = 0; i < 3; ++i) {
+    // 1 deg: a URDF rounds +-pi to +-3.1416
+    if (m.links[i].limits.upper - m.links[i].limits.lower > 2.0 * kPi + DegToRad(1.0)) return true;
+  }
+  return false;
+}
+
+// The planner's IK start (calibration_config.h, planning.ik_seed): the start pose for arms
+// whose posture joints turn fully, where the mid-range default gives every axis its own branch
+// and whole-turn wraps (a UR5e lost 66-72 of 100 poses to self-collisions in the moves); the
+// default (no line) for the others.
+std::string IkSeedLine(const Texts& t) {
+  if (!PostureJointsTurnFully(t.a1.model) && !PostureJointsTurnFully(t.a2.model)) return "";
+  return "      # joints 1-3 turn more than a turn: the middle of their range is no posture, so each\n"
+         "      # axis's IK starts from the start pose above (pose_planner.h, active_ik_seed)\n"
+         "      ik_seed: start_pose\n";
+}
+
 std::string OpticalAxisText(const Texts& t) {
   const Layout& c = t.c;
   const Transform told_he = t.a1.X_LF * MakePose(Mm(kToldHandEyeMm), Matrix3::Identity());
@@ -431,6 +453,7 @@ std::string OpticalAxisText(const Texts& t) {
     << "      min_singular_value: 0.1\n      max_visibility_angle_deg: 30\n"
     << "      camera_reach_mm: " << Num(c.camera_out_mm, 0) << "\n"
     << "      camera_height_mm: " << Num(c.height_mm, 0) << "\n      seed: 1\n"
+    << IkSeedLine(t)
     << "    servo: {tolerance_px: 0.1, max_iterations: 10, gain: 1.0, encoder_readings: 16}\n"
     << "    calibration_axes: 6\n    scoring: {configurations: 200, seed: 1}\n"
     << "  # The CI verdict (bench/report/acceptance.h): issue 13's targets for an added arm, over\n"

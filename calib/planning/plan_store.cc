@@ -78,6 +78,11 @@ std::string PlanInputsText(const PlanInputs& in) {
   Write(os, "camera_region_half_extent", o.camera_region_half_extent);
   Write(os, "axis_cone_half_angle", o.axis_cone_half_angle);
   for (int i = 0; i < 3; ++i) Write(os, "board_normal_in_E." + std::to_string(i), o.board_normal_in_E(i));
+  // The IK seeds only where given, so the keys of plans made before they existed stay the same.
+  for (const auto& [name, seed] : {std::pair<const char*, const JointVector*>{"active_ik_seed", &o.active_ik_seed},
+                                   {"passive_ik_seed", &o.passive_ik_seed}}) {
+    for (int i = 0; i < seed->size(); ++i) Write(os, std::string(name) + "." + std::to_string(i), (*seed)(i));
+  }
   os << "max_draws_per_axis " << o.max_draws_per_axis << "\nredraws_after_update "
      << o.redraws_after_update << '\n';
   Write(os, "rank_tolerance", o.rank_tolerance);

@@ -26,6 +26,21 @@ constexpr int kAxisHead = 7;     // P_c (3), yaw, pitch, camera roll, D
 constexpr int kPerPosition = 3;  // tilt a, tilt b, board roll
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// q with each joint turned by whole turns (the same pose) to the angle within its limits
+// nearest `ref`: the IK's wrap into the limits takes the lowest such angle, which on joints
+// that turn more than a full turn can be a turn away from where the arm is.
+JointVector NearestTurn(const KinematicModel& m, JointVector q, const JointVector& ref) {
+  for (int i = 0; i < m.num_joints(); ++i) {
+    const JointLimits& l = m.links[i].limits;
+    const double turns = std::round((ref(i) - q(i)) / (2.0 * kPi));
+    for (const double k : {turns, turns - 1.0, turns + 1.0}) {
+      const double v = q(i) + 2.0 * kPi * k;
+      if (v >= l.lower && v <= l.upper && std::abs(v - ref(i)) < std::abs(q(i) - ref(i))) q(i) = v;
+    }
+  }
+  return q;
+}
+
 enum class Cause { kNone, kActiveIk, kPassiveIk, kC1, kC2, kC3, kC4, kC5 };
 
 void Count(Cause c, RejectionCounts* r) {
@@ -87,6 +102,8 @@ struct Planner {
   Eigen::VectorXd lo, hi;  // bounds of one sub-particle
   int dim = 0;             // of one sub-particle
 
+  IkOptions ik;            // o.ik; without random restarts where a start pose seeds the IK
+
   // Decodes sub-particle x, solves IK for both robots and checks C1-C5 (eq. 25-33).
   Cause Evaluate(const double* x, PlannedAxis* out) const {
     const Vector3 p_c(x[0], x[1], x[2]);
@@ -102,8 +119,10 @@ struct Planner {
     X_BpC.linear().col(2) = mu;
     X_BpC.translation() = p_c;
 
-    const IkResult ik_a = SolveIk(active, X_BaBp * X_BpC * X_CF, MidRange(active), o.ik);
+    IkResult ik_a = SolveIk(active, X_BaBp * X_BpC * X_CF,
+                            o.active_ik_seed.size() ? o.active_ik_seed : MidRange(active), ik);
     if (ik_a.status != IkStatus::kSuccess) return Cause::kActiveIk;
+    if (o.active_ik_seed.size()) ik_a.q = NearestTurn(active, ik_a.q, o.active_ik_seed);
     if (Cause c = CheckConfiguration(active, ik_a.q, o, active_trig); c != Cause::kNone) return c;
     // Camera as the active robot actually reaches it (within IK tolerance).
     const Transform X_BpC_fk = X_BpBa * EndPose(active, ik_a.q, &active_trig) * X_CF.inverse();
@@ -113,7 +132,7 @@ struct Planner {
     out->q_active = ik_a.q;
     out->q_passive.assign(o.positions_per_axis, ZeroJoints(passive));
     out->distances.assign(o.positions_per_axis, 0.0);
-    JointVector seed = MidRange(passive);
+    JointVector seed = o.passive_ik_seed.size() ? o.passive_ik_seed : MidRange(passive);
     for (int i = 0; i < o.positions_per_axis; ++i) {
       const double* t = x + kAxisHead + kPerPosition * i;
       const Vector3 tilt = t[0] * x_c + t[1] * mu.cross(x_c);
@@ -126,8 +145,9 @@ struct Planner {
                            .toRotationMatrix();
       const double d_i = D + i * o.distance_step;
       X_BpE.translation() = p_c + d_i * mu;
-      const IkResult ik_p = SolveIk(passive, X_BpE, seed, o.ik);
+      IkResult ik_p = SolveIk(passive, X_BpE, seed, ik);
       if (ik_p.status != IkStatus::kSuccess) return Cause::kPassiveIk;
+      if (o.passive_ik_seed.size()) ik_p.q = NearestTurn(passive, ik_p.q, seed);
       if (Cause c = CheckConfiguration(passive, ik_p.q, o, passive_trig); c != Cause::kNone) {
         return c;
       }
@@ -345,6 +365,14 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
   ValidatePosePlannerOptions(options);
   ValidateModel(active, "active model");
   ValidateModel(passive, "passive model");
+  const auto check_seed = [](const JointVector& seed, const KinematicModel& m, const char* what) {
+    if (seed.size() == 0) return;
+    TWIN_REQUIRE(seed.size() == m.num_joints() && seed.allFinite(),
+                 std::string(what) + " must hold " + std::to_string(m.num_joints()) +
+                     " finite angles, got " + std::to_string(seed.size()));
+  };
+  check_seed(options.active_ik_seed, active, "active_ik_seed");
+  check_seed(options.passive_ik_seed, passive, "passive_ik_seed");
   PosePlanResult result;
   const PosePlannerOptions& o = options;
 
@@ -370,6 +398,9 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
   pl.X_BpBa = X_BaBp.inverse();
   pl.X_CF = X_FC.inverse();
   pl.o = o;
+  // A start pose seeds the IK to keep each axis in its branch: a random restart would leave it.
+  pl.ik = o.ik;
+  if (o.active_ik_seed.size() || o.passive_ik_seed.size()) pl.ik.random_restarts = 0;
   pl.z = Vector3::UnitZ();
   const Vector3 p_BpBa = pl.X_BpBa.translation();
   Vector3 to_bp = -p_BpBa;

@@ -62,6 +62,17 @@ struct PosePlannerOptions {
   double camera_region_half_extent = 0.15;  ///< half side of the camera-origin box [m]
   double axis_cone_half_angle = DegToRad(40.0);  ///< largest yaw / pitch of mu [rad]
   Vector3 board_normal_in_E = Vector3::UnitZ();  ///< board's outward normal in E (unit) [-]
+  /// Where each axis's IK starts (the active robot's camera pose, the passive robot's first
+  /// board position; later positions start from the one before): empty is the mid-range of the
+  /// joint limits (the default). A start configuration (the joints the cell was set up in)
+  /// keeps every axis in that posture's branch: an arm whose joints turn a full turn or more
+  /// (a UR's +-360 deg) has no posture at its mid-range, and mid-range seeds there give each
+  /// axis its own branch and 2 pi wraps, so the moves between axes sweep the arm through
+  /// itself. With a seed the IK makes no random restarts (a draw it cannot reach from the seed
+  /// is replaced like any infeasible one) and each solution is turned by whole turns to the
+  /// angles nearest the seed. Each given seed holds one angle per joint of its model.
+  JointVector active_ik_seed;
+  JointVector passive_ik_seed;
   int max_draws_per_axis = 300;        ///< random draws of one sub-particle before giving up
   int redraws_after_update = 3;        ///< draws tried when an updated sub-particle is infeasible
   double rank_tolerance = 1e-6;        ///< relative singular-value cut of AnalyseObservability

@@ -434,6 +434,10 @@ void StartBackgroundPlanning(const ProcedureContext& ctx,
     PlanInputs inputs{knowledge.nominal[a], BoardRobotModel(knowledge.nominal[r], knowledge.X_FT),
                       a == 0 ? knowledge.X_B1B2 : Transform(knowledge.X_B1B2.inverse()),
                       knowledge.X_FC, options.planner};
+    if (options.plan_from_start_pose) {
+      inputs.options.active_ik_seed = ctx.home[a];
+      inputs.options.passive_ik_seed = ctx.home[r];
+    }
     ctx.Say(ctx.Name(r) + ": planning " + std::to_string(options.planner.num_axes) + " axes x " +
             std::to_string(options.planner.positions_per_axis) + " positions (PSO, " +
             std::to_string(options.planner.runs) + " runs x " +

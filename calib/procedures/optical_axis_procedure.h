@@ -64,6 +64,10 @@ struct OpticalAxisOptions {
                                      ///< servo's IK restarts have their own, planner.seed and
                                      ///< servo.ik_seed)
   PosePlannerOptions planner;        ///< PSO (q, p, swarm, iterations, runs, C1-C5)
+  /// Where the planner's IK starts (PosePlannerOptions::active_ik_seed): the mid-range of the
+  /// joint limits (false, the default), or the joints both robots are read at when the
+  /// procedure starts (true: the set-up pose; for arms whose joints turn a full turn or more).
+  bool plan_from_start_pose = false;
   ServoOptions servo;                ///< alignment (tolerance 0.1 px, iteration limit)
   int calibration_axes = 3;          ///< axes in the calibration set, the rest validate
                                      ///< (paper: 30 / 20 poses of 5 x 10, by whole axes)

@@ -44,6 +44,8 @@ TEST(PlanStoreTest, EveryInputThatChangesThePlanChangesTheText) {
       {"C3", [](PlanInputs* p) { p->options.max_visibility_angle *= 1.0000001; }},
       {"ik seed", [](PlanInputs* p) { p->options.ik.seed = 9; }},
       {"board normal", [](PlanInputs* p) { p->options.board_normal_in_E.x() = 1e-12; }},
+      {"active IK start", [](PlanInputs* p) { p->options.active_ik_seed = JointVector::Zero(6); }},
+      {"passive IK start", [](PlanInputs* p) { p->options.passive_ik_seed = JointVector::Zero(6); }},
       {"run selection",
        [](PlanInputs* p) {
          p->options.select_run = PosePlannerOptions::RunSelection::kPredictedError;
@@ -66,6 +68,8 @@ TEST(PlanStoreTest, EveryInputThatChangesThePlanChangesTheText) {
   EXPECT_NE(PlanInputsText(other_count), PlanInputsText(predicted));
   EXPECT_EQ(PlanInputsText(paper), base);
   EXPECT_EQ(base.find("select_run"), std::string::npos);
+  // Without IK starts (the mid-range) the text is that of plans made before they existed.
+  EXPECT_EQ(base.find("ik_seed."), std::string::npos);
 }
 
 }  // namespace
