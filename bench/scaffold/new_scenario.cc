@@ -203,26 +203,71 @@ struct PoseChoice {
   double score = -1, sv = 0, margin = 0;
 };
 
+// q with each joint turned by whole turns (the same pose) to the angle within its limits
+// nearest `ref`.
+JointVector NearestTurns(const KinematicModel& m, JointVector q, const JointVector& ref) {
+  for (int i = 0; i < m.num_joints(); ++i) {
+    const JointLimits& l = m.links[i].limits;
+    const double v = q(i) + 2.0 * kPi * std::round((ref(i) - q(i)) / (2.0 * kPi));
+    if (v >= l.lower && v <= l.upper) q(i) = v;
+  }
+  return q;
+}
+
+// Whether the elbow (the origin of DH frame L2, joint 3's axis) stands above the shoulder
+// (L1) by a tenth of the upper arm at `q`: the posture arms work in. An arm whose upper arm
+// lies level or hangs (a UR's shoulder at -180 deg) is a small move away from its own base.
+bool ElbowUp(const KinematicModel& m, const JointVector& q) {
+  const FrameSet fk = ForwardKinematics(m, q);
+  const Vector3 shoulder = fk.X_BL[1].translation(), elbow = fk.X_BL[2].translation();
+  return elbow.z() - shoulder.z() > 0.1 * (elbow - shoulder).norm();
+}
+
 // The best IK solution of `end_model` for `target` turned about its z by 0, 90, 180, 270 deg,
-// from three IK seeds each: the largest smallest Jacobian singular value, weighed down within
-// 40 deg of a joint limit (the planner's C1 keeps 10 deg; the pose must leave room to move).
+// from three IK seeds each: elbow up where one is (ElbowUp), then the largest smallest
+// Jacobian singular value, weighed down within 40 deg of a joint limit (the planner's C1 keeps
+// 10 deg; the pose must leave room to move).
 PoseChoice BestPose(const KinematicModel& end_model, const Transform& target) {
-  PoseChoice best;
-  for (int roll = 0; roll < 4; ++roll) {
-    Transform X = target;
-    X.linear() = target.linear() * Eigen::AngleAxisd(roll * kPi / 2, Vector3::UnitZ()).matrix();
-    for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-      IkOptions o;
-      o.seed = seed;
-      const IkResult r = SolveIk(end_model, X, MidRange(end_model), o);
-      if (r.status != IkStatus::kSuccess) continue;
-      const double margin = LimitMarginDeg(end_model, r.q);
-      const double sv = SmallestJacobianSingularValue(end_model, r.q);
-      const double score = sv * std::min(1.0, margin / 40.0);
-      if (margin >= 15.0 && score > best.score) best = PoseChoice{r.q, score, sv, margin};
+  PoseChoice best, best_up;
+  // IK from `start` for the four rolls; the restarts' seeds 1..3 where the start fails. From a
+  // random start a solution is turned by whole turns to the angles nearest the limits' middle
+  // (-310 deg written as 50).
+  const auto search = [&](const JointVector& start, bool random_start) {
+    for (int roll = 0; roll < 4; ++roll) {
+      Transform X = target;
+      X.linear() = target.linear() * Eigen::AngleAxisd(roll * kPi / 2, Vector3::UnitZ()).matrix();
+      for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+        IkOptions o;
+        o.seed = seed;
+        IkResult r = SolveIk(end_model, X, start, o);
+        if (r.status != IkStatus::kSuccess) continue;
+        if (random_start) r.q = NearestTurns(end_model, r.q, MidRange(end_model));
+        const double margin = LimitMarginDeg(end_model, r.q);
+        const double sv = SmallestJacobianSingularValue(end_model, r.q);
+        const double score = sv * std::min(1.0, margin / 40.0);
+        if (margin < 15.0) continue;
+        if (score > best.score) best = PoseChoice{r.q, score, sv, margin};
+        if (score > best_up.score && ElbowUp(end_model, r.q)) {
+          best_up = PoseChoice{r.q, score, sv, margin};
+        }
+      }
+    }
+  };
+  search(MidRange(end_model), false);
+  // No elbow-up solution from the middle of the limits (a UR's all-zero middle is the arm
+  // stretched out level): the IK from 16 seeded random starts inside the limits too.
+  if (best_up.score < 0) {
+    std::mt19937_64 rng(2019);
+    for (int k = 0; k < 16; ++k) {
+      JointVector q = MidRange(end_model);
+      for (int i = 0; i < end_model.num_joints(); ++i) {
+        const JointLimits& l = end_model.links[i].limits;
+        q(i) = std::uniform_real_distribution<double>(l.lower, l.upper)(rng);
+      }
+      search(q, true);
     }
   }
-  return best;
+  return best_up.score >= 0 ? best_up : best;
 }
 
 // The cell whose camera and board meet `fraction` of the reach out at `height`.

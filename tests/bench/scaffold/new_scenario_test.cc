@@ -101,6 +101,14 @@ TEST_P(NewScenarioOnArm, OpticalAxisFilePassesCheckWithCameraAndBoardFaceToFace)
   // +-180 deg, which a URDF rounds to +-3.1416 rad).
   const bool full_turns = model == "tests/data/ur5e.urdf";
   EXPECT_EQ(text.find("ik_seed: start_pose") != std::string::npos, full_turns) << model;
+  // Both arms start elbow up: the elbow (DH frame L2) above the shoulder (L1), the posture
+  // arms work in (a UR5e started with its upper arm level lost half its poses to collisions
+  // with its own base).
+  const Scenario sc = LoadScenario(out.string());
+  for (const RobotSpec& r : sc.twin.robots) {
+    const FrameSet fk = ForwardKinematics(r.model, r.q_initial);
+    EXPECT_GT(fk.X_BL[2].translation().z(), fk.X_BL[1].translation().z() + 0.05) << model;
+  }
   const FacingFigures f = Facing(out);
   EXPECT_LT(f.axis_angle_deg, kMaxAxisAngleDeg);
   EXPECT_LT(f.off_axis_mm, kMaxOffAxisMm);
