@@ -299,6 +299,28 @@ HandclaspConfig ParseHandclaspConfig(const Scenario& scenario) {
   return c;
 }
 
+TeachOptions HandclaspTeachOptions(const Scenario& scenario, bool identify_tips) {
+  TeachOptions teach;
+  teach.seed = scenario.seeds.estimator;
+  if (identify_tips) teach.orientations_per_point = 4;
+  return teach;
+}
+
+TaughtPoints TeachHandclaspPoints(const HandclaspConfig& config,
+                                  const std::array<KinematicModel, 2>& pendant_models_flange,
+                                  const std::array<JointVector, 2>& seeds,
+                                  const TeachOptions& options) {
+  // The pendants' tips are the told ones (by drawing), never the twin's true tips.
+  std::array<KinematicModel, 2> tip_models;
+  for (int k = 0; k < 2; ++k) {
+    tip_models[k] = WithTipTool(pendant_models_flange[k], config.told_X_FTip[k]);
+  }
+  // The operator teaches from the cell layout as drawn (told), not from the truth.
+  return config.auto_points
+             ? PlanTaughtPoints(tip_models, config.rough_X_B1B2, seeds, options)
+             : TeachPoints(tip_models, config.rough_X_B1B2, config.points_B1, seeds, options);
+}
+
 namespace {
 
 // What a stage's steps read: the caller's inputs, the section and the pendants' tip models.
@@ -335,15 +357,10 @@ struct Teaching {
 
 // Plans or teaches the contact points from the current encoders.
 Teaching TeachContactPoints(TwinCell& cell, const StageInputs& in) {
-  // The operator teaches from the cell layout as drawn (told), not from the truth.
-  const Transform X_B1B2_layout = in.config.rough_X_B1B2;
   const std::array<JointVector, 2> seeds = {cell.ReadEncoders(0), cell.ReadEncoders(1)};
   Teaching t;
-  t.teach.seed = in.scenario.seeds.estimator;
-  if (in.options.identify_tips) t.teach.orientations_per_point = 4;
-  t.taught = in.config.auto_points
-                 ? PlanTaughtPoints(in.tip_models, X_B1B2_layout, seeds, t.teach)
-                 : TeachPoints(in.tip_models, X_B1B2_layout, in.config.points_B1, seeds, t.teach);
+  t.teach = HandclaspTeachOptions(in.scenario, in.options.identify_tips);
+  t.taught = TeachHandclaspPoints(in.config, in.pendant_models_flange, seeds, t.teach);
   return t;
 }
 

@@ -43,6 +43,7 @@
 #include "bench/scoring/handclasp_results.h"
 #include "calib/identification/base_calibration.h"
 #include "calib/kinematics/kinematic_model.h"
+#include "calib/procedures/handclasp_procedure.h"
 #include "sim/cell/twin_cell.h"
 
 namespace twin {
@@ -116,6 +117,22 @@ Transform BestFitBaseOffset(const KinematicModel& true_tip_model,
 /// (base_frame.physical_truth).
 Transform KinematicFrameTruth(const TwinTruth& truth,
                               const std::array<KinematicModel, 2>& pendant_models);
+
+/// The operator's teaching options of a stage: the planner's defaults
+/// (calib/procedures/handclasp_procedure.h) with its IK restarts seeded by the scenario's
+/// estimator seed, and 4 tip orientations per point where the tips are identified.
+TeachOptions HandclaspTeachOptions(const Scenario& scenario, bool identify_tips);
+
+/// The points a stage teaches before its first contact, from told values alone: the told tips
+/// (config.told_X_FTip) as tools of the flange models `pendant_models_flange`, the layout as
+/// drawn (config.rough_X_B1B2), the planned cube (points: auto, PlanTaughtPoints) or the listed
+/// points (TeachPoints), IK seeded at `seeds` (robot 1's and robot 2's encoders). Needs no
+/// twin: `twinbench new-scenario` (bench/scaffold/new_scenario.h) and its tests call it with
+/// the nominal models at the initial joints, which the settled encoders read to the sag.
+TaughtPoints TeachHandclaspPoints(const HandclaspConfig& config,
+                                  const std::array<KinematicModel, 2>& pendant_models_flange,
+                                  const std::array<JointVector, 2>& seeds,
+                                  const TeachOptions& options);
 
 /// Runs one handclasp stage on `cell` with the section of `scenario` and the controllers'
 /// flange models `pendant_models_flange` (nominal or calibrated; the section's told tips are

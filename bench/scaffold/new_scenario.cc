@@ -185,6 +185,7 @@ struct Layout {
   Transform X_B1B2_true = Transform::Identity();
   Transform X_FC_true = Transform::Identity(), X_FT = Transform::Identity();
   JointVector q1, q2;        // initial joints [rad]
+  bool mid_range = false;    // q1, q2 the middle of each joint's range (camera, board apart)
   double score = -1;         // the smaller of the two arms' pose scores
   double sv1 = 0, sv2 = 0, margin1 = 0, margin2 = 0;  // manipulability, limit margin [deg]
 };
@@ -270,17 +271,26 @@ PoseChoice BestPose(const KinematicModel& end_model, const Transform& target) {
   return best_up.score >= 0 ? best_up : best;
 }
 
-// The cell whose camera and board meet `fraction` of the reach out at `height`.
-Layout SolveCell(const Arm& a1, const Arm& a2, double fraction, double height_m) {
+// The cell's frames (no initial joints): bases `distance_mm` apart, camera and board meeting
+// `fraction` of the reach out at `height`.
+Layout CellFrames(const Arm& a1, const Arm& a2, double fraction, double distance_mm,
+                  double height_m) {
   Layout c;
   c.fraction = fraction;
-  const double reach = 0.5 * (a1.reach + a2.reach);
-  c.distance_mm = 10.0 * std::round((2 * fraction * reach * 1e3 + kWorkingDistanceMm) / 10.0);
+  c.distance_mm = distance_mm;
   c.height_mm = 10.0 * std::round(height_m * 100.0);
   c.camera_out_mm = 0.5 * (c.distance_mm - kWorkingDistanceMm);
   c.X_B1B2_true = MakePose(Vector3(c.distance_mm, 0, 0) + Mm(kBaseOffsetMm), Zyz(kBaseZyzDeg));
   c.X_FC_true = a1.X_LF * MakePose(Mm(kTrueHandEyeMm), Rpy(kTrueHandEyeRpyDeg));
   c.X_FT = a2.X_LF * MakePose(Mm(kBoardMountMm), Matrix3::Identity());
+  return c;
+}
+
+// The cell of bases `distance_mm` apart whose camera and board meet `fraction` of the reach
+// out (D = 2 f R + w) at `height`.
+Layout SolveCell(const Arm& a1, const Arm& a2, double fraction, double distance_mm,
+                 double height_m) {
+  Layout c = CellFrames(a1, a2, fraction, distance_mm, height_m);
   // Camera (OpenCV: z forward, y down) looking along base 1's x at robot 2; the board's
   // outward normal (its z) back along the optical axis, w further on.
   Matrix3 R_C;
@@ -308,21 +318,108 @@ Layout SolveCell(const Arm& a1, const Arm& a2, double fraction, double height_m)
   return c;
 }
 
-// Candidate cells, best first: the meeting point at 0.5, 0.6, 0.7 of the reach out, at the
-// shoulder's height and 0.25, 0.5 of the reach above it (never below 0.4 m off the floor).
+// The cells of bases `distance_mm` apart (camera and board meeting `fraction` of the reach
+// out), at the shoulder's height and 0.25, 0.5 of the reach above it (never below 0.4 m off the
+// floor), appended to `cells` where IK found both start poses.
+void AddCellsAt(const Arm& a1, const Arm& a2, double fraction, double distance_mm,
+                std::vector<Layout>* cells) {
+  const double reach = 0.5 * (a1.reach + a2.reach);
+  const double shoulder = 0.5 * (a1.shoulder_z + a2.shoulder_z);
+  for (double up : {0.0, 0.25, 0.5}) {
+    Layout c = SolveCell(a1, a2, fraction, distance_mm, std::max(0.4, shoulder + up * reach));
+    if (c.score > 0) cells->push_back(c);
+  }
+}
+
+void SortByScore(std::vector<Layout>* cells) {
+  std::stable_sort(cells->begin(), cells->end(),
+                   [](const Layout& x, const Layout& y) { return x.score > y.score; });
+}
+
+// Candidate cells, best first: the meeting point at 0.5, 0.6, 0.7 of the reach out (D = 2 f R
+// + w rounded to 10 mm), at the heights of AddCellsAt.
 std::vector<Layout> CandidateCells(const Arm& a1, const Arm& a2) {
   std::vector<Layout> cells;
   const double reach = 0.5 * (a1.reach + a2.reach);
-  const double shoulder = 0.5 * (a1.shoulder_z + a2.shoulder_z);
   for (double fraction : {0.5, 0.6, 0.7}) {
-    for (double up : {0.0, 0.25, 0.5}) {
-      Layout c = SolveCell(a1, a2, fraction, std::max(0.4, shoulder + up * reach));
-      if (c.score > 0) cells.push_back(c);
-    }
+    const double distance_mm =
+        10.0 * std::round((2 * fraction * reach * 1e3 + kWorkingDistanceMm) / 10.0);
+    AddCellsAt(a1, a2, fraction, distance_mm, &cells);
   }
-  std::stable_sort(cells.begin(), cells.end(),
-                   [](const Layout& x, const Layout& y) { return x.score > y.score; });
+  SortByScore(&cells);
   return cells;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The handclasp cell. The run's planner (bench/runs/handclasp_run.h, TeachHandclaspPoints)
+// puts its contacts on the corners of a cube centred between the two shoulders, robot 1's tip
+// pointing at robot 2's shoulder, and needs 6 corners that both arms reach with their tips
+// (and robot 2 its stand-off) inside the joint limits, by IK started from the encoders. That
+// depends on D and the tip length (the cube sits at the shoulders' height, lifted to 150 mm
+// off the floor) and on the start pose, not on where the camera meets the board: with the
+// optical-axis cell's D = 2 f R + w and start poses, 200 mm tips on 0.85 m arms (reinovo_r2,
+// D = 1250 mm) taught 4 of 8 corners of the smallest cube (the flanges folded back towards
+// the bases; from the camera-and-board poses the IK ended beyond the joint limits). Too far
+// apart, the corners are out of reach. So D is searched with the planner itself from the
+// joints' mid-range (the file's initial joints), and the best candidates are tried on the
+// twin: the planner knows the limits, not the links, and a folded arm may touch itself.
+constexpr double kHandclaspTipMm = 200.0;  // as scenarios/gan2014_*.yaml
+constexpr int kHandclaspSeed = 11;          // the scenario's seed: the planner's IK restarts
+// Where the tips meet: g of the reach out from each base (D = 2 g R), g on this grid.
+constexpr double kMeetFirst = 0.40, kMeetStep = 0.05;
+constexpr int kMeetCount = 15;  // 0.40 .. 1.10
+constexpr int kMeetsTried = 6;  // the best meeting points tried on the twin
+
+// The handclasp's tip on an arm's flange: `tip_mm` out of the face (in L_N).
+Transform HandclaspTip(const Arm& a, double tip_mm) {
+  return a.X_LF * MakePose(Vector3(0, 0, tip_mm), Matrix3::Identity());
+}
+
+// One meeting point of the tips and the cube the planner takes there.
+struct Meeting {
+  double g = 0;            // the tips meet g R out from each base
+  double distance_mm = 0;  // D = 2 g R, rounded to 10 mm
+  double side_m = 0;       // the planner's cube side [m] (0: no cube)
+  double worst_m = 0;      // the smallest of side_m at this D and one grid step each way
+};
+
+// The planner's cube side [m] for bases D apart as drawn (the told layout: (D, 0, 0), ZYZ
+// (180, 0, 0)) and the told tips, on the nominal models from their mid-range joints; 0 where
+// no cube has 6 teachable corners.
+double PlannedCubeSide(const Arm& a1, const Arm& a2, double distance_mm, double tip_mm) {
+  HandclaspConfig config;
+  config.rough_X_B1B2 = MakePose(Vector3(distance_mm, 0, 0),
+                                 Eigen::AngleAxisd(kPi, Vector3::UnitZ()).toRotationMatrix());
+  config.told_X_FTip = {HandclaspTip(a1, tip_mm), HandclaspTip(a2, tip_mm)};
+  TeachOptions options;
+  options.seed = kHandclaspSeed;
+  const TaughtPoints t = TeachHandclaspPoints(config, {a1.model, a2.model},
+                                              {MidRange(a1.model), MidRange(a2.model)}, options);
+  return t.ok ? t.cube_side_m : 0.0;
+}
+
+// The meeting points with a cube, best first: the largest cube that D one grid step shorter
+// and longer keep too (the planner's IK is sensitive to the exact D: a point between two good
+// ones may fail), then the largest cube, then the shorter D.
+std::vector<Meeting> HandclaspMeetings(const Arm& a1, const Arm& a2, double tip_mm) {
+  const double reach = 0.5 * (a1.reach + a2.reach);
+  std::vector<Meeting> grid(kMeetCount);
+  for (int i = 0; i < kMeetCount; ++i) {
+    grid[i].g = kMeetFirst + i * kMeetStep;
+    grid[i].distance_mm = 10.0 * std::round(2 * grid[i].g * reach * 1e2);
+    grid[i].side_m = PlannedCubeSide(a1, a2, grid[i].distance_mm, tip_mm);
+  }
+  std::vector<Meeting> meetings;
+  for (int i = 0; i < kMeetCount; ++i) {
+    Meeting m = grid[i];
+    m.worst_m = std::min({i > 0 ? grid[i - 1].side_m : 0.0, m.side_m,
+                          i + 1 < kMeetCount ? grid[i + 1].side_m : 0.0});
+    if (m.side_m > 0) meetings.push_back(m);
+  }
+  std::stable_sort(meetings.begin(), meetings.end(), [](const Meeting& x, const Meeting& y) {
+    return x.worst_m != y.worst_m ? x.worst_m > y.worst_m : x.side_m > y.side_m;
+  });
+  return meetings;
 }
 
 std::string JointsDeg(const JointVector& q) {
@@ -344,6 +441,7 @@ struct Texts {
   const Arm& a1;
   const Arm& a2;
   const Layout& c;
+  const Meeting* meeting = nullptr;  // the handclasp's: where the tips meet
 };
 
 std::string RobotEntries(const Texts& t) {
@@ -408,24 +506,60 @@ std::string Header(const Texts& t, const std::string& title) {
     << "#   random joint angles inside the limits: r1 " << Num(t.a1.reach * 1e3, 0) << " mm, r2 "
     << Num(t.a2.reach * 1e3, 0) << " mm (mean " << Num(0.5e3 * (t.a1.reach + t.a2.reach), 0)
     << " mm); shoulder (DH frame L1) " << Num(t.a1.shoulder_z * 1e3, 0) << " mm up.\n"
-    << "# - cell: both bases on the floor, facing each other, D = " << Num(c.distance_mm, 0)
-    << " mm apart (D = 2 f R + w rounded to\n#   10 mm: camera and board meet f = "
-    << Num(c.fraction, 1) << " of the reach out from each base, w = " << Num(kWorkingDistanceMm, 0)
-    << " mm apart, " << Num(c.height_mm, 0) << " mm up).\n"
-    << "#   f and the height were chosen among f = 0.5, 0.6, 0.7 and the shoulder's height, 0.25 R\n"
-    << "#   and 0.5 R above it: the candidate whose worse arm has the largest smallest Jacobian\n"
-    << "#   singular value (weighed down within 40 deg of a joint limit) and whose cell settles\n"
-    << "#   without a collision.\n"
-    << "# - initial joints: the estimator's IK (calib/kinematics/inverse_kinematics.h, as\n"
-    << "#   `twinbench ik`) on the nominal models with the true base and hand-eye: r1's camera at\n"
-    << "#   (" << Num(c.camera_out_mm, 0) << ", 0, " << Num(c.height_mm, 0)
-    << ") mm looking along base 1's x at r2, r2's board centre " << Num(kWorkingDistanceMm, 0)
-    << " mm further on the optical\n#   axis, its face towards the camera (rolls about the axis "
-    << "chosen among 0, 90, 180, 270 deg).\n"
-    << "#   r1: smallest Jacobian singular value " << Num(c.sv1, 3) << ", " << Num(c.margin1, 0)
-    << " deg from the nearest joint limit; r2: " << Num(c.sv2, 3) << ", " << Num(c.margin2, 0)
-    << " deg.\n"
-    << "# - tools: the hand-eye, the board mount, the reflector and the tips are given in the\n"
+    << "# - cell: both bases on the floor, facing each other, D = " << Num(c.distance_mm, 0);
+  if (t.meeting) {
+    const Meeting& m = *t.meeting;
+    s << " mm apart (D = 2 g R rounded to\n#   10 mm: the handclasp cube's centre, midway, is g = "
+      << Num(m.g, 2) << " of the reach out from each base).\n"
+      << "#   g was chosen among " << Num(kMeetFirst, 2) << ", " << Num(kMeetFirst + kMeetStep, 2)
+      << ", .., " << Num(kMeetFirst + (kMeetCount - 1) * kMeetStep, 2)
+      << " with the run's planner (bench/runs/handclasp_run.h,\n"
+      << "#   points: auto) on the nominal models and the told values below, best first: the "
+         "largest\n#   cube of which 6 corners are teachable at D and one step of g either side "
+         "(here "
+      << Num(m.side_m * 1e3, 0) << " mm,\n#   " << Num(m.worst_m * 1e3, 0)
+      << " mm at worst beside it); the first whose cell settles without a collision and whose\n"
+      << "#   first trial on the twin made a contact at every taught point (the planner knows "
+         "the\n#   joint limits, not the links: a folded arm may touch itself).\n";
+  }
+  if (t.meeting && !c.mid_range) {
+    s << "#   Camera and board (not used by the handclasp) meet f = (D - w) / 2R = "
+      << Num(c.fraction, 2) << " of the reach\n#   out, w = " << Num(kWorkingDistanceMm, 0)
+      << " mm apart, " << Num(c.height_mm, 0) << " mm up; the height was chosen among the "
+         "shoulder's\n#   height, 0.25 R and 0.5 R above it: the candidate whose worse arm has "
+         "the largest\n#   smallest Jacobian singular value (weighed down within 40 deg of a "
+         "joint limit), whose\n#   cell settles without a collision and whose initial joints "
+         "teach the cube.\n";
+  } else if (!t.meeting) {
+    s << " mm apart (D = 2 f R + w rounded to\n#   10 mm: camera and board meet f = "
+      << Num(c.fraction, 1) << " of the reach out from each base, w = "
+      << Num(kWorkingDistanceMm, 0) << " mm apart, " << Num(c.height_mm, 0) << " mm up).\n"
+      << "#   f and the height were chosen among f = 0.5, 0.6, 0.7 and the shoulder's height, "
+         "0.25 R\n"
+      << "#   and 0.5 R above it: the candidate whose worse arm has the largest smallest "
+         "Jacobian\n"
+      << "#   singular value (weighed down within 40 deg of a joint limit) and whose cell "
+         "settles\n"
+      << "#   without a collision.\n";
+  }
+  if (c.mid_range) {
+    s << "# - initial joints: the middle of each joint's range (as the zero pose of\n"
+      << "#   scenarios/gan2014_*.yaml): the planner's IK seeds (the encoders once the cell "
+         "settled)\n#   and where robot 2 returns between contacts. Camera and board do not "
+         "face each other\n#   there; the handclasp does not use them.\n";
+  } else {
+    s << "# - initial joints: the estimator's IK (calib/kinematics/inverse_kinematics.h, as\n"
+      << "#   `twinbench ik`) on the nominal models with the true base and hand-eye: r1's camera "
+         "at\n"
+      << "#   (" << Num(c.camera_out_mm, 0) << ", 0, " << Num(c.height_mm, 0)
+      << ") mm looking along base 1's x at r2, r2's board centre " << Num(kWorkingDistanceMm, 0)
+      << " mm further on the optical\n#   axis, its face towards the camera (rolls about the axis "
+      << "chosen among 0, 90, 180, 270 deg).\n"
+      << "#   r1: smallest Jacobian singular value " << Num(c.sv1, 3) << ", " << Num(c.margin1, 0)
+      << " deg from the nearest joint limit; r2: " << Num(c.sv2, 3) << ", " << Num(c.margin2, 0)
+      << " deg.\n";
+  }
+  s << "# - tools: the hand-eye, the board mount, the reflector and the tips are given in the\n"
     << "#   model's flange frame L_N (the DH frame of the last joint). "
     << (flipped ? "On this arm L_N's z points into\n#   the wrist (as KUKA's A6): every tool is "
                   "its z-out value turned 180 deg about x\n#   (x, -y, -z).\n"
@@ -552,21 +686,21 @@ std::string TrackerText(const Texts& t) {
 
 std::string HandclaspText(const Texts& t) {
   const Layout& c = t.c;
-  // Tips reaching from each flange to the middle of the cell: the flanges stand at the
-  // optical-axis start poses, w apart, so each tip is w / 2 long (plus its mount).
-  const double tip_mm = 0.5 * kWorkingDistanceMm;
-  const Transform tip1 = t.a1.X_LF * MakePose(Vector3(0, 0, tip_mm), Matrix3::Identity());
-  const Transform tip2 = t.a2.X_LF * MakePose(Vector3(0, 0, tip_mm), Matrix3::Identity());
+  const double tip_mm = kHandclaspTipMm;
+  const Transform tip1 = HandclaspTip(t.a1, tip_mm);
+  const Transform tip2 = HandclaspTip(t.a2, tip_mm);
   std::ostringstream s;
   s << Header(t, "Handclasp base-frame calibration (Gan et al. 2014) of " + t.a1.model.name +
                      " (r1) and " + t.a2.model.name + " (r2).")
     << "# Geometry errors: a factory-calibrated arm's (sigma 0.5 mm and 0.05 deg per DH\n"
     << "# parameter, as scenarios/gan2014_*.yaml); the operator aligns the tips to 0.5 mm.\n"
     << "scenario:\n  format: " << kScenarioFormat << "   # the scenario format version\n"
-    << "  name: " << fs::path(t.o.out).stem().string() << "\n  seed: 11\n"
+    << "  name: " << fs::path(t.o.out).stem().string() << "\n  seed: " << kHandclaspSeed
+    << "\n"
     << "  robots:\n" << RobotEntries(t) << CameraAndBoard(t, false)
-    << "  # Measuring tips " << Num(tip_mm, 0) << " mm out of each flange (w / 2: they meet "
-       "mid-cell), beyond the camera and the board.\n"
+    << "  # Measuring tips " << Num(tip_mm, 0) << " mm out of each flange (as "
+       "scenarios/gan2014_*.yaml), beyond the\n  # camera and the board; D puts the handclasp "
+       "cube where both arms reach it (header).\n"
     << "  tips:\n"
     << "    r1: " << PoseMap(tip1).substr(0, PoseMap(tip1).size() - 1) << ", length_mm: "
     << Num(tip_mm - 20, 0) << ", radius_mm: 4}\n"
@@ -583,8 +717,9 @@ std::string HandclaspText(const Texts& t) {
   return s.str();
 }
 
-// What `twinbench check` checks (bench/runs/calibration_run.cc, CheckScenario), on the text.
-void CheckScenarioText(const std::string& text, const std::string& out) {
+// What `twinbench check` checks (bench/runs/calibration_run.cc, CheckScenario) on the text
+// before the cell is built: the scenario as parsed.
+Scenario ParseScenarioText(const std::string& text, const std::string& out) {
   const std::string dir = fs::absolute(fs::path(out)).parent_path().string();
   const Scenario sc = ParseScenario(text, out, dir);
   if (IsPresent(sc.calibration)) ParseCalibrationConfig(sc);
@@ -592,7 +727,92 @@ void CheckScenarioText(const std::string& text, const std::string& out) {
   if (IsPresent(sc.tracker_calibration)) ValidateTrackerScenario(sc);
   ParseAcceptance(sc);
   InstallMujocoErrorHandlers();
+  return sc;
+}
+
+// What `twinbench check` checks, on the text.
+void CheckScenarioText(const std::string& text, const std::string& out) {
+  const Scenario sc = ParseScenarioText(text, out);
   const TwinCell cell(sc.twin, sc.path);  // the cell settles at its initial pose
+}
+
+// The handclasp scenario: the best kMeetsTried meeting points of the tips (HandclaspMeetings),
+// each with the arms at mid-range, else (where that cell cannot start) the optical-axis start
+// poses; the first file whose initial joints teach the cube as the run will
+// (TeachHandclaspPoints on the file's nominal models and told values), whose cell settles
+// without a collision (the check) and whose first trial on the twin (RunHandclaspStage, as
+// `twinbench run`) made a contact at every taught point.
+std::string HandclaspScenarioText(const NewScenarioOptions& o, const Arm& a1, const Arm& a2) {
+  const std::vector<Meeting> meetings = HandclaspMeetings(a1, a2, kHandclaspTipMm);
+  if (meetings.empty()) {
+    throw InputError("--robot", "no handclasp cell found: with " + Num(kHandclaspTipMm, 0) +
+                                    " mm tips the planner taught 6 corners of no cube for "
+                                    "bases 2 g R apart, g = " + Num(kMeetFirst, 2) + ".." +
+                                    Num(kMeetFirst + (kMeetCount - 1) * kMeetStep, 2));
+  }
+  const double reach = 0.5 * (a1.reach + a2.reach);
+  const double shoulder = 0.5 * (a1.shoulder_z + a2.shoulder_z);
+  std::string last_error;
+  // Where a cell failed: at its start (no cube taught from its initial joints, or the cell
+  // does not settle without a collision) or in its first trial on the twin.
+  enum class Failed { kNothing, kStart, kTrial };
+  // Writes the file to *text unless its initial joints teach no cube (on the nominal models,
+  // as the test does), its cell does not settle without a collision (the check) or its first
+  // trial on the twin left a taught point without a contact (the planner knows the joint
+  // limits, not the links: a folded arm may touch itself).
+  const auto attempt = [&](const Layout& c, const Meeting& m, std::string* text) -> Failed {
+    *text = HandclaspText(Texts{o, a1, a2, c, &m});
+    const std::string at = "D = " + Num(m.distance_mm, 0) + " mm: ";
+    try {
+      const Scenario sc = ParseScenarioText(*text, o.out);
+      const std::array<KinematicModel, 2> nominal = {sc.twin.robots[0].model,
+                                                     sc.twin.robots[1].model};
+      const TaughtPoints taught = TeachHandclaspPoints(
+          ParseHandclaspConfig(sc), nominal,
+          {sc.twin.robots[0].q_initial, sc.twin.robots[1].q_initial},
+          HandclaspTeachOptions(sc, false));
+      if (!taught.ok) {
+        last_error = at + taught.reason;
+        return Failed::kStart;
+      }
+      TwinCell cell(sc.twin, sc.path);  // the cell settles at its initial pose
+      std::ostringstream progress;
+      const HandclaspStageResult trial = RunHandclaspStage(cell, sc, nominal, progress);
+      if (trial.ok() && trial.procedure.skipped.empty()) return Failed::kNothing;
+      last_error = at + "first trial: " +
+                   (trial.ok() ? trial.procedure.skipped.front() : trial.reason);
+      return Failed::kTrial;
+    } catch (const InputError& e) {
+      last_error = at + e.what();  // a collision at the start pose
+      return Failed::kStart;
+    }
+  };
+  for (std::size_t i = 0; i < meetings.size() && i < static_cast<std::size_t>(kMeetsTried);
+       ++i) {
+    const Meeting& m = meetings[i];
+    const double fraction = (m.distance_mm - kWorkingDistanceMm) / (2e3 * reach);
+    // The arms at mid-range, the seeds the meeting point was found with; where the cell cannot
+    // start from there, the optical-axis start poses at this D.
+    Layout mid = CellFrames(a1, a2, fraction, m.distance_mm, std::max(0.4, shoulder));
+    mid.q1 = MidRange(a1.model);
+    mid.q2 = MidRange(a2.model);
+    mid.mid_range = true;
+    std::string text;
+    const Failed failed = attempt(mid, m, &text);
+    if (failed == Failed::kNothing) return text;
+    if (failed == Failed::kTrial) continue;
+    std::vector<Layout> cells;
+    AddCellsAt(a1, a2, fraction, m.distance_mm, &cells);
+    SortByScore(&cells);
+    for (const Layout& c : cells) {
+      const Failed f = attempt(c, m, &text);
+      if (f == Failed::kNothing) return text;
+      if (f == Failed::kTrial) break;
+    }
+  }
+  throw InputError("--robot", "no handclasp cell of the best " + std::to_string(kMeetsTried) +
+                                  " meeting points taught its cube and made every contact on "
+                                  "the twin; the last one's: " + last_error);
 }
 
 }  // namespace
@@ -604,6 +824,7 @@ std::string NewScenarioText(const NewScenarioOptions& o) {
   }
   const Arm a1 = LoadArm(o.robot, o.links, "--robot");
   const Arm a2 = o.second.empty() ? a1 : LoadArm(o.second, o.second_links, "--second");
+  if (o.procedure == "handclasp") return HandclaspScenarioText(o, a1, a2);
   const std::vector<Layout> cells = CandidateCells(a1, a2);
   if (cells.empty()) {
     throw InputError("--robot", "no cell found: IK put camera and board face to face at none of "
@@ -613,9 +834,7 @@ std::string NewScenarioText(const NewScenarioOptions& o) {
   std::string last_error;
   for (std::size_t k = 0; k < cells.size(); ++k) {
     const Texts t{o, a1, a2, cells[k]};
-    const std::string text = o.procedure == "tracker"     ? TrackerText(t)
-                             : o.procedure == "handclasp" ? HandclaspText(t)
-                                                          : OpticalAxisText(t);
+    const std::string text = o.procedure == "tracker" ? TrackerText(t) : OpticalAxisText(t);
     try {
       CheckScenarioText(text, o.out);
       return text;

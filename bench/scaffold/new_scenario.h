@@ -11,6 +11,10 @@
 //     (calib/kinematics/inverse_kinematics.h, as `twinbench ik`) and scored by the smaller
 //     manipulability of the two arms and their distance from the joint limits; the best one
 //     whose cell settles without a collision (the twin, as `twinbench check`) is written;
+//   - for the handclasp, D instead from where its cube is reachable: a search over D with the
+//     run's planner (bench/runs/handclasp_run.h, TeachHandclaspPoints) from the joints'
+//     mid-range (the file's initial joints), the best candidates tried on the twin until one
+//     makes a contact at every taught point;
 //   - the planning region (the camera search box) round robot 1's start pose;
 //   - the told values (rough base, rough hand-eye, the reflector or the tips by drawing) off
 //     the truth by the amounts of the shipped scenarios, stated in the file's comments.

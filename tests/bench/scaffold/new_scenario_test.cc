@@ -3,7 +3,9 @@
 // file passes `twinbench check`, and at its initial joints the camera on r1's flange and the
 // board on r2's face each other at the working distance. That is computed here, from the
 // file as the scenario parser reads it and forward kinematics of its models, not from the
-// generator's IK. An existing --out is refused and left as it was; bad input exits 2.
+// generator's IK. The handclasp file's cube is teachable as the run teaches it, on the file's
+// nominal models and told values (no twin). An existing --out is refused and left as it was;
+// bad input exits 2.
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -14,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "bench/io/scenario.h"
+#include "bench/runs/handclasp_run.h"
 #include "calib/kinematics/forward_kinematics.h"
 #include "tests/bench/cli_run.h"
 
@@ -113,6 +116,35 @@ TEST_P(NewScenarioOnArm, OpticalAxisFilePassesCheckWithCameraAndBoardFaceToFace)
   EXPECT_LT(f.axis_angle_deg, kMaxAxisAngleDeg);
   EXPECT_LT(f.off_axis_mm, kMaxOffAxisMm);
   EXPECT_NEAR(f.distance_mm, kWorkingDistanceMm, kMaxOffAxisMm);
+  fs::remove_all(dir);
+}
+
+// The handclasp file's taught cube, as `twinbench run` plans it before the first contact
+// (TeachHandclaspPoints: the planner on the file's nominal models with its told layout and
+// tips), seeded at the initial joints, which the settled encoders read to the sag. The
+// generator's earlier cell (D = 2 f R + w, the camera-and-board start poses, 200 mm tips)
+// failed it: reinovo_r2 at D = 1250 mm taught 4 of 8 corners of the smallest cube (`run`
+// refused), reinovo_r1 at D = 1240 mm a 0.2 m cube (its contacts came out coplanar).
+// 6 corners of a cube of at least kMinCubeSideM (scenarios/gan2014_floor_floor.yaml teaches
+// 0.35 m): the contacts' spread is the lever the rotation is determined from.
+constexpr double kMinCubeSideM = 0.3;
+
+TEST_P(NewScenarioOnArm, HandclaspFileTeachesItsCubeOnTheNominalModels) {
+  const std::string model = GetParam();
+  const fs::path dir = TempDir("handclasp_" + fs::path(model).stem().string());
+  const fs::path out = dir / "handclasp.yaml";
+  const CliRun made = NewScenario(model, "handclasp", out);
+  ASSERT_EQ(made.code, 0) << made.output;
+  const Scenario sc = LoadScenario(out.string());
+  const TwinSpec& t = sc.twin;
+  const TaughtPoints taught = TeachHandclaspPoints(
+      ParseHandclaspConfig(sc), {t.robots[0].model, t.robots[1].model},
+      {t.robots[0].q_initial, t.robots[1].q_initial}, HandclaspTeachOptions(sc, false));
+  std::string rejected;
+  for (const std::string& r : taught.rejected) rejected += "\n  " + r;
+  ASSERT_TRUE(taught.ok) << taught.reason << rejected;
+  EXPECT_GE(taught.points, 6) << rejected;
+  EXPECT_GE(taught.cube_side_m, kMinCubeSideM - 1e-9) << rejected;
   fs::remove_all(dir);
 }
 
