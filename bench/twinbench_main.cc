@@ -386,7 +386,8 @@ void AddNewScenarioVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
   sub->add_option("--robot", o.robot, "robot 1's model (.yaml or .urdf): the camera robot")
       ->required();
   AddLinkOptions(sub, &o.links);
-  sub->add_option("--second", o.second, "robot 2's model (default: the same as --robot)");
+  sub->add_option("--second", o.second,
+                  "robot 2's model (default: the same as --robot; tracker: none, one robot)");
   sub->add_option("--procedure", o.procedure, "optical-axis, tracker or handclasp")->required();
   sub->add_option("--out", o.out, "the scenario file to write (must not exist)")->required();
 }

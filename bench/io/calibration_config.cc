@@ -81,6 +81,7 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
                      "missing: `twinbench run` needs a calibration section (see "
                      "scenarios/paper_reinovo.yaml)");
   }
+  RequireTwoRobots(sc, "calibration", "the optical-axis calibration");
   const YamlMap m(r, sc.calibration, kKeys);
   CalibrationConfig c;
   // What the estimator is told comes from this section only, never from the twin's truth
@@ -123,8 +124,7 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
       const std::string name = r.String(item);
       const auto it = std::find(sc.robot_names.begin(), sc.robot_names.end(), name);
       if (it == sc.robot_names.end()) {
-        r.Fail(item, "unknown robot '" + name + "' (robots: " + sc.robot_names[0] + ", " +
-                         sc.robot_names[1] + ")");
+        r.Fail(item, "unknown robot '" + name + "' (robots: " + JoinNames(sc.robot_names) + ")");
       }
       const int index = static_cast<int>(it - sc.robot_names.begin());
       if (std::find(o.robots.begin(), o.robots.end(), index) != o.robots.end()) {

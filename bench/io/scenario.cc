@@ -91,9 +91,12 @@ class ScenarioParser {
     if (out_.name.empty()) r_.Fail(m.Get("name"), "expected a non-empty scenario name");
     ParseSeeds(m);
     ParseRobots(m.Get("robots"));
-    ParseCamera(m.Get("camera"));
-    ParseBoard(m.Get("board"));
-    if (const auto f = m.Find("intrinsics_target", false)) ParseIntrinsicsTarget(*f);
+    RefuseTwoRobotKeys(m);
+    if (out_.twin.HasCameraAndBoard()) {
+      ParseCamera(m.Get("camera"));
+      ParseBoard(m.Get("board"));
+      if (const auto f = m.Find("intrinsics_target", false)) ParseIntrinsicsTarget(*f);
+    }
     if (const auto f = m.Find("tips", false)) ParseTips(*f);
     DefaultTipsOutward();
     if (const auto f = m.Find("physics", false)) ParsePhysics(*f);
@@ -104,6 +107,7 @@ class ScenarioParser {
     if (const auto f = m.Find("handclasp", false)) out_.handclasp = *f;
     if (const auto f = m.Find("acceptance", false)) out_.acceptance = *f;
     if (const auto f = m.Find("tracker_calibration", false)) out_.tracker_calibration = *f;
+    if (out_.twin.num_robots == 1) RequireTrackerCalibration(m);
     Validate();
     return out_;
   }
@@ -111,6 +115,31 @@ class ScenarioParser {
  private:
   void Locate(const std::string& spec_field, const YamlField& f) {
     locations_.Add(spec_field, r_.Where(f));
+  }
+
+  // Refuses, at its line, a key the tables allow only with two robots in a one-robot cell
+  // (ScenarioKey::only_with_robots: camera, board, intrinsics_target, calibration, handclasp).
+  void RefuseTwoRobotKeys(const YamlMap& m) const {
+    if (out_.twin.num_robots == kMaxRobots) return;
+    for (const ScenarioKey& k : ScenarioSectionNamed("scenario").keys) {
+      if (k.only_with_robots != kMaxRobots) continue;
+      if (const auto f = m.Find(k.key, false)) {
+        r_.Fail(*f, "is not allowed with one robot: a one-robot cell is a laser-tracker cell, "
+                    "without camera, board or intrinsics target, and the optical-axis "
+                    "calibration and the handclasp need two robots (bench/io/scenario.h)");
+      }
+    }
+  }
+
+  // A one-robot cell runs the laser-tracker procedure only: without tracker_calibration
+  // (ScenarioKey::required_with_robots) nothing would run.
+  void RequireTrackerCalibration(const YamlMap& m) const {
+    if (!m.Find("tracker_calibration", false)) {
+      r_.Fail(m.Get("robots"), "lists one robot, and a one-robot cell runs only the laser-"
+                               "tracker procedure: add a tracker: and a tracker_calibration: "
+                               "section (bench/runs/tracker_run.h), or a second robot with a "
+                               "camera: and a board:");
+    }
   }
 
   // `seed: N` drives both the truth and the estimator; `seeds: {truth, estimator}` sets them
@@ -143,9 +172,7 @@ class ScenarioParser {
     return static_cast<int>(it - out_.robot_names.begin());
   }
 
-  std::vector<std::string> RobotNames() const {
-    return {out_.robot_names.begin(), out_.robot_names.end()};
-  }
+  const std::vector<std::string>& RobotNames() const { return out_.robot_names; }
 
   std::string ResolvePath(const std::string& file) const {
     std::filesystem::path p(file);
@@ -161,13 +188,20 @@ class ScenarioParser {
     r_.Fail(f, "expected floor, wall or ceiling, got '" + s + "'");
   }
 
+  // One robot (a laser-tracker cell) or two (with the camera and the board).
   void ParseRobots(const YamlField& f) {
     Locate("robots", f);
-    if (!f.node.IsSequence() || f.node.size() != static_cast<std::size_t>(kNumRobots)) {
-      r_.Fail(f, "expected a sequence of exactly " + std::to_string(kNumRobots) +
-                     " robots, got " + DescribeNode(f.node));
+    if (!f.node.IsSequence() || f.node.size() < 1 ||
+        f.node.size() > static_cast<std::size_t>(kMaxRobots)) {
+      r_.Fail(f, "expected a sequence of one robot (a laser-tracker cell) or two (with the "
+                 "camera and the board), got " + DescribeNode(f.node));
     }
-    for (int i = 0; i < kNumRobots; ++i) ParseRobot(f.Item(static_cast<std::size_t>(i)), i);
+    out_.twin.num_robots = static_cast<int>(f.node.size());
+    out_.robot_names.resize(f.node.size());
+    out_.model_paths.resize(f.node.size());
+    for (int i = 0; i < out_.twin.num_robots; ++i) {
+      ParseRobot(f.Item(static_cast<std::size_t>(i)), i);
+    }
   }
 
   void ParseRobot(const YamlField& f, int i) {
@@ -398,7 +432,7 @@ class ScenarioParser {
   // the default frame is turned by 180 deg about x, or the capsule would stand out of the
   // flange through whatever is mounted on it).
   void DefaultTipsOutward() {
-    for (int i = 0; i < kNumRobots; ++i) {
+    for (int i = 0; i < out_.twin.num_robots; ++i) {
       if (tip_pose_given_[i]) continue;
       const KinematicModel& model = out_.twin.robots[i].model;
       if (model.num_joints() < 1 || model.flange().dh.d >= 0.0) continue;
@@ -410,7 +444,7 @@ class ScenarioParser {
   void ParseTips(const YamlField& f) {
     Locate("tips", f);
     const YamlMap m(r_, f, RobotNames());  // keys are robot names
-    for (int i = 0; i < kNumRobots; ++i) {
+    for (int i = 0; i < out_.twin.num_robots; ++i) {
       const auto entry = m.Find(out_.robot_names[i], false);
       if (!entry) continue;
       const std::string spec = "tips[" + std::to_string(i) + "]";
@@ -492,7 +526,7 @@ class ScenarioParser {
         const int joint = r_.Integer(*v);
         // The joint must exist on every robot the effect acts on (robots come first).
         int joints = kMaxJoints;
-        for (int r = 0; r < kNumRobots; ++r) {
+        for (int r = 0; r < out_.twin.num_robots; ++r) {
           if (e.robot == -1 || e.robot == r) {
             joints = std::min(joints, out_.twin.robots[r].model.num_joints());
           }
@@ -520,14 +554,14 @@ class ScenarioParser {
     } catch (const InputError& e) {
       throw InputError(locations_.Of(e.message(), r_.source()), e.message());
     }
-    for (const EffectSpec& e : out_.twin.effects) MakeEffect(e);
+    MakeEffects(out_.twin);
   }
 
   YamlReader r_;
   std::string base_dir_;
   Locations locations_;
   Scenario out_;
-  std::array<bool, kNumRobots> tip_pose_given_{};  // tips.<robot> gave xyz_mm or a rotation
+  std::array<bool, kMaxRobots> tip_pose_given_{};  // tips.<robot> gave xyz_mm or a rotation
 };
 
 }  // namespace
@@ -569,6 +603,14 @@ Scenario LoadScenario(const std::string& path) {
   PrintWarnings(scenario.warnings);
   if (scenario.format < kScenarioFormat) PrintFormatNotice(path, scenario.format);
   return scenario;
+}
+
+void RequireTwoRobots(const Scenario& scenario, const std::string& section,
+                      const std::string& what) {
+  if (scenario.twin.HasCameraAndBoard()) return;
+  throw InputError(scenario.path + " scenario." + section,
+                   what + " needs two robots; this scenario's cell has one (a laser-tracker "
+                   "cell: tracker_calibration)");
 }
 
 void ApplyTrial(int trial, Scenario* scenario) {

@@ -15,7 +15,8 @@
 //                                          # PSO planning unless calibration.planning.seed pins
 //                                          # it, IK restarts, taught points). Trial t of a study
 //                                          # (`twinbench run --trial t`) uses both + t.
-//     robots:                              # required, exactly two
+//     robots:                              # required: two, or one alone (a laser-tracker
+//                                          # cell, below)
 //       - name: r1                         # unique identifier ([A-Za-z_][A-Za-z0-9_]*), used by
 //                                          # camera.robot, board.robot, tips and effects; it also
 //                                          # renames the loaded model (parameter-name prefix)
@@ -32,7 +33,7 @@
 //         base_from_robot1: {xyz_mm: [1200, 0, 0], zyz_deg: [180, 0, 0]}  # required X_B1B2;
 //                                          # X_WB2 = X_WB1 X_B1B2 (robot 2 takes no 'base')
 //         initial_joints_deg: [0, 39, -36, 0, 87, 90]
-//     camera:                              # required
+//     camera:                              # required with two robots (refused with one)
 //       robot: r1                          # required: the robot whose flange carries it
 //       hand_eye: {xyz_mm: [0, 0, 50], rpy_deg: [0, 0, 0]}  # required X_FC (OpenCV optical C)
 //       resolution: [1024, 768]            # required [width, height] px
@@ -44,7 +45,7 @@
 //       msaa: 4                            # optional samples 0, 1, 2, 4, 8 (default 4)
 //       near_mm: 20                        # optional clipping planes (defaults 20, 5000)
 //       far_mm: 5000
-//     board:                               # required
+//     board:                               # required with two robots (refused with one)
 //       robot: r2                          # required
 //       squares: [4, 4]                    # required [x, y] squares
 //       square_mm: 20                      # required
@@ -52,13 +53,14 @@
 //       thickness_mm: 4                    # optional (default 4)
 //       mass_kg: 0.2                       # optional (default 0.2)
 //       mount: {xyz_mm: [0, 0, 40], rpy_deg: [0, 0, 0]}      # required X_FT
-//     intrinsics_target:                   # optional: a larger chessboard the operator swaps
-//       squares: [14, 10]                  # onto the board's bracket for the intrinsics step
-//       square_mm: 20                      # (Cell::MountTarget); required in it: squares,
-//       margin_mm: 10                      # square_mm; margin, thickness, mass and mount as
-//       thickness_mm: 5                    # the board's (defaults: 10 mm, 4 mm, the board's
-//       mass_kg: 0.6                       # mass and the board's mount); the estimator is
-//                                          # told it by calibration.intrinsics_target
+//     intrinsics_target:                   # optional, two robots: a larger chessboard the
+//       squares: [14, 10]                  # operator swaps onto the board's bracket for the
+//       square_mm: 20                      # intrinsics step (Cell::MountTarget); required in
+//       margin_mm: 10                      # it: squares, square_mm; margin, thickness, mass and
+//       thickness_mm: 5                    # mount as the board's (defaults: 10 mm, 4 mm, the
+//       mass_kg: 0.6                       # board's mass and the board's mount); the
+//                                          # estimator is told it by
+//                                          # calibration.intrinsics_target
 //     tips:                                # optional, keyed by robot name; each entry optional
 //       r1: {xyz_mm: [0, 0, 80], rpy_deg: [0, 0, 0], length_mm: 80, radius_mm: 4}
 //                                          # pose X_FTip (if given, xyz_mm and a rotation), and
@@ -75,10 +77,10 @@
 //       settle_steps: 20
 //       max_steps: 20000
 //       gravity: true
-//     calibration: {...}                   # optional: the optical-axis procedure (see
-//                                          # bench/io/calibration_config.h)
-//     handclasp: {...}                     # optional: the handclasp base-frame procedure
-//                                          # (bench/runs/handclasp_run.h)
+//     calibration: {...}                   # optional, two robots: the optical-axis procedure
+//                                          # (see bench/io/calibration_config.h)
+//     handclasp: {...}                     # optional, two robots: the handclasp base-frame
+//                                          # procedure (bench/runs/handclasp_run.h)
 //     tracker:                             # optional: a laser tracker (truth; TrackerSpec)
 //       robot: r2                          # the robot carrying the reflector
 //       pose: {xyz_mm: [..], rpy_deg: [..]}  # the tracker frame in the world
@@ -87,8 +89,8 @@
 //       sigma_um_per_m: 0                  # optional: range-proportional noise
 //       drift_mm_per_h: [0, 0, 0]          # optional: drift of the readings
 //       max_range_m: 30                    # optional: range
-//     tracker_calibration: {...}           # optional: the tracker procedure (told values;
-//                                          # bench/runs/tracker_run.h)
+//     tracker_calibration: {...}           # optional (required with one robot): the tracker
+//                                          # procedure (told values; bench/runs/tracker_run.h)
 //     acceptance:                          # optional: criteria on report.json figures that
 //       - {figure: robots.r2.truth_position_error_mm.rigid.after.rms, max: 0.3}  # make
 //                                          # `twinbench run` exit 3 when missed
@@ -96,10 +98,32 @@
 //     effects:                             # optional list, applied on the truth side
 //       - type: transmission_error         # required; one of EffectTypes()
 //         declared: false                  # optional (default true): told to the estimator?
-//         robot: r2                        # optional robot name (absent: both robots)
+//         robot: r2                        # optional robot name (absent: every robot)
 //         joint: 3                         # optional joint 1..6 (absent: every joint)
 //         amplitude_deg: 0.02              # every other key is a number, into EffectSpec::params
 //         harmonic: 2                      #   under its own name (the effect checks its keys)
+//
+// A one-robot cell (scenarios/tracker_single_reinovo.yaml) is an arm alone with a laser
+// tracker: `robots:` lists one robot, and the cell has no camera, board, intrinsics target or
+// second robot (camera:, board:, intrinsics_target: and tips of another robot are refused).
+// It runs only the tracker procedure: tracker_calibration: (with tracker:) is required, and
+// calibration: and handclasp:, which need two robots, are refused. Effects act on its one robot
+// (`robot:` absent or its name); image_noise and mount_deflection, which act through the camera
+// and the board, are refused. For example:
+//
+//   scenario:
+//     format: 2
+//     name: tracker_single_reinovo
+//     robots:
+//       - name: r1
+//         model: ../models/reinovo_r2.yaml
+//         installation: floor
+//         initial_joints_deg: [11.86, 21.16, -15.5, -64.86, 76.88, -25.73]
+//     effects:
+//       - {type: geometry_errors, sigma_length_mm: 2.0, sigma_angle_deg: 0.25}
+//     tracker: {robot: r1, pose: {xyz_mm: [-2000, -400, 900], rpy_deg: [0, 0, -8]},
+//               reflector_mm: [40.6, -29.2, 80.9]}
+//     tracker_calibration: {robot: r1, told_reflector_mm: [40, -30, 80], poses: 100}
 //
 // A pose map takes xyz_mm and exactly one of rpy_deg (fixed axes, R = Rz(y) Ry(p) Rx(r), as
 // URDF) or zyz_deg (R = Rz(a) Ry(b) Rz(c), the Euler angles of Gan et al. 2014, eq. 31).
@@ -135,8 +159,8 @@ struct Scenario {
                                                      ///< twin.seed == seeds.truth
   ScenarioSeeds seeds;                               ///< seeds of this trial
   int trial = 0;                                     ///< the trial (ApplyTrial), 0 as loaded
-  std::array<std::string, kNumRobots> robot_names;   ///< robot names, in file order
-  std::array<std::string, kNumRobots> model_paths;   ///< model files as resolved and loaded
+  std::vector<std::string> robot_names;  ///< robot names, in file order (twin.num_robots)
+  std::vector<std::string> model_paths;  ///< model files as resolved and loaded, likewise
   std::vector<std::string> warnings;                 ///< the model imports' warnings, each
                                                      ///< naming its robot (LoadScenario prints
                                                      ///< them to stderr)
@@ -172,6 +196,12 @@ void PrintFormatNotice(const std::string& path, int format);
 /// or unreadable file is an InputError naming it. Prints the warnings to stderr, and the format
 /// notice for a file without scenario.format (PrintFormatNotice).
 Scenario LoadScenario(const std::string& path);
+
+/// Throws InputError naming `section` of the scenario ("calibration", "handclasp") when its
+/// cell has one robot: `what` (that procedure) needs two. The parser refuses such a section on
+/// a one-robot cell already; procedures check again for scenarios built in code.
+void RequireTwoRobots(const Scenario& scenario, const std::string& section,
+                      const std::string& what);
 
 /// Makes `scenario` trial `trial` of a study: both seeds become the file's seeds + trial
 /// (twin.seed follows seeds.truth). Throws InputError ("--trial") for a negative trial.

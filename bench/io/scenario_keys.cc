@@ -254,7 +254,10 @@ std::vector<ScenarioSection> MakeSections() {
                        "(docs/reference/scenario.md).",
                {K("scenario", T::kSection).Required().Of("scenario").Doc("the scenario")}});
   s.push_back(
-      {"scenario", "The twin cell: robots, camera, board, effects, and the procedures to run.",
+      {"scenario", "The twin cell: robots, camera, board, effects, and the procedures to run. "
+                   "Two robots carry the camera and the board; one robot alone is a laser-tracker "
+                   "cell (tracker and tracker_calibration; no camera, board, intrinsics_target, "
+                   "calibration or handclasp).",
        {K("format", T::kInteger).Min(1).Max(kScenarioFormat).Default("1")
             .Doc("the scenario format version. 1: every file without this key. 2: adds this "
                  "key; `twinbench check` validates a format-2 file strictly against this schema "
@@ -264,21 +267,24 @@ std::vector<ScenarioSection> MakeSections() {
         K("seed", T::kUnsigned).Default("1").Doc("the seed of both random streams (truth and "
                                                  "estimator); not with seeds"),
         K("seeds", T::kSection).Of("seeds").Doc("the two random streams apart; not with seed"),
-        K("robots", T::kSectionList).Required().Count(kNumRobots)
-            .Doc("exactly two robots: robot 1 (with base), robot 2 (with base_from_robot1)"),
-        K("camera", T::kSection).Required().Of("camera").Doc("the hand camera (truth)"),
-        K("board", T::kSection).Required().Of("board").Doc("the chessboard (truth)"),
-        K("intrinsics_target", T::kSection).Of("intrinsics_target")
+        K("robots", T::kSectionList).Required().Counts(1, kMaxRobots)
+            .Doc("one or two robots: robot 1 (with base), robot 2 (with base_from_robot1); one "
+                 "robot alone is a laser-tracker cell"),
+        K("camera", T::kSection).Of("camera").RequiredWithRobots(2).OnlyWithRobots(2)
+            .Doc("the hand camera (truth)"),
+        K("board", T::kSection).Of("board").RequiredWithRobots(2).OnlyWithRobots(2)
+            .Doc("the chessboard (truth)"),
+        K("intrinsics_target", T::kSection).Of("intrinsics_target").OnlyWithRobots(2)
             .Doc("a larger chessboard swapped onto the board's bracket for the intrinsics step"),
         K("tips", T::kSectionMap).Of("tip").Doc("tips keyed by robot name"),
         K("physics", T::kSection).Of("physics").Doc("joint drive and settling"),
         K("effects", T::kSectionList).Of("effect").Doc("effects applied on the truth side"),
         K("tracker", T::kSection).Of("tracker").Doc("a laser tracker (truth)"),
-        K("calibration", T::kSection).Of("calibration").Doc("the optical-axis procedure "
-                                                            "(bench/io/calibration_config.h)"),
-        K("handclasp", T::kSection).Of("handclasp").Doc("the handclasp base-frame procedure "
-                                                        "(bench/runs/handclasp_run.h)"),
-        K("tracker_calibration", T::kSection).Of("tracker_calibration")
+        K("calibration", T::kSection).Of("calibration").OnlyWithRobots(2)
+            .Doc("the optical-axis procedure (bench/io/calibration_config.h)"),
+        K("handclasp", T::kSection).Of("handclasp").OnlyWithRobots(2)
+            .Doc("the handclasp base-frame procedure (bench/runs/handclasp_run.h)"),
+        K("tracker_calibration", T::kSection).Of("tracker_calibration").RequiredWithRobots(1)
             .Doc("the tracker procedure (bench/runs/tracker_run.h)"),
         K("acceptance", T::kSectionList).Of("acceptance_criterion").Counts(1, 100)
             .Doc("criteria on report.json figures (bench/report/acceptance.h)")}});
@@ -380,7 +386,7 @@ std::vector<ScenarioSection> MakeSections() {
                          "parameter of the effect under its own name.",
                {K("type", T::kString).Required().OneOf(EffectTypes()).Doc("the effect"),
                 K("declared", T::kBoolean).Default("true").Doc("told to the estimator?"),
-                K("robot", T::kString).Default("both robots").Doc("robot name"),
+                K("robot", T::kString).Default("every robot").Doc("robot name"),
                 K("joint", T::kInteger).Min(1).Max(kMaxJoints).Default("every joint")
                     .Doc("joint 1..N")},
                true});

@@ -54,6 +54,8 @@ struct ScenarioKey {
   std::string key;
   KeyType type = KeyType::kString;
   bool required = false;
+  int required_with_robots = 0;      ///< required only in a cell of this many robots (0: none)
+  int only_with_robots = 0;          ///< allowed only in a cell of this many robots (0: any)
   std::string unit;                  ///< "mm", "deg", "px", ... ("" where none)
   std::string default_text;          ///< the default as documented ("" where none)
   std::optional<double> minimum;     ///< for numbers, or each item of a sequence
@@ -73,6 +75,8 @@ struct ScenarioKey {
 
   // Builders, so that a table reads as a list of keys.
   ScenarioKey& Required() { required = true; return *this; }
+  ScenarioKey& RequiredWithRobots(int n) { required_with_robots = n; return *this; }
+  ScenarioKey& OnlyWithRobots(int n) { only_with_robots = n; return *this; }
   ScenarioKey& Unit(std::string u) { unit = std::move(u); return *this; }
   ScenarioKey& Default(std::string d) { default_text = std::move(d); return *this; }
   ScenarioKey& Min(double v) { minimum = v; return *this; }

@@ -163,8 +163,8 @@ Acceptance ParseAcceptance(const Scenario& sc) {
         std::find(sc.robot_names.begin(), sc.robot_names.end(), parts[1]) ==
             sc.robot_names.end()) {
       r.Fail(figure, "unknown report figure '" + c.figure + "': '" + parts[1] +
-                         "' is not a robot of the scenario (" + sc.robot_names[0] + ", " +
-                         sc.robot_names[1] + ")");
+                         "' is not a robot of the scenario (" + JoinNames(sc.robot_names) +
+                         ")");
     }
     if (const auto v = m.Find("max", false)) c.max = r.Number(*v);
     if (const auto v = m.Find("min", false)) c.min = r.Number(*v);

@@ -27,6 +27,9 @@ std::string Describe(const ScenarioKey& k) {
   if (!k.unit.empty()) d += " [" + k.unit + "]";
   if (!k.default_text.empty()) d += "; default " + k.default_text;
   if (k.required) d += "; required";
+  const auto robots = [](int n) { return n == 1 ? std::string("one robot") : "two robots"; };
+  if (k.required_with_robots > 0) d += "; required with " + robots(k.required_with_robots);
+  if (k.only_with_robots > 0) d += "; only with " + robots(k.only_with_robots);
   return d;
 }
 

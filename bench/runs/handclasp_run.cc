@@ -191,6 +191,7 @@ void RequireHandclaspSection(const Scenario& scenario) {
                      "missing: the handclasp needs a handclasp section with the told "
                      "rough_base_from_robot1 and tips (see scenarios/gan2014_floor_floor.yaml)");
   }
+  RequireTwoRobots(scenario, "handclasp", "the handclasp");
 }
 
 // Told values: from this section only, never from the twin's truth.
@@ -199,8 +200,7 @@ void ReadToldLayoutAndTips(const YamlReader& r, const YamlMap& m, const Scenario
   c->rough_X_B1B2 = ReadPoseWithin(r, m.Get("rough_base_from_robot1"), kMaxToldBaseDistanceM,
                                    "two arms that touch each other stand within a few metres");
   const YamlField tips = m.Get("tips");
-  const std::vector<std::string> names(scenario.robot_names.begin(), scenario.robot_names.end());
-  const YamlMap t(r, tips, names);
+  const YamlMap t(r, tips, scenario.robot_names);
   for (int k = 0; k < 2; ++k) {
     const std::optional<YamlField> tip = t.Find(scenario.robot_names[k], false);
     if (!tip) {

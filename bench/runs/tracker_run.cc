@@ -61,8 +61,8 @@ TrackerRunConfig ParseTrackerRunConfig(const Scenario& sc) {
   const YamlField robot = m.Get("robot");
   const std::string name = r.String(robot);
   c.robot = -1;
-  for (int k = 0; k < kNumRobots; ++k) {
-    if (sc.robot_names[k] == name) c.robot = k;
+  for (std::size_t k = 0; k < sc.robot_names.size(); ++k) {
+    if (sc.robot_names[k] == name) c.robot = static_cast<int>(k);
   }
   if (c.robot < 0) r.Fail(robot, "names no robot of the scenario: '" + name + "'");
   const YamlField told = m.Get("told_reflector_mm");

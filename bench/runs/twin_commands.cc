@@ -42,8 +42,11 @@ int RunRender(const RenderOptions& o) {
   if (o.poses < 1) throw InputError("--poses", "must be >= 1, got " + std::to_string(o.poses));
   const Scenario scenario = LoadScenario(o.scenario);
   TwinCell cell(scenario.twin, o.scenario);
-  const int board_robot = scenario.twin.board.robot;
-  const JointVector q0 = scenario.twin.robots[board_robot].q_initial;
+  // The robot that moves between views: the board robot, whose board the hand camera sees; in
+  // a one-robot cell (no camera) the robot itself, seen in the overviews only.
+  const bool camera = scenario.twin.HasCameraAndBoard();
+  const int robot = camera ? scenario.twin.board.robot : 0;
+  const JointVector q0 = scenario.twin.robots[robot].q_initial;
 
   // Everything goes to a staging folder first, so a failure leaves no half-written output.
   ValidateOutputFolder(o.out_dir, "--out");
@@ -52,21 +55,30 @@ int RunRender(const RenderOptions& o) {
   int written = 0;
   try {
     for (int k = 0; k < o.poses; ++k) {
-      const MoveResult m = cell.MoveTo(board_robot, ViewPose(q0, k));
+      const MoveResult m = cell.MoveTo(robot, ViewPose(q0, k));
       if (m.status != MoveStatus::kSettled) {
         std::printf("pose %d skipped: %s: %s\n", k, ToString(m.status), m.reason.c_str());
         continue;
       }
       char name[64];
-      std::snprintf(name, sizeof(name), "hand_camera_%02d.png", k);
-      WritePng(staging / name, cell.GrabImage());
+      if (camera) {
+        std::snprintf(name, sizeof(name), "hand_camera_%02d.png", k);
+        WritePng(staging / name, cell.GrabImage());
+      }
       std::snprintf(name, sizeof(name), "overview_%02d.png", k);
       WritePng(staging / name, cell.RenderOverview(o.overview_width, o.overview_height, 135, -25));
-      std::printf("pose %d: wrote hand_camera_%02d.png and overview_%02d.png\n", k, k, k);
+      if (camera) {
+        std::printf("pose %d: wrote hand_camera_%02d.png and overview_%02d.png\n", k, k, k);
+      } else {
+        std::printf("pose %d: wrote overview_%02d.png (a one-robot cell has no hand camera)\n",
+                    k, k);
+      }
       ++written;
     }
     if (written == 0) {
-      throw InputError(o.scenario, "no pose of the board robot could be reached; nothing written");
+      throw InputError(o.scenario, std::string("no pose of the ") +
+                                       (camera ? "board robot" : "robot") +
+                                       " could be reached; nothing written");
     }
     PublishDirectory(staging.string(), out.string());
   } catch (...) {
@@ -129,6 +141,11 @@ double WorkerFps(const TwinSpec& spec, int workers, int frames) {
 int RunTwinBenchmark(const TwinBenchmarkOptions& o) {
   if (o.frames < 1 || o.moves < 2) throw InputError("benchmark-twin", "need frames >= 1, moves >= 2");
   const Scenario scenario = LoadScenario(o.scenario);
+  if (!scenario.twin.HasCameraAndBoard()) {
+    throw InputError(o.scenario + " scenario.robots",
+                     "benchmark-twin times the hand camera's frames; this cell has one robot "
+                     "and no camera (a two-robot scenario has one)");
+  }
   // Worker processes first: they must be forked before this process starts its own GL
   // context (llvmpipe's threads do not survive a fork).
   const double fps1 = WorkerFps(scenario.twin, 1, o.frames);

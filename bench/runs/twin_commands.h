@@ -14,8 +14,9 @@ struct RenderOptions {
   int overview_height = 960;   ///< [px]
 };
 
-/// Writes hand-camera and third-person PNGs of the scenario's cell at a few poses; returns the
-/// process exit code. Throws InputError for bad input.
+/// Writes hand-camera and third-person PNGs of the scenario's cell at a few poses (a one-robot
+/// cell, without a camera: the third-person ones only); returns the process exit code. Throws
+/// InputError for bad input.
 int RunRender(const RenderOptions& options);
 
 /// Options of RunTwinBenchmark.
@@ -26,7 +27,8 @@ struct TwinBenchmarkOptions {
 };
 
 /// Prints ms per frame of GrabImage vs a bare mjr_render + mjr_readPixels loop, ms per
-/// settled move, and frames per second with one and with two worker processes.
+/// settled move, and frames per second with one and with two worker processes. Throws
+/// InputError for a cell without a hand camera (one robot).
 int RunTwinBenchmark(const TwinBenchmarkOptions& options);
 
 }  // namespace twin

@@ -422,6 +422,40 @@ std::vector<Meeting> HandclaspMeetings(const Arm& a1, const Arm& a2, double tip_
   return meetings;
 }
 
+// Where a lone arm (a one-robot tracker cell) starts: its flange face out along base x at
+// `fraction` of the reach out and `height_mm` up, at the pose BestPose chose.
+struct ArmStart {
+  double fraction = 0.6;
+  double height_mm = 0;
+  PoseChoice pose;
+};
+
+// Start poses of a lone arm, best first: the flange-out frame F' with its z along base x at
+// 0.5, 0.6, 0.7 of the reach out, at the shoulder's height and 0.25, 0.5 of the reach above
+// it (never below 0.4 m off the floor), as CandidateCells places robot 1's camera.
+std::vector<ArmStart> CandidateStarts(const Arm& a) {
+  Matrix3 R;  // F' z out along base x
+  R.col(0) = Vector3::UnitY();
+  R.col(1) = Vector3::UnitZ();
+  R.col(2) = Vector3::UnitX();
+  const KinematicModel end_model = BoardRobotModel(a.model, a.X_LF);
+  std::vector<ArmStart> starts;
+  for (double fraction : {0.5, 0.6, 0.7}) {
+    for (double up : {0.0, 0.25, 0.5}) {
+      ArmStart start;
+      start.fraction = fraction;
+      start.height_mm = 10.0 * std::round(std::max(0.4, a.shoulder_z + up * a.reach) * 100.0);
+      const Vector3 p_mm(10.0 * std::round(fraction * a.reach * 100.0), 0, start.height_mm);
+      start.pose = BestPose(end_model, MakePose(p_mm, R));
+      if (start.pose.score > 0) starts.push_back(start);
+    }
+  }
+  std::stable_sort(starts.begin(), starts.end(), [](const ArmStart& x, const ArmStart& y) {
+    return x.pose.score > y.pose.score;
+  });
+  return starts;
+}
+
 std::string JointsDeg(const JointVector& q) {
   std::string s = "[";
   for (int i = 0; i < q.size(); ++i) s += (i ? ", " : "") + Num(RadToDeg(q(i)), 2);
@@ -656,9 +690,9 @@ std::string TrackerText(const Texts& t) {
   std::ostringstream s;
   s << Header(t, "Laser-tracker calibration of " + t.a2.model.name +
                      " (r2) on the twin (bench/runs/tracker_run.h).")
-    << "# The scenario format needs two robots, a camera and a board even for a tracker-only\n"
-    << "# calibration (issue 41): r1, the camera and the board are the optical-axis cell's and\n"
-    << "# take no part; the board stays on r2 as its payload.\n"
+    << "# The optical-axis cell of the two arms (--second given; without it the cell is one arm\n"
+    << "# alone): r1, the camera and the board take no part; the board stays on r2 as its\n"
+    << "# payload.\n"
     << "scenario:\n  format: " << kScenarioFormat << "   # the scenario format version\n"
     << "  name: " << fs::path(t.o.out).stem().string() << "\n"
     << "  seeds: {truth: 2019, estimator: 2019}\n"
@@ -679,6 +713,66 @@ std::string TrackerText(const Texts& t) {
     << "    holdout: 0.2\n"
     << "    payload: {mass_kg: 0.3, xyz_mm: " << List(c.X_FT.translation() * 1e3)
     << "}   # the board and its bracket\n"
+    << "  acceptance:                       # as scenarios/tracker_reinovo.yaml\n"
+    << "    - {figure: truth_position_error_mm.rigid.after.rms, max: 0.03}\n";
+  return s.str();
+}
+
+// The one-robot tracker cell (no --second): r1 alone, no camera, board or second robot.
+std::string SingleTrackerText(const NewScenarioOptions& o, const Arm& a, const ArmStart& st) {
+  const double behind_mm = 1e3 * std::max(2.0, 2.0 * a.reach);
+  const Vector3 told = a.X_LF * Mm(kToldReflectorMm);
+  const Vector3 truth = a.X_LF * Mm(kTrueReflectorMm);
+  const bool flipped = !a.X_LF.linear().isIdentity(1e-9);
+  std::ostringstream s;
+  s << "# Laser-tracker calibration of " << a.model.name << " (r1) alone on the twin "
+    << "(bench/runs/tracker_run.h):\n# a one-robot cell, without camera, board or second robot.\n"
+    << "# Written by `twinbench new-scenario --robot " << o.robot << " --procedure tracker` "
+    << "(bench/scaffold/new_scenario.h).\n"
+    << "# Format: bench/io/scenario.h (the cell), bench/runs/tracker_run.h "
+       "(tracker_calibration:).\n"
+    << "# `twinbench check FILE` validates it; `twinbench run FILE --out DIR` runs it.\n#\n"
+    << "# How the values were derived:\n"
+    << "# - reach R: the largest horizontal distance of the flange from the base axis over 4000\n"
+    << "#   random joint angles inside the limits: " << Num(a.reach * 1e3, 0)
+    << " mm; shoulder (DH frame L1) " << Num(a.shoulder_z * 1e3, 0) << " mm up.\n"
+    << "# - initial joints: the estimator's IK (calib/kinematics/inverse_kinematics.h, as\n"
+    << "#   `twinbench ik`) on the nominal model: the flange face at ("
+    << Num(10.0 * std::round(st.fraction * a.reach * 100.0), 0) << ", 0, "
+    << Num(st.height_mm, 0) << ") mm (" << Num(st.fraction, 1) << " R out),\n"
+    << "#   pointing out along the base's x; smallest Jacobian singular value "
+    << Num(st.pose.sv, 3) << ",\n#   " << Num(st.pose.margin, 0)
+    << " deg from the nearest joint limit.\n"
+    << "# - the reflector is given in the model's flange frame L_N (the DH frame of the last "
+       "joint)"
+    << (flipped ? ";\n#   on this arm L_N's z points into the wrist: the z-out value turned 180 "
+                  "deg about x.\n"
+                : ".\n")
+    << "# - told versus true (the truth is never read for a told value): the reflector by "
+       "drawing,\n#   as built ~1 mm off; kinematics: the nominal model, the truth drawn by the\n"
+    << "#   geometry_errors effect below.\n"
+    << "scenario:\n  format: " << kScenarioFormat << "   # the scenario format version\n"
+    << "  name: " << fs::path(o.out).stem().string() << "\n"
+    << "  seeds: {truth: 2019, estimator: 2019}\n"
+    << "  robots:                           # one robot: no camera, board or second robot\n"
+    << "    - name: r1\n      model: " << ModelPathFrom(a.path, o.out) << "\n";
+  if (!a.links.base_link.empty()) s << "      base_link: " << a.links.base_link << "\n";
+  if (!a.links.tip_link.empty()) s << "      tip_link: " << a.links.tip_link << "\n";
+  s << "      installation: floor\n"
+    << "      base: {xyz_mm: [0, 0, 0], rpy_deg: [0, 0, 0]}\n"
+    << "      initial_joints_deg: " << JointsDeg(st.pose.q) << "\n"
+    << "  effects:\n    - type: geometry_errors\n      sigma_length_mm: 2.0\n"
+    << "      sigma_angle_deg: 0.25\n    - type: encoder_noise\n      sigma_deg: 0.0005\n"
+    << "  # The tracker (truth): max(2 m, 2 R) behind the base, facing it.\n"
+    << "  tracker:\n    robot: r1\n"
+    << "    pose: {xyz_mm: [" << Num(-behind_mm, 0) << ", -400, " << Num(st.height_mm, 0)
+    << "], rpy_deg: [0.5, -0.3, -8]}\n"
+    << "    reflector_mm: " << List(truth) << "   # as built (told: the drawing, below)\n"
+    << "    sigma_mm: 0.01\n    max_range_m: 20\n"
+    << "  tracker_calibration:\n    robot: r1\n"
+    << "    told_reflector_mm: " << List(told) << "   # by drawing: off the truth by "
+    << "(0.6, 0.8, 0.9) mm in F'\n"
+    << "    poses: 100\n    holdout: 0.2\n"
     << "  acceptance:                       # as scenarios/tracker_reinovo.yaml\n"
     << "    - {figure: truth_position_error_mm.rigid.after.rms, max: 0.03}\n";
   return s.str();
@@ -815,6 +909,28 @@ std::string HandclaspScenarioText(const NewScenarioOptions& o, const Arm& a1, co
                                   "the twin; the last one's: " + last_error);
 }
 
+// A lone arm's tracker scenario: the first candidate start whose cell passes the check.
+std::string SingleTrackerScenario(const NewScenarioOptions& o, const Arm& a) {
+  const std::vector<ArmStart> starts = CandidateStarts(a);
+  if (starts.empty()) {
+    throw InputError("--robot", "no start pose found: IK put the flange face out along the "
+                                "base's x at none of the candidate points (0.5..0.7 of the "
+                                "reach out, 15 deg or more from every joint limit)");
+  }
+  std::string last_error;
+  for (const ArmStart& st : starts) {
+    const std::string text = SingleTrackerText(o, a, st);
+    try {
+      CheckScenarioText(text, o.out);
+      return text;
+    } catch (const InputError& e) {
+      last_error = e.what();  // a collision at the start pose: the next candidate
+    }
+  }
+  throw InputError("--robot", "no candidate start passed the check; the last one's: " +
+                                  last_error);
+}
+
 }  // namespace
 
 std::string NewScenarioText(const NewScenarioOptions& o) {
@@ -823,6 +939,8 @@ std::string NewScenarioText(const NewScenarioOptions& o) {
                                         o.procedure + "'");
   }
   const Arm a1 = LoadArm(o.robot, o.links, "--robot");
+  // The tracker needs one robot: without --second the cell is the arm alone.
+  if (o.procedure == "tracker" && o.second.empty()) return SingleTrackerScenario(o, a1);
   const Arm a2 = o.second.empty() ? a1 : LoadArm(o.second, o.second_links, "--second");
   if (o.procedure == "handclasp") return HandclaspScenarioText(o, a1, a2);
   const std::vector<Layout> cells = CandidateCells(a1, a2);

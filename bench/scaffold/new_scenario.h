@@ -18,6 +18,10 @@
 //   - the planning region (the camera search box) round robot 1's start pose;
 //   - the told values (rough base, rough hand-eye, the reflector or the tips by drawing) off
 //     the truth by the amounts of the shipped scenarios, stated in the file's comments.
+// A tracker scenario without --second is one arm alone (scenarios/tracker_single_reinovo.yaml):
+// no camera, board or second robot; its start pose puts the flange face out along the base's x
+// at 0.5..0.7 of the reach (BestPose, as robot 1's camera above), the tracker max(2 m, 2 R)
+// behind the base.
 // The file is checked as `twinbench check` checks it before it appears: it is written to a
 // temporary file beside --out, validated, and linked into place only if --out still does not
 // exist (an existing file is never replaced).
@@ -33,7 +37,8 @@ namespace twin {
 /// Options of RunNewScenario (the verb's command line).
 struct NewScenarioOptions {
   std::string robot;      ///< robot 1's model (.yaml/.yml/.urdf): the camera robot
-  std::string second;     ///< robot 2's model (empty: the same as robot)
+  std::string second;     ///< robot 2's model (empty: the same as robot; for the tracker, a
+                          ///< one-robot cell)
   ModelLinks links;       ///< URDF chain of robot (and of second when that is empty)
   ModelLinks second_links;  ///< URDF chain of second
   std::string procedure;  ///< optical-axis | tracker | handclasp

@@ -59,7 +59,9 @@ enum class BracketTarget {
 /// Name of a target for messages ("feature_board", "intrinsics_target").
 const char* ToString(BracketTarget target);
 
-/// A cell with two robots (indices 0 and 1) and one hand camera.
+/// A cell with two robots (indices 0 and 1) and one hand camera, or with one robot (index 0)
+/// and no camera (a laser-tracker cell): there the camera's methods (GrabImage, CameraRobot,
+/// ExchangeTools) refuse, and a procedure that needs them cannot run.
 class Cell {
  public:
   virtual ~Cell() = default;

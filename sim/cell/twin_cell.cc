@@ -89,27 +89,27 @@ struct TwinCell::Impl {
   TwinSpec spec;
   std::string where;
   std::vector<std::unique_ptr<Effect>> effects;
-  std::array<KinematicModel, kNumRobots> models;
-  std::array<std::vector<JointDrive>, kNumRobots> drives;
-  std::array<MountCompliance, kNumRobots> mounts;  // target brackets (mount deflection)
-  std::array<StructureCompliance, kNumRobots> structures;  // bearings and bases on springs
+  std::array<KinematicModel, kMaxRobots> models;
+  std::array<std::vector<JointDrive>, kMaxRobots> drives;
+  std::array<MountCompliance, kMaxRobots> mounts;  // target brackets (mount deflection)
+  std::array<StructureCompliance, kMaxRobots> structures;  // bearings and bases on springs
   std::vector<int> passive_dofs;   // dof addresses of the mounts' and supports' spring joints
   // Axis wobble: per robot, whether an effect tilts its axes, and each link body's id and its
   // orientation in the parent as compiled (the twin turns it by the tilt as the joint moves).
-  std::array<bool, kNumRobots> tilts_axes{false, false};
-  std::array<std::vector<int>, kNumRobots> link_body;
-  std::array<std::vector<Eigen::Quaterniond>, kNumRobots> link_quat0;
+  std::array<bool, kMaxRobots> tilts_axes{false, false};
+  std::array<std::vector<int>, kMaxRobots> link_body;
+  std::array<std::vector<Eigen::Quaterniond>, kMaxRobots> link_quat0;
   std::string mjcf;
   MjModelPtr m;
   MjDataPtr d;
   std::mt19937_64 encoder_rng, image_rng, operator_rng, tracker_rng, temperature_rng;
   double operator_sigma = 0.0;   // operator alignment error per axis [m]
   double last_gap = 0.0;         // jogged tip to aim point after the last contact [m]
-  std::array<JointVector, kNumRobots> motor;      // commanded motor angles [rad]
-  std::array<JointVector, kNumRobots> direction;  // sign of each joint's last motion
-  std::array<std::vector<int>, kNumRobots> qadr, dadr, act;
-  std::array<std::vector<int>, kNumRobots> site_L;
-  std::array<int, kNumRobots> site_tip;
+  std::array<JointVector, kMaxRobots> motor;      // commanded motor angles [rad]
+  std::array<JointVector, kMaxRobots> direction;  // sign of each joint's last motion
+  std::array<std::vector<int>, kMaxRobots> qadr, dadr, act;
+  std::array<std::vector<int>, kMaxRobots> site_L;
+  std::array<int, kMaxRobots> site_tip;
   int camera = -1, board_body = -1;
   BracketTarget mounted = BracketTarget::kFeatureBoard;  // what spec.board is now
   std::optional<DistortionMapper> distortion;     // only when the lens distorts
@@ -126,6 +126,21 @@ struct TwinCell::Impl {
   std::vector<DriftEntry> drift;
 
   int Joints(int robot) const { return models[robot].num_joints(); }
+  int Robots() const { return spec.num_robots; }
+
+  // Throws InputError for `what` (a method that needs the hand camera) on a cell without one.
+  void RequireCamera(const std::string& what) const {
+    if (spec.HasCameraAndBoard()) return;
+    throw InputError(where, what + ": this cell has no hand camera (a one-robot cell has "
+                                   "neither camera nor board; it needs two robots)");
+  }
+
+  // "robot index 2 is not a robot of this cell (0..1)", or "" for a valid index.
+  std::string BadRobot(int robot) const {
+    if (robot >= 0 && robot < Robots()) return "";
+    return "robot index " + std::to_string(robot) + " is not a robot of this cell (0.." +
+           std::to_string(Robots() - 1) + ")";
+  }
 
   // Product of the drifting effects' length scales of robot k at the twin's time t.
   double LengthScale(int k, double t) const {
@@ -144,11 +159,11 @@ struct TwinCell::Impl {
   void SetUpDrift() {
     drift.clear();
     constexpr double kProbe = 1e-3;
-    for (int k = 0; k < kNumRobots; ++k) {
+    for (int k = 0; k < Robots(); ++k) {
       bool drifts = false;
       for (const auto& e : effects) drifts = drifts || e->DriftsLengths(k);
       if (!drifts) continue;
-      std::array<KinematicModel, kNumRobots> probe_models = models;
+      std::array<KinematicModel, kMaxRobots> probe_models = models;
       for (Link& link : probe_models[k].links) {
         link.dh.d *= 1.0 + kProbe;
         link.dh.a *= 1.0 + kProbe;
@@ -190,8 +205,8 @@ struct TwinCell::Impl {
   // stepping or mj_forward).
   void ApplyDrift() {
     if (drift.empty()) return;
-    std::array<double, kNumRobots> scale;
-    for (int k = 0; k < kNumRobots; ++k) scale[k] = LengthScale(k, d->time);
+    std::array<double, kMaxRobots> scale;
+    for (int k = 0; k < Robots(); ++k) scale[k] = LengthScale(k, d->time);
     for (const DriftEntry& e : drift) *e.value = e.base + e.slope * (scale[e.robot] - 1.0);
   }
 
@@ -199,7 +214,7 @@ struct TwinCell::Impl {
   // angles (Effect::AddAxisTilt): the rotation vector (tx, ty, 0) in the parent's DH frame
   // L(i-1) = U_i RotZ(-theta_offset_i), written into body i's orientation in its parent.
   void ApplyWobble() {
-    for (int k = 0; k < kNumRobots; ++k) {
+    for (int k = 0; k < Robots(); ++k) {
       if (!tilts_axes[k]) continue;
       std::vector<Eigen::Vector2d> tilt(Joints(k), Eigen::Vector2d::Zero());
       const JointVector q = LinkAngles(k);
@@ -288,10 +303,10 @@ struct TwinCell::Impl {
     return offset;
   }
 
-  // Position targets and gravity feed-forward of both robots for the coming step (call after
+  // Position targets and gravity feed-forward of the robots for the coming step (call after
   // mj_step1, which computed qfrc_bias of the current state).
   void WriteControls() {
-    for (int k = 0; k < kNumRobots; ++k) {
+    for (int k = 0; k < Robots(); ++k) {
       const JointVector link = motor[k] + TransmissionOffset(k);
       for (int i = 0; i < Joints(k); ++i) {
         d->ctrl[act[k][i]] = link(i);
@@ -301,10 +316,10 @@ struct TwinCell::Impl {
     }
   }
 
-  // Largest joint speed of robot `robot`, or of both robots for -1 [rad/s].
+  // Largest joint speed of robot `robot`, or of every robot for -1 [rad/s].
   double MaxSpeed(int robot) const {
     double speed = 0.0;
-    for (int k = 0; k < kNumRobots; ++k) {
+    for (int k = 0; k < Robots(); ++k) {
       if (robot >= 0 && k != robot) continue;
       for (int i = 0; i < Joints(k); ++i) speed = std::max(speed, std::abs(d->qvel[dadr[k][i]]));
     }
@@ -322,8 +337,8 @@ struct TwinCell::Impl {
   }
 
   // Steps the world: robot `robot`'s motor command ramps to `target` (all joints arriving
-  // together at max_joint_speed) and then holds, until it has settled. robot = -1 holds both
-  // robots and waits for both.
+  // together at max_joint_speed) and then holds, until it has settled. robot = -1 holds every
+  // robot and waits for all.
   MoveResult Run(int robot, const JointVector& target) {
     const PhysicsSpec& ph = spec.physics;
     const double dt = m->opt.timestep;
@@ -395,7 +410,7 @@ struct TwinCell::Impl {
   // pose's joint-space inertia, armature included).
   void CheckServoStability(const std::string& where) const {
     const double dt = m->opt.timestep;
-    for (int k = 0; k < kNumRobots; ++k) {
+    for (int k = 0; k < Robots(); ++k) {
       for (int i = 0; i < Joints(k); ++i) {
         const int dof = dadr[k][i];
         const double inertia = d->qM[m->dof_Madr[dof]];
@@ -423,7 +438,7 @@ struct TwinCell::Impl {
     m = LoadMjcfFromString(mjcf);
     d.reset(mj_makeData(m.get()));
     if (!d) throw std::runtime_error("MuJoCo could not allocate mjData");
-    for (int k = 0; k < kNumRobots; ++k) {
+    for (int k = 0; k < Robots(); ++k) {
       const std::string p = Prefix(k);
       const int n = Joints(k);
       qadr[k].assign(n, -1);
@@ -440,7 +455,7 @@ struct TwinCell::Impl {
       site_tip[k] = Id(mjOBJ_SITE, p + "tip");
     }
     passive_dofs.clear();
-    for (int k = 0; k < kNumRobots; ++k) {
+    for (int k = 0; k < Robots(); ++k) {
       std::vector<std::string> names;
       for (const char* axis : {"x", "y", "z"}) names.push_back(std::string("mount_") + axis);
       for (const char* axis : {"x", "y"}) {
@@ -462,8 +477,10 @@ struct TwinCell::Impl {
         link_quat0[k][i] = Eigen::Quaterniond(quat[0], quat[1], quat[2], quat[3]);
       }
     }
-    camera = Id(mjOBJ_CAMERA, kHandCameraName);
-    board_body = Id(mjOBJ_BODY, Prefix(spec.board.robot) + "board");
+    if (spec.HasCameraAndBoard()) {
+      camera = Id(mjOBJ_CAMERA, kHandCameraName);
+      board_body = Id(mjOBJ_BODY, Prefix(spec.board.robot) + "board");
+    }
     SetUpDrift();
   }
 
@@ -482,14 +499,14 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
   ValidateTwinSpec(spec, where);
   s.spec = spec;
   s.where = where;
-  for (const EffectSpec& e : spec.effects) s.effects.push_back(MakeEffect(e));
+  s.effects = MakeEffects(spec);
   std::mt19937_64 geometry_rng = Stream(spec.seed, 0);
   s.encoder_rng = Stream(spec.seed, 1);
   s.image_rng = Stream(spec.seed, 2);
   s.operator_rng = Stream(spec.seed, 3);
   s.tracker_rng = Stream(spec.seed, 4);
   s.temperature_rng = Stream(spec.seed, 5);
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < s.Robots(); ++k) {
     s.models[k] = spec.robots[k].model;
     for (const auto& e : s.effects) e->ApplyToGeometry(k, &s.models[k], &geometry_rng);
     s.drives[k].assign(s.models[k].num_joints(), {spec.physics.stiffness, true});
@@ -499,7 +516,7 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
     for (const auto& e : s.effects) e->ApplyToStructure(k, &s.structures[k]);
     for (const auto& e : s.effects) s.tilts_axes[k] = s.tilts_axes[k] || e->TiltsAxes(k);
   }
-  if (spec.camera.distortion.Any()) {
+  if (spec.HasCameraAndBoard() && spec.camera.distortion.Any()) {
     try {
       s.distortion.emplace(spec.camera.intrinsics, spec.camera.distortion);
     } catch (const std::invalid_argument& e) {
@@ -517,12 +534,12 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
                                   std::to_string(k.width) + " x " + std::to_string(k.height) +
                                   " image; at most 3 times the image and 8192 px per side");
     }
-  } else {
+  } else if (spec.HasCameraAndBoard()) {
     s.canvas = spec.camera.intrinsics;
   }
   s.Build();
   // Start at rest at the link-side angles of the initial motor angles.
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < s.Robots(); ++k) {
     s.motor[k] = spec.robots[k].q_initial;
     s.direction[k] = ZeroJoints(s.models[k]);
     const JointVector link = s.motor[k] + s.TransmissionOffset(k);
@@ -548,9 +565,9 @@ TwinCell::~TwinCell() = default;
 MoveResult TwinCell::MoveTo(int robot, const JointVector& q_target) {
   Impl& s = *impl_;
   MoveResult result;
-  if (robot < 0 || robot >= kNumRobots) {
+  if (const std::string bad = s.BadRobot(robot); !bad.empty()) {
     result.status = MoveStatus::kInvalidInput;
-    result.reason = "robot index " + std::to_string(robot) + " is not 0 or 1";
+    result.reason = bad;
     return result;
   }
   if (!q_target.allFinite()) {
@@ -586,14 +603,14 @@ MoveResult TwinCell::MoveTo(int robot, const JointVector& q_target) {
 MoveResult TwinCell::RemountTools(const std::function<void()>& change, const std::string& what,
                                   const std::string& refused) {
   Impl& s = *impl_;
-  std::array<JointVector, kNumRobots> link;
-  for (int k = 0; k < kNumRobots; ++k) link[k] = s.LinkAngles(k);
+  std::array<JointVector, kMaxRobots> link;
+  for (int k = 0; k < s.Robots(); ++k) link[k] = s.LinkAngles(k);
   const double time = s.d->time;
   const auto rebuild = [&]() {
     change();
     s.Build();
     s.d->time = time;
-    for (int k = 0; k < kNumRobots; ++k) {
+    for (int k = 0; k < s.Robots(); ++k) {
       for (int i = 0; i < s.Joints(k); ++i) s.d->qpos[s.qadr[k][i]] = link[k](i);
     }
     s.ApplyModelMotion();
@@ -614,6 +631,12 @@ MoveResult TwinCell::RemountTools(const std::function<void()>& change, const std
 
 MoveResult TwinCell::ExchangeTools() {
   Impl& s = *impl_;
+  if (!s.spec.HasCameraAndBoard()) {
+    MoveResult result;
+    result.status = MoveStatus::kInvalidInput;
+    result.reason = "this cell has no camera and board to exchange (a one-robot cell)";
+    return result;
+  }
   // The operator re-mounts both tools on the same brackets while the robots hold still.
   return RemountTools([&s]() { std::swap(s.spec.camera.robot, s.spec.board.robot); },
                       "exchanging the tools",
@@ -622,8 +645,13 @@ MoveResult TwinCell::ExchangeTools() {
 
 MoveResult TwinCell::MountTarget(BracketTarget target) {
   Impl& s = *impl_;
-  if (target == s.mounted) return MoveResult{};
   MoveResult result;
+  if (!s.spec.HasCameraAndBoard()) {
+    result.status = MoveStatus::kInvalidInput;
+    result.reason = "this cell has no board bracket to mount a target on (a one-robot cell)";
+    return result;
+  }
+  if (target == s.mounted) return MoveResult{};
   if (target == BracketTarget::kIntrinsicsTarget && !s.spec.intrinsics_target) {
     result.status = MoveStatus::kInvalidInput;
     result.reason = "this cell has no intrinsics target (the scenario names none)";
@@ -650,7 +678,10 @@ MoveResult TwinCell::MountTarget(BracketTarget target) {
   return result;
 }
 
-int TwinCell::CameraRobot() { return impl_->spec.camera.robot; }
+int TwinCell::CameraRobot() {
+  impl_->RequireCamera("CameraRobot");
+  return impl_->spec.camera.robot;
+}
 
 void TwinCell::SetOperatorAlignmentError(double sigma_m) {
   if (!(std::isfinite(sigma_m) && sigma_m >= 0.0)) {
@@ -665,9 +696,14 @@ double TwinCell::last_contact_gap_m() const { return impl_->last_gap; }
 MoveResult TwinCell::JogTipToContact(int j) {
   Impl& s = *impl_;
   MoveResult result;
-  if (j < 0 || j >= kNumRobots) {
+  if (const std::string bad = s.BadRobot(j); !bad.empty()) {
     result.status = MoveStatus::kInvalidInput;
-    result.reason = "robot index " + std::to_string(j) + " is not 0 or 1";
+    result.reason = bad;
+    return result;
+  }
+  if (s.Robots() < 2) {
+    result.status = MoveStatus::kInvalidInput;
+    result.reason = "a handclasp needs two robots; this cell has one (no other tip to touch)";
     return result;
   }
   const int o = 1 - j;
@@ -813,8 +849,8 @@ MoveResult TwinCell::JogTipToContact(int j) {
 
 JointVector TwinCell::ReadEncoders(int robot) {
   Impl& s = *impl_;
-  if (robot < 0 || robot >= kNumRobots) {
-    throw InputError("ReadEncoders", "robot index " + std::to_string(robot) + " is not 0 or 1");
+  if (const std::string bad = s.BadRobot(robot); !bad.empty()) {
+    throw InputError("ReadEncoders", bad);
   }
   JointVector reading = s.motor[robot];
   for (const auto& e : s.effects) e->ApplyToEncoder(robot, &reading, &s.encoder_rng);
@@ -823,6 +859,7 @@ JointVector TwinCell::ReadEncoders(int robot) {
 
 cv::Mat TwinCell::GrabImage() {
   Impl& s = *impl_;
+  s.RequireCamera("GrabImage");
   cv::Mat image = s.HandRenderer().RenderPinhole(s.m.get(), s.d.get(), s.camera, s.canvas);
   if (s.distortion) image = s.distortion->Apply(image);
   for (const auto& e : s.effects) e->ApplyToImage(&image, &s.image_rng);
@@ -831,6 +868,7 @@ cv::Mat TwinCell::GrabImage() {
 
 cv::Mat TwinCell::GrabImageRegion(const cv::Rect& roi) {
   Impl& s = *impl_;
+  s.RequireCamera("GrabImageRegion");
   const Intrinsics& K = s.spec.camera.intrinsics;
   const cv::Rect r = roi & cv::Rect(0, 0, K.width, K.height);
   if (r.empty()) return cv::Mat();
@@ -847,9 +885,8 @@ double TwinCell::ClockSeconds() { return impl_->d->time; }
 
 double TwinCell::ReadTemperatureC(int robot) {
   Impl& s = *impl_;
-  if (robot < 0 || robot >= kNumRobots) {
-    throw InputError("ReadTemperatureC", "robot index " + std::to_string(robot) +
-                                             ", expected 0.." + std::to_string(kNumRobots - 1));
+  if (const std::string bad = s.BadRobot(robot); !bad.empty()) {
+    throw InputError("ReadTemperatureC", bad);
   }
   const TemperatureSensorSpec& sensor = s.spec.robots[robot].temperature_sensor;
   if (!sensor.present) return std::numeric_limits<double>::quiet_NaN();
@@ -907,12 +944,13 @@ TrackerReading TwinCell::MeasureTracker(int robot) {
 TwinTruth TwinCell::Truth() const {
   const Impl& s = *impl_;
   TwinTruth t;
+  t.num_robots = s.Robots();
   t.models = s.models;
   t.time_s = s.d->time;
   t.camera = s.spec.camera;
   t.board = s.spec.board;
   t.tracker = s.spec.tracker;
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < s.Robots(); ++k) {
     t.X_WB[k] = s.spec.robots[k].X_WB;
     t.length_scale[k] = s.LengthScale(k, s.d->time);
     t.q_link[k] = s.LinkAngles(k);
@@ -921,6 +959,7 @@ TwinTruth TwinCell::Truth() const {
     const int flange = s.site_L[k][s.Joints(k)];
     t.X_WF[k] = FromMj(s.d->site_xpos + 3 * flange, s.d->site_xmat + 9 * flange);
   }
+  if (!s.spec.HasCameraAndBoard()) return t;
   // MuJoCo's camera looks along -z with y up; the optical frame C is it turned by pi about x.
   t.X_WC = FromMj(s.d->cam_xpos + 3 * s.camera, s.d->cam_xmat + 9 * s.camera) *
            Transform(Eigen::AngleAxisd(kPi, Vector3::UnitX()));
@@ -942,17 +981,24 @@ cv::Mat TwinCell::RenderOverview(int width, int height, double azimuth_deg,
   if (!s.overview_renderer || s.overview_renderer->width() != width ||
       s.overview_renderer->height() != height) {
     s.overview_renderer.reset();  // one context at a time
+    // The MJCF's samples: the hand camera's, or the default of a cell without one.
     s.overview_renderer = std::make_unique<OffscreenRenderer>(s.m.get(), width, height,
-                                                              s.spec.camera.msaa_samples);
+                                                              s.m->vis.quality.offsamples);
   }
+  // Both bases in view, 1.4 times their distance back; one arm: its stretched length.
   const Vector3 b0 = s.spec.robots[0].X_WB.translation();
-  const Vector3 b1 = s.spec.robots[1].X_WB.translation();
+  const Vector3 b1 = s.spec.robots[s.Robots() - 1].X_WB.translation();
   const Vector3 lookat = 0.5 * (b0 + b1) + Vector3(0, 0, 0.35);
+  double spread = (b1 - b0).norm();
+  if (s.Robots() == 1) {
+    spread = 0.0;
+    for (const Link& link : s.models[0].links) spread += std::hypot(link.dh.a, link.dh.d);
+  }
   mjvCamera cam;
   mjv_defaultCamera(&cam);
   cam.type = mjCAMERA_FREE;
   for (int i = 0; i < 3; ++i) cam.lookat[i] = lookat(i);
-  cam.distance = 1.0 + 1.4 * (b1 - b0).norm();
+  cam.distance = 1.0 + 1.4 * spread;
   cam.azimuth = azimuth_deg;
   cam.elevation = elevation_deg;
   return s.overview_renderer->RenderFree(s.m.get(), s.d.get(), cam);
@@ -960,8 +1006,8 @@ cv::Mat TwinCell::RenderOverview(int width, int height, double azimuth_deg,
 
 std::vector<Transform> TwinCell::SiteFrames(int robot) const {
   const Impl& s = *impl_;
-  if (robot < 0 || robot >= kNumRobots) {
-    throw InputError("SiteFrames", "robot index " + std::to_string(robot) + " is not 0 or 1");
+  if (const std::string bad = s.BadRobot(robot); !bad.empty()) {
+    throw InputError("SiteFrames", bad);
   }
   std::vector<Transform> frames(s.site_L[robot].size());
   for (size_t i = 0; i < frames.size(); ++i) {
@@ -975,6 +1021,7 @@ int TwinCell::last_move_steps() const { return impl_->last_steps; }
 
 void TwinCell::RenderBare() {
   Impl& s = *impl_;
+  s.RequireCamera("RenderBare");
   s.HandRenderer().RenderBare(s.m.get(), s.d.get(), s.camera);
 }
 

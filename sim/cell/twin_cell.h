@@ -1,5 +1,6 @@
-// The MuJoCo twin of a dual-robot cell. It implements the Cell interface (what the estimator
-// may use) and, separately and explicitly, TwinCell::Truth() for scoring in bench/.
+// The MuJoCo twin of a robot cell: two robots with the hand camera and the board, or one robot
+// alone (TwinSpec::num_robots). It implements the Cell interface (what the estimator may use)
+// and, separately and explicitly, TwinCell::Truth() for scoring in bench/.
 #pragma once
 
 #include <array>
@@ -16,46 +17,55 @@
 namespace twin {
 
 /// What only the twin knows; bench/ reads it for scoring after a procedure, never calib/.
+/// Per-robot arrays hold the cell's robots in their first num_robots entries.
 struct TwinTruth {
-  std::array<KinematicModel, kNumRobots> models;   ///< true geometry, effects applied; a
+  int num_robots = kMaxRobots;                     ///< the cell's robots (TwinSpec::num_robots)
+  std::array<KinematicModel, kMaxRobots> models;   ///< true geometry, effects applied; a
                                                    ///< drifting one (thermal_drift) as at
                                                    ///< time 0, the start of the session
-  std::array<double, kNumRobots> length_scale{1.0, 1.0};  ///< factor on d and a of every link
+  std::array<double, kMaxRobots> length_scale{1.0, 1.0};  ///< factor on d and a of every link
                                                    ///< of `models` now (drift; 1 without)
   double time_s = 0.0;                             ///< the twin's clock now [s]
-  std::array<Transform, kNumRobots> X_WB;          ///< base poses in the world
-  std::array<JointVector, kNumRobots> q_link;      ///< current link-side joint angles [rad]
-  std::array<JointVector, kNumRobots> q_motor;     ///< current motor-side angles [rad]
+  std::array<Transform, kMaxRobots> X_WB;          ///< base poses in the world
+  std::array<JointVector, kMaxRobots> q_link;      ///< current link-side joint angles [rad]
+  std::array<JointVector, kMaxRobots> q_motor;     ///< current motor-side angles [rad]
   Transform X_WC;                                  ///< camera optical frame in the world now
+                                                   ///< (identity without a camera)
   Transform X_WT;                                  ///< board frame (origin P) in the world now
-  std::array<Vector3, kNumRobots> p_WTip;          ///< measuring tip points in the world now
-  std::array<Transform, kNumRobots> X_WF;          ///< flange frames in the world now (physics:
+                                                   ///< (identity without a board)
+  std::array<Vector3, kMaxRobots> p_WTip;          ///< measuring tip points in the world now
+  std::array<Transform, kMaxRobots> X_WF;          ///< flange frames in the world now (physics:
                                                    ///< every effect included)
   CameraSpec camera;                               ///< true intrinsics, distortion, hand-eye
-  BoardSpec board;                                 ///< true board geometry and mount
+  BoardSpec board;                                 ///< true board geometry and mount (both
+                                                   ///< unused without camera and board)
   TrackerSpec tracker;                             ///< true tracker pose, reflector, noise
 };
 
 class TwinCell : public Cell {
  public:
   /// Validates `spec`, applies geometry effects, builds the MJCF and the MuJoCo model, places
-  /// both robots at their initial angles and lets them settle. Throws InputError for bad spec
-  /// values (naming `where`) and for initial poses that collide or leave the limits.
+  /// the robots at their initial angles and lets them settle. Throws InputError for bad spec
+  /// values (naming `where`) and for initial poses that collide or leave the limits. A robot
+  /// index outside the cell's robots is kInvalidInput (MoveTo) or an InputError.
   explicit TwinCell(const TwinSpec& spec, const std::string& where = "scenario");
   ~TwinCell() override;
 
   MoveResult MoveTo(int robot, const JointVector& q_target) override;
   JointVector ReadEncoders(int robot) override;
+  /// Throws InputError naming `where` on a cell without a hand camera (one robot), as do
+  /// GrabImageRegion, CameraRobot and RenderBare.
   cv::Mat GrabImage() override;
   /// Renders only the region (OffscreenRenderer::RenderPinholeRegion; with distortion the
   /// canvas region it samples, DistortionMapper::CanvasRegion), then the image effects.
   cv::Mat GrabImageRegion(const cv::Rect& roi) override;
+  /// kInvalidInput on a cell without camera and board.
   MoveResult ExchangeTools() override;
   int CameraRobot() override;
   /// Swaps the plate on the board's bracket (TwinSpec::intrinsics_target) and rebuilds the
   /// world with the robots where they stand, as ExchangeTools does; Truth().board is then the
-  /// mounted plate. kInvalidInput when the spec has no intrinsics target; kCollision (nothing
-  /// changed) when the other plate would touch something.
+  /// mounted plate. kInvalidInput when the spec has no intrinsics target (or, one robot, no
+  /// board); kCollision (nothing changed) when the other plate would touch something.
   MoveResult MountTarget(BracketTarget target) override;
   /// The simulated operator's handclasp (Gan et al. 2014, section 3): using the true
   /// kinematics (a person looking at the tips), robot `jogged_robot` is driven by settled moves
@@ -63,7 +73,7 @@ class TwinCell : public Cell {
   /// corrective jogs, until its true tip point is within kContactToleranceM of the other true
   /// tip point plus the operator's alignment error (drawn per contact, N(0, sigma) per world
   /// axis). Tips do not collide with each other in the MJCF, so contact is decided from the
-  /// MuJoCo site positions.
+  /// MuJoCo site positions. kInvalidInput on a one-robot cell.
   MoveResult JogTipToContact(int jogged_robot) override;
   /// The tracker of the spec (TrackerSpec): the reflector's true position from MuJoCo's flange
   /// frame (sag included), out of range beyond max_range, occluded when a ray from the tracker

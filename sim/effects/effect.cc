@@ -18,9 +18,10 @@ void Effect::ApplyToTransmission(int, const JointVector&, const JointVector&,
                                  JointVector*) const {}
 void Effect::ApplyToEncoder(int, JointVector*, std::mt19937_64*) const {}
 void Effect::ApplyToImage(cv::Mat*, std::mt19937_64*) const {}
+bool Effect::NeedsCameraAndBoard() const { return false; }
 
 bool Effect::Applies(int robot) const {
-  assert(robot >= 0 && robot < kNumRobots);
+  assert(robot >= 0 && robot < kMaxRobots);
   return spec().robot == -1 || spec().robot == robot;
 }
 

@@ -79,6 +79,9 @@ class Effect {
   virtual void ApplyToEncoder(int robot, JointVector* reading, std::mt19937_64* rng) const;
   /// Changes a rendered camera image (8-bit BGR).
   virtual void ApplyToImage(cv::Mat* image, std::mt19937_64* rng) const;
+  /// True if this effect acts only through the hand camera or the board (the image, the
+  /// target's bracket): it has nothing to act on in a cell without them.
+  virtual bool NeedsCameraAndBoard() const;
 
  protected:
   /// True if this effect acts on `robot` / `joint` (its spec's -1 means all).
@@ -89,6 +92,11 @@ class Effect {
 /// Builds the effect named by spec.type; throws InputError naming spec.where for an unknown
 /// type (listing the known ones), an unknown or missing parameter, or a bad value.
 std::unique_ptr<Effect> MakeEffect(const EffectSpec& spec);
+
+/// Every effect of `spec` (MakeEffect), in order; also throws InputError naming the effect's
+/// where for one that needs the camera and the board (Effect::NeedsCameraAndBoard) in a cell
+/// without them (TwinSpec::HasCameraAndBoard).
+std::vector<std::unique_ptr<Effect>> MakeEffects(const TwinSpec& spec);
 
 /// Names of the registered effect types.
 std::vector<std::string> EffectTypes();

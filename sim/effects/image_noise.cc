@@ -17,6 +17,8 @@ class ImageNoise : public Effect {
     AddImageNoise(image, sigma_, (*rng)());
   }
 
+  bool NeedsCameraAndBoard() const override { return true; }
+
  private:
   EffectSpec spec_;
   double sigma_;  // [grey levels]

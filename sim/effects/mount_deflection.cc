@@ -20,6 +20,8 @@ class MountDeflection : public Effect {
     if (Applies(robot)) mount->deflection_F = deflection_;
   }
 
+  bool NeedsCameraAndBoard() const override { return true; }
+
  private:
   EffectSpec spec_;
   Vector3 deflection_;  // [m]

@@ -31,13 +31,13 @@ constexpr Registration kRegistry[] = {
     {"axis_wobble", effects::MakeAxisWobble},
 };
 
-// Checks the fields every effect shares: robot -1, 0..kNumRobots-1; joint -1, 0..kMaxJoints-1
-// (ValidateTwinSpec checks the joint against the robots' own joint counts).
+// Checks the fields every effect shares: robot -1, 0..kMaxRobots-1; joint -1, 0..kMaxJoints-1
+// (ValidateTwinSpec checks both against the cell's robots and their own joint counts).
 void ValidateTargets(const EffectSpec& spec) {
-  if (spec.robot < -1 || spec.robot >= kNumRobots) {
+  if (spec.robot < -1 || spec.robot >= kMaxRobots) {
     throw InputError(spec.where, effects::EffectLabel(spec) + "robot = " +
-                                     std::to_string(spec.robot) + ", expected -1 (both) or 0.." +
-                                     std::to_string(kNumRobots - 1));
+                                     std::to_string(spec.robot) + ", expected -1 (every robot) "
+                                     "or 0.." + std::to_string(kMaxRobots - 1));
   }
   if (spec.joint < -1 || spec.joint >= kMaxJoints) {
     throw InputError(spec.where, effects::EffectLabel(spec) + "joint = " +
@@ -66,6 +66,18 @@ std::unique_ptr<Effect> MakeEffect(const EffectSpec& spec) {
   }
   throw InputError(spec.where,
                    "unknown effect type \"" + spec.type + "\"; known types: " + KnownTypes());
+}
+
+std::vector<std::unique_ptr<Effect>> MakeEffects(const TwinSpec& spec) {
+  std::vector<std::unique_ptr<Effect>> made;
+  for (const EffectSpec& e : spec.effects) {
+    made.push_back(MakeEffect(e));
+    if (made.back()->NeedsCameraAndBoard() && !spec.HasCameraAndBoard()) {
+      throw InputError(e.where, effects::EffectLabel(e) + "acts through the hand camera or the "
+                                "board, which a one-robot cell does not have");
+    }
+  }
+  return made;
 }
 
 std::vector<std::string> EffectTypes() {

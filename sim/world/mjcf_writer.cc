@@ -136,11 +136,11 @@ std::vector<Part> Parts(const TwinSpec& spec, int robot, const KinematicModel& m
   for (int i = 0; i < n; ++i) add(i, UsedInertia(m.links[i]), f.X_BL[i + 1]);
   add(n - 1, m.tool().inertia, f.tool());
   const Transform& X_BF = f.flange();
-  if (spec.camera.robot == robot) {
+  if (spec.HasCameraAndBoard() && spec.camera.robot == robot) {
     parts.push_back({n - 1, kCameraMassKg, X_BF * spec.camera.X_FC.translation(),
                      Matrix3::Zero()});
   }
-  if (spec.board.robot == robot) {
+  if (spec.HasCameraAndBoard() && spec.board.robot == robot) {
     parts.push_back({n - 1, spec.board.mass_kg, X_BF * spec.board.X_FT.translation(),
                      Matrix3::Zero()});
   }
@@ -191,17 +191,24 @@ std::string TiltHinges(const std::string& name, double k, double inertia, double
   return x;
 }
 
-std::string Assets() {
-  return "<texture name=\"sky\" type=\"skybox\" builtin=\"gradient\" rgb1=\"0.78 0.82 0.88\""
-         " rgb2=\"0.35 0.38 0.44\" width=\"64\" height=\"64\"/>\n"
-         "<material name=\"floor\" rgba=\"0.62 0.63 0.65 1\" specular=\"0\" shininess=\"0\"/>\n"
-         "<material name=\"base\" rgba=\"0.22 0.23 0.25 1\" specular=\"0.2\"/>\n"
-         "<material name=\"robot1_orange\" rgba=\"0.93 0.42 0.08 1\" specular=\"0.3\"/>\n"
-         "<material name=\"robot2_orange\" rgba=\"0.96 0.62 0.18 1\" specular=\"0.3\"/>\n"
-         "<material name=\"robot1_grey\" rgba=\"0.45 0.46 0.48 1\" specular=\"0.3\"/>\n"
-         "<material name=\"robot2_grey\" rgba=\"0.62 0.63 0.66 1\" specular=\"0.3\"/>\n"
-         "<material name=\"camera\" rgba=\"0.08 0.08 0.09 1\" specular=\"0.4\"/>\n"
-         "<material name=\"tip\" rgba=\"0.8 0.8 0.82 1\" specular=\"0.6\"/>\n";
+// Textures and materials: the cell's, and the orange and grey of each of its `num_robots`.
+std::string Assets(int num_robots) {
+  static const char* const kOrange[2] = {"0.93 0.42 0.08", "0.96 0.62 0.18"};
+  static const char* const kGrey[2] = {"0.45 0.46 0.48", "0.62 0.63 0.66"};
+  std::string x =
+      "<texture name=\"sky\" type=\"skybox\" builtin=\"gradient\" rgb1=\"0.78 0.82 0.88\""
+      " rgb2=\"0.35 0.38 0.44\" width=\"64\" height=\"64\"/>\n"
+      "<material name=\"floor\" rgba=\"0.62 0.63 0.65 1\" specular=\"0\" shininess=\"0\"/>\n"
+      "<material name=\"base\" rgba=\"0.22 0.23 0.25 1\" specular=\"0.2\"/>\n";
+  for (const auto* colours : {&kOrange, &kGrey}) {
+    const std::string name = colours == &kOrange ? "orange" : "grey";
+    for (int k = 0; k < num_robots; ++k) {
+      x += "<material name=\"" + Prefix(k) + name + "\" rgba=\"" + (*colours)[k] +
+           " 1\" specular=\"0.3\"/>\n";
+    }
+  }
+  return x + "<material name=\"camera\" rgba=\"0.08 0.08 0.09 1\" specular=\"0.4\"/>\n"
+             "<material name=\"tip\" rgba=\"0.8 0.8 0.82 1\" specular=\"0.6\"/>\n";
 }
 
 // Geoms of link body i (0-based joint index) in its frame U_i: capsules from the joint axis
@@ -271,7 +278,7 @@ std::string FlangeBodies(const TwinSpec& spec, const Intrinsics& canvas,
     x << "<body name=\"" << p << "tool\" " << PoseAttrs(X_UL7) << ">\n"
       << Inertial(m.tool().inertia, Transform::Identity()) << "</body>\n";
   }
-  if (spec.camera.robot == robot) {
+  if (spec.HasCameraAndBoard() && spec.camera.robot == robot) {
     // MJCF cameras look along -z with y up; the OpenCV optical frame is that turned by RotX(pi).
     const Transform X_UC = X_UF * spec.camera.X_FC;
     const double fovy_deg = RadToDeg(2.0 * std::atan(0.5 * canvas.height / canvas.fy));
@@ -290,7 +297,7 @@ std::string FlangeBodies(const TwinSpec& spec, const Intrinsics& canvas,
       << "\" size=\"" << Num(hx) << " " << Num(hy) << " " << Num(hz)
       << "\" material=\"camera\" " << RobotContact(robot) << "/>\n</body>\n";
   }
-  if (spec.board.robot == robot) {
+  if (spec.HasCameraAndBoard() && spec.board.robot == robot) {
     // The board's collidable plate takes the robot's collision bits from the child class.
     x << "<body name=\"" << p << "board\" childclass=\"" << p << "contact\" "
       << PoseAttrs(X_UF * spec.board.X_FT) << ">\n"
@@ -379,10 +386,16 @@ std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel,
                           const std::array<std::vector<JointDrive>, 2>& drives,
                           const std::array<MountCompliance, 2>& mounts,
                           const std::array<StructureCompliance, 2>& structures) {
+  const bool camera = spec.HasCameraAndBoard();
+  // Without a hand camera the off-screen buffer, samples and clipping serve overviews only:
+  // CameraSpec's defaults.
+  const CameraSpec view = camera ? spec.camera : CameraSpec{};
   const Intrinsics canvas =
-      DistortionMapper(spec.camera.intrinsics, spec.camera.distortion).canvas();
-  const Vector3 mid =
-      0.5 * (spec.robots[0].X_WB.translation() + spec.robots[1].X_WB.translation());
+      camera ? DistortionMapper(spec.camera.intrinsics, spec.camera.distortion).canvas()
+             : Intrinsics{kOverviewWidth, kOverviewHeight};
+  Vector3 mid = Vector3::Zero();  // the centre of the bases
+  for (int k = 0; k < spec.num_robots; ++k) mid += spec.robots[k].X_WB.translation();
+  mid /= spec.num_robots;
   std::ostringstream x;
   x << "<mujoco model=\"twin_cell\">\n"
     << "<compiler angle=\"radian\" balanceinertia=\"true\" inertiafromgeom=\"auto\"/>\n"
@@ -395,19 +408,20 @@ std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel,
     << "<visual>\n"
     << "<global offwidth=\"" << std::max(canvas.width, kOverviewWidth) << "\" offheight=\""
     << std::max(canvas.height, kOverviewHeight) << "\"/>\n"
-    << "<quality offsamples=\"" << spec.camera.msaa_samples << "\"/>\n"
-    << "<map znear=\"" << Num(spec.camera.near_m) << "\" zfar=\""
-    << Num(std::max(spec.camera.far_m, kOverviewFar)) << "\"/>\n"
+    << "<quality offsamples=\"" << view.msaa_samples << "\"/>\n"
+    << "<map znear=\"" << Num(view.near_m) << "\" zfar=\""
+    << Num(std::max(view.far_m, kOverviewFar)) << "\"/>\n"
     << "<headlight ambient=\"0.3 0.3 0.3\" diffuse=\"0.45 0.45 0.45\""
     << " specular=\"0.05 0.05 0.05\"/>\n"
     << "</visual>\n";
   x << "<default>\n";
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < spec.num_robots; ++k) {
     x << "<default class=\"" << Prefix(k) << "contact\"><geom " << RobotContact(k)
       << "/></default>\n";
   }
   x << "</default>\n";
-  x << "<asset>\n" << Assets() << BoardAssetsMjcf(spec.board) << "</asset>\n";
+  x << "<asset>\n" << Assets(spec.num_robots) << (camera ? BoardAssetsMjcf(spec.board) : "")
+    << "</asset>\n";
   x << "<worldbody>\n"
     << "<geom name=\"floor\" type=\"plane\" pos=\"" << Num(mid.x()) << " " << Num(mid.y())
     << " 0\" size=\"4 4 0.05\" material=\"floor\" contype=\"0\" conaffinity=\"0\"/>\n"
@@ -417,11 +431,11 @@ std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel,
     << "<light name=\"fill\" directional=\"true\" castshadow=\"false\" pos=\"" << Num(mid.x())
     << " " << Num(mid.y()) << " 4\" dir=\"-0.4 -0.5 -0.6\" diffuse=\"0.25 0.25 0.25\""
     << " specular=\"0 0 0\"/>\n";
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < spec.num_robots; ++k) {
     x << Robot(spec, canvas, true_models[k], drives[k], mounts[k], structures[k], k);
   }
   x << "</worldbody>\n<contact>\n";
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < spec.num_robots; ++k) {
     // MuJoCo's parent filter skips pairs with a static body: the base needs an explicit one.
     x << "<exclude body1=\"" << Prefix(k) << "base\" body2=\"" << Prefix(k) << "link1\"/>\n";
     for (int i = 0; i + 2 < true_models[k].num_joints(); ++i) {
@@ -431,7 +445,7 @@ std::string WriteTwinMjcf(const TwinSpec& spec, const std::array<KinematicModel,
     }
   }
   x << "</contact>\n<actuator>\n";
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < spec.num_robots; ++k) {
     for (int i = 0; i < true_models[k].num_joints(); ++i) {
       x << "<position name=\"" << Prefix(k) << "a" << i + 1 << "\" joint=\"" << Prefix(k) << "j"
         << i + 1 << "\" kp=\"" << Num(drives[k][i].stiffness) << "\" ctrllimited=\"false\"/>\n";

@@ -1,5 +1,6 @@
-// The MJCF text of a whole twin cell: both arms built from their true (perturbed) geometry,
-// the hand camera, the chessboard, the measuring tips, floor and lights.
+// The MJCF text of a whole twin cell: its arms (TwinSpec::num_robots, one or two) built from
+// their true (perturbed) geometry, the hand camera and the chessboard (two-robot cells only),
+// the measuring tips, floor and lights.
 //
 // Names: robot k (k = 1, 2, the scenario's first and second robot) prefixes its elements with
 // "robot<k>_". Body frames (calib/common/frames.h letters): the base body "robot<k>_base" sits at
@@ -44,7 +45,8 @@ constexpr double kFlangeThicknessM = 0.012;
 /// [N m/rad] on a joint of effective inertia `inertia` [kg m^2]: 2 sqrt(kp * inertia).
 double CriticalDamping(double kp, double inertia);
 
-/// The whole cell as MJCF text. `true_models` replace spec.robots[k].model (they carry the
+/// The whole cell as MJCF text; only the first spec.num_robots entries of the arrays are read.
+/// `true_models` replace spec.robots[k].model (they carry the
 /// geometry effects); `drives` give each joint's position-actuator gain kp [N m/rad]; `mounts`
 /// the compliance of each robot's target bracket: a compliant board hangs on three slide
 /// joints "robot<k>_mount_x/y/z" along the flange axes, springs of stiffness m g / d;

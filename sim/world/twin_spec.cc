@@ -237,7 +237,7 @@ bool InsideFlange(const KinematicModel& model, const Vector3& p_F) {
 void CheckFlangeTool(const Checker& c, const TwinSpec& spec, int robot, const Transform& X_F,
                      const std::string& field, const std::string& what) {
   c.Offset(X_F, field, kMaxToolOffsetM, "a flange tool's bracket is shorter than a metre");
-  if (robot < 0 || robot >= kNumRobots) return;
+  if (robot < 0 || robot >= spec.num_robots) return;
   const KinematicModel& m = spec.robots[robot].model;
   if (m.num_joints() < 1 || !InsideFlange(m, X_F.translation())) return;
   const Vector3 p = 1e3 * X_F.translation();
@@ -248,7 +248,7 @@ void CheckFlangeTool(const Checker& c, const TwinSpec& spec, int robot, const Tr
 }
 
 void CheckCamera(const Checker& c, const CameraSpec& cam) {
-  c.IntRange(cam.robot, "camera.robot", 0, kNumRobots - 1);
+  c.IntRange(cam.robot, "camera.robot", 0, kMaxRobots - 1);
   c.Rigid(cam.X_FC, "camera.X_FC");
   const Intrinsics& in = cam.intrinsics;
   c.IntRange(in.width, "camera.intrinsics.width", kMinImageSidePx, kMaxImageSidePx);
@@ -373,57 +373,21 @@ void CheckPhysics(const Checker& c, const PhysicsSpec& p) {
 void CheckEffect(const Checker& c, const EffectSpec& e, int k, const TwinSpec& spec) {
   const std::string field = "effects[" + std::to_string(k) + "]";
   if (e.type.empty()) c.Fail(field + ".type", "must name an effect type, got ''");
-  c.IntRange(e.robot, field + ".robot", -1, kNumRobots - 1);
+  c.IntRange(e.robot, field + ".robot", -1, spec.num_robots - 1);
   // The joint must exist on every robot the effect acts on.
   int joints = kMaxJoints;
-  for (int r = 0; r < kNumRobots; ++r) {
+  for (int r = 0; r < spec.num_robots; ++r) {
     if (e.robot == -1 || e.robot == r) joints = std::min(joints, spec.robots[r].model.num_joints());
   }
   c.IntRange(e.joint, field + ".joint", -1, joints - 1);
   for (const auto& [name, value] : e.params) c.Finite(value, field + ".params." + name);
 }
 
-}  // namespace
-
-const char* ToString(Installation installation) {
-  switch (installation) {
-    case Installation::kFloor:
-      return "floor";
-    case Installation::kWall:
-      return "wall";
-    case Installation::kCeiling:
-      return "ceiling";
-  }
-  return "unknown";
-}
-
-// The tracker (plausibility): a laser tracker measures to about 80 m with micrometres of noise;
-// a reflector sits on a short bracket; a drift beyond 1 um/s would be a broken instrument.
-static void CheckTracker(const Checker& c, const TrackerSpec& t) {
-  if (!t.present) return;
-  c.IntRange(t.robot, "tracker.robot", 0, kNumRobots - 1);
-  c.Rigid(t.X_WT, "tracker.X_WT");
-  c.Offset(t.X_WT, "tracker.X_WT", kMaxWorldOffsetM, "a tracker stands in the cell");
-  if (!(t.p_FR.allFinite() && t.p_FR.norm() <= 0.5)) {
-    c.Fail("tracker.reflector", "must lie within 500 mm of the flange (a reflector's bracket), "
-                                "got " + Checker::Num(t.p_FR.norm()) + " m");
-  }
-  c.Within(t.sigma_m, "tracker.sigma", 0.0, 1e-3, " m", "a laser tracker measures to microns");
-  c.Within(t.sigma_per_m, "tracker.sigma_per_m", 0.0, 1e-4, " m/m",
-           "a tracker's range-proportional error is a few um per m");
-  if (!(t.drift_m_per_s.allFinite() && t.drift_m_per_s.norm() <= 1e-6)) {
-    c.Fail("tracker.drift", "must be at most 1 um/s (3.6 mm/h), got " +
-                                Checker::Num(t.drift_m_per_s.norm()) + " m/s");
-  }
-  c.Within(t.max_range_m, "tracker.max_range", 0.1, 80.0, " m", "trackers reach about 80 m");
-}
-
-void ValidateTwinSpec(const TwinSpec& spec, const std::string& where) {
-  const Checker c(where);
-  for (int i = 0; i < kNumRobots; ++i) CheckRobot(c, spec.robots[i], i, where);
-  CheckTracker(c, spec.tracker);
+// The hand camera, the board and the intrinsics target of a two-robot cell, where they sit
+// and how far apart the two bases stand.
+void CheckCameraAndBoard(const Checker& c, const TwinSpec& spec) {
   CheckCamera(c, spec.camera);
-  c.IntRange(spec.board.robot, "board.robot", 0, kNumRobots - 1);  // the target's is ignored
+  c.IntRange(spec.board.robot, "board.robot", 0, kMaxRobots - 1);  // the target's is ignored
   CheckBoard(c, spec.board, spec.camera, "board");
   if (spec.intrinsics_target) {
     CheckBoard(c, *spec.intrinsics_target, spec.camera, "intrinsics_target");
@@ -449,7 +413,55 @@ void ValidateTwinSpec(const TwinSpec& spec, const std::string& where) {
     c.Fail("board.robot", "must differ from camera.robot (the camera and the board are on "
                           "different robots), got both " + std::to_string(spec.board.robot));
   }
-  for (int i = 0; i < kNumRobots; ++i) {
+}
+
+}  // namespace
+
+const char* ToString(Installation installation) {
+  switch (installation) {
+    case Installation::kFloor:
+      return "floor";
+    case Installation::kWall:
+      return "wall";
+    case Installation::kCeiling:
+      return "ceiling";
+  }
+  return "unknown";
+}
+
+// The tracker (plausibility): a laser tracker measures to about 80 m with micrometres of noise;
+// a reflector sits on a short bracket; a drift beyond 1 um/s would be a broken instrument.
+static void CheckTracker(const Checker& c, const TrackerSpec& t, int num_robots) {
+  if (!t.present) return;
+  c.IntRange(t.robot, "tracker.robot", 0, num_robots - 1);
+  c.Rigid(t.X_WT, "tracker.X_WT");
+  c.Offset(t.X_WT, "tracker.X_WT", kMaxWorldOffsetM, "a tracker stands in the cell");
+  if (!(t.p_FR.allFinite() && t.p_FR.norm() <= 0.5)) {
+    c.Fail("tracker.reflector", "must lie within 500 mm of the flange (a reflector's bracket), "
+                                "got " + Checker::Num(t.p_FR.norm()) + " m");
+  }
+  c.Within(t.sigma_m, "tracker.sigma", 0.0, 1e-3, " m", "a laser tracker measures to microns");
+  c.Within(t.sigma_per_m, "tracker.sigma_per_m", 0.0, 1e-4, " m/m",
+           "a tracker's range-proportional error is a few um per m");
+  if (!(t.drift_m_per_s.allFinite() && t.drift_m_per_s.norm() <= 1e-6)) {
+    c.Fail("tracker.drift", "must be at most 1 um/s (3.6 mm/h), got " +
+                                Checker::Num(t.drift_m_per_s.norm()) + " m/s");
+  }
+  c.Within(t.max_range_m, "tracker.max_range", 0.1, 80.0, " m", "trackers reach about 80 m");
+}
+
+void ValidateTwinSpec(const TwinSpec& spec, const std::string& where) {
+  const Checker c(where);
+  c.IntRange(spec.num_robots, "num_robots", 1, kMaxRobots);
+  for (int i = 0; i < spec.num_robots; ++i) CheckRobot(c, spec.robots[i], i, where);
+  CheckTracker(c, spec.tracker, spec.num_robots);
+  if (spec.HasCameraAndBoard()) {
+    CheckCameraAndBoard(c, spec);
+  } else if (spec.intrinsics_target) {
+    c.Fail("intrinsics_target", "must be absent on a one-robot cell (it has no board, and no "
+                                "camera to calibrate)");
+  }
+  for (int i = 0; i < spec.num_robots; ++i) {
     const TipSpec& t = spec.tips[i];
     const std::string field = "tips[" + std::to_string(i) + "]";
     c.Rigid(t.X_FTip, field + ".X_FTip");

@@ -15,7 +15,9 @@
 
 namespace twin {
 
-constexpr int kNumRobots = 2;
+/// The most robots a cell has. A cell has one or two (TwinSpec::num_robots); per-robot arrays
+/// hold kMaxRobots entries, of which the first num_robots are the cell's.
+constexpr int kMaxRobots = 2;
 
 /// How a robot base is mounted (Gan et al. 2014): base z up, horizontal, or down.
 enum class Installation { kFloor, kWall, kCeiling };
@@ -106,7 +108,7 @@ struct PhysicsSpec {
 struct EffectSpec {
   std::string type;                       ///< e.g. "transmission_error"
   bool declared = true;                   ///< false: the estimator is not told about it
-  int robot = -1;                         ///< 0 or 1, or -1 for both
+  int robot = -1;                         ///< 0..num_robots-1, or -1 for every robot
   int joint = -1;                         ///< 0..5, or -1 for every joint
   std::map<std::string, double> params;   ///< numbers by name
   std::string where;                      ///< where it was written, for messages
@@ -127,24 +129,33 @@ struct TrackerSpec {
   double max_range_m = 30.0;                   ///< beyond it: out of range [m]
 };
 
-/// A whole twin cell.
+/// A whole twin cell: two robots with the hand camera on one flange and the board on the
+/// other (the optical-axis and handclasp cells), or one robot alone (a laser-tracker cell),
+/// without camera, board or intrinsics target.
 struct TwinSpec {
-  std::array<RobotSpec, kNumRobots> robots;
-  CameraSpec camera;
-  BoardSpec board;
+  int num_robots = kMaxRobots;             ///< 1 or 2: robots[0..num_robots) are the cell's
+  std::array<RobotSpec, kMaxRobots> robots;
+  CameraSpec camera;                       ///< the hand camera; unused with one robot
+  BoardSpec board;                         ///< the board; unused with one robot
   /// A larger chessboard the operator can mount on the board's bracket in place of the board
   /// for the camera's intrinsic calibration (TwinCell::MountTarget); its robot field is
-  /// ignored (it goes where the board is). Absent: the cell has only the board.
+  /// ignored (it goes where the board is). Absent: the cell has only the board. Never on a
+  /// one-robot cell.
   std::optional<BoardSpec> intrinsics_target;
-  std::array<TipSpec, kNumRobots> tips;
+  std::array<TipSpec, kMaxRobots> tips;    ///< tips[0..num_robots) are the cell's
   PhysicsSpec physics;
   std::vector<EffectSpec> effects;
   TrackerSpec tracker;                    ///< a laser tracker, if present
   std::uint64_t seed = 1;                 ///< seed of every random effect
+
+  /// True for a two-robot cell: it has the hand camera and the board (camera, board); a
+  /// one-robot cell has neither.
+  bool HasCameraAndBoard() const { return num_robots == kMaxRobots; }
 };
 
 /// Checks values before anything is built; throws InputError naming `where`, the field and the
-/// bad value (e.g. a negative square size, a zero focal length, a bad robot index).
+/// bad value (e.g. a negative square size, a zero focal length, a bad robot index). A
+/// one-robot cell is checked without camera and board, and refuses an intrinsics target.
 void ValidateTwinSpec(const TwinSpec& spec, const std::string& where);
 
 }  // namespace twin

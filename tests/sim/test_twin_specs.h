@@ -38,7 +38,7 @@ inline Transform Pose(const Vector3& p, const Vector3& axis = Vector3::UnitZ(), 
 /// demo pose suits the floor installation; other installations keep it, for FK tests).
 inline TwinSpec DemoTwinSpec(Installation installation = Installation::kFloor) {
   TwinSpec spec;
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < kMaxRobots; ++k) {
     spec.robots[k].model = ReinovoArm(k);
     spec.robots[k].q_initial = DemoPose();
   }
@@ -61,6 +61,20 @@ inline TwinSpec DemoTwinSpec(Installation installation = Installation::kFloor) {
   spec.board.robot = 1;
   spec.board.X_FT = Pose(Vector3(0.002, 0.001, 0.012), Vector3::UnitZ(), DegToRad(10.0));
   for (TipSpec& tip : spec.tips) tip.X_FTip = Pose(Vector3(0.0, 0.07, 0.0));
+  return spec;
+}
+
+/// A one-robot cell (a laser-tracker cell): DemoTwinSpec's robot 0 alone, in its demo pose,
+/// with a laser tracker 2.5 m in front of it (beyond where robot 1 stood) and a reflector on
+/// its flange; no camera, board or second robot (camera and board keep DemoTwinSpec's values,
+/// which a one-robot cell ignores).
+inline TwinSpec OneRobotTwinSpec() {
+  TwinSpec spec = DemoTwinSpec();
+  spec.num_robots = 1;
+  spec.tracker.present = true;
+  spec.tracker.robot = 0;
+  spec.tracker.X_WT = Pose(Vector3(2.5, 0.3, 0.6), Vector3::UnitZ(), DegToRad(172.0));
+  spec.tracker.p_FR = Vector3(0.04, -0.03, 0.08);
   return spec;
 }
 

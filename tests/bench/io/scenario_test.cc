@@ -428,14 +428,124 @@ TEST(ScenarioErrorTest, MissingKeyIsNamed) {
                             "required key 'square_mm'"));
 }
 
-TEST(ScenarioErrorTest, ExactlyTwoRobots) {
+TEST(ScenarioErrorTest, OneOrTwoRobots) {
+  // Three: the first two again, the second renamed.
   std::string text = DemoText();
-  const std::size_t begin = text.find("    - name: r2");
+  const std::size_t begin = text.find("    - name: r1");
   const std::size_t end = text.find("  camera:");
-  text.erase(begin, end - begin);
+  const std::string third = Replaced(text.substr(text.find("    - name: r2"),
+                                                 end - text.find("    - name: r2")),
+                                     "name: r2", "name: r3");
+  text.insert(end, third);
+  std::string msg = ParseError(text);
+  EXPECT_TRUE(Contains(msg, At(LineOf(text, "    - name: r1")) + " scenario.robots: expected a "
+                            "sequence of one robot (a laser-tracker cell) or two (with the "
+                            "camera and the board), got a sequence of 3 items"));
+  // None.
+  text = DemoText();
+  text.replace(begin, end - begin, "");
+  text = Replaced(text, "  robots:\n", "  robots: []\n");
+  msg = ParseError(text);
+  EXPECT_TRUE(Contains(msg, "scenario.robots: expected a sequence of one robot"));
+  EXPECT_TRUE(Contains(msg, "got a sequence of 0 items"));
+}
+
+// ---- A one-robot cell: the arm alone with a laser tracker ----
+
+const std::string kSinglePath = kRoot + "/scenarios/tracker_single_reinovo.yaml";
+
+std::string SingleText() { return ReadFile(kSinglePath); }
+
+TEST(ScenarioOneRobotTest, TheShippedTrackerCellLoadsWithOneRobotAndNoCameraOrBoard) {
+  const Scenario s = LoadScenario(kSinglePath);
+  EXPECT_EQ(s.name, "tracker_single_reinovo");
+  EXPECT_EQ(s.twin.num_robots, 1);
+  EXPECT_FALSE(s.twin.HasCameraAndBoard());
+  EXPECT_FALSE(s.twin.intrinsics_target.has_value());
+  ASSERT_EQ(s.robot_names, std::vector<std::string>{"r1"});
+  ASSERT_EQ(s.model_paths.size(), 1u);
+  EXPECT_EQ(s.model_paths[0], kRoot + "/models/reinovo_r2.yaml");
+  EXPECT_EQ(s.twin.robots[0].model.name, "r1");
+  EXPECT_EQ(s.twin.robots[0].model.num_joints(), 6);
+  EXPECT_TRUE(s.twin.tracker.present);
+  EXPECT_EQ(s.twin.tracker.robot, 0);
+  EXPECT_TRUE(IsPresent(s.tracker_calibration));
+  EXPECT_FALSE(IsPresent(s.calibration));
+  EXPECT_FALSE(IsPresent(s.handclasp));
+  ASSERT_EQ(s.twin.effects.size(), 2u);
+  EXPECT_EQ(s.twin.effects[0].robot, -1);  // every robot: the one
+  // Tips of its one robot are read as usual.
+  const Scenario tipped = Parse(Replaced(SingleText(), "  effects:\n",
+                                         "  tips: {r1: {length_mm: 50}}\n  effects:\n"));
+  EXPECT_NEAR(tipped.twin.tips[0].length_m, 0.05, kExact);
+}
+
+// A two-robot cell's camera section, to paste into the one-robot file.
+std::string CameraSection() {
+  const std::string demo = DemoText();
+  const std::size_t a = demo.find("  camera:\n"), b = demo.find("  board:\n");
+  return demo.substr(a, b - a);
+}
+
+TEST(ScenarioOneRobotTest, ACameraBoardOrIntrinsicsTargetIsRefusedAtItsKey) {
+  for (const std::string& section :
+       {CameraSection(), std::string("  board: {robot: r1, squares: [4, 4], square_mm: 20, "
+                                     "mount: {xyz_mm: [0, 0, 40], rpy_deg: [0, 0, 0]}}\n"),
+        std::string("  intrinsics_target: {squares: [14, 10], square_mm: 20}\n")}) {
+    const std::string text = Replaced(SingleText(), "  effects:\n", section + "  effects:\n");
+    const std::string key = section.substr(2, section.find(':') - 2);
+    // A block map is located at its first key, the line after its own key.
+    const bool block = section.compare(2 + key.size(), 2, ":\n") == 0;
+    const int line = LineOf(text, "  " + key + ":") + (block ? 1 : 0);
+    EXPECT_TRUE(Contains(ParseError(text),
+                         At(line) + " scenario." + key + ": is not allowed with one robot: a "
+                         "one-robot cell is a laser-tracker cell, without camera, board or "
+                         "intrinsics target"));
+  }
+}
+
+TEST(ScenarioOneRobotTest, CalibrationOrHandclaspIsRefusedAsNeedingTwoRobots) {
+  for (const std::string key : {"calibration", "handclasp"}) {
+    const std::string text = Replaced(SingleText(), "  acceptance:\n",
+                                      "  " + key + ": {robots: [r1]}\n  acceptance:\n");
+    const std::string msg = ParseError(text);
+    EXPECT_TRUE(Contains(msg, At(LineOf(text, "  " + key + ":")) + " scenario." + key +
+                              ": is not allowed with one robot"));
+    EXPECT_TRUE(Contains(msg, "need two robots"));
+  }
+}
+
+TEST(ScenarioOneRobotTest, WithoutTrackerCalibrationItIsRefusedAtRobots) {
+  std::string text = SingleText();
+  const std::size_t a = text.find("  tracker_calibration:\n"), b = text.find("  acceptance:\n");
+  text.erase(a, b - a);
   const std::string msg = ParseError(text);
-  EXPECT_TRUE(Contains(msg, "scenario.robots: expected a sequence of exactly 2 robots, got a "
-                            "sequence of 1 items"));
+  EXPECT_TRUE(Contains(msg, At(LineOf(text, "    - name: r1")) + " scenario.robots: lists one "
+                            "robot, and a one-robot cell runs only the laser-tracker "
+                            "procedure"));
+}
+
+TEST(ScenarioOneRobotTest, ASecondRobotsNameIsUnknown) {
+  EXPECT_TRUE(Contains(ParseError(Replaced(SingleText(), "  effects:\n",
+                                           "  tips: {r2: {}}\n  effects:\n")),
+                       "scenario.tips.r2: unknown key 'r2' (allowed: r1)"));
+  const std::string text = Replaced(SingleText(), "    - type: encoder_noise\n",
+                                    "    - type: encoder_noise\n      robot: r2\n");
+  EXPECT_TRUE(Contains(ParseError(text), At(LineOf(text, "robot: r2")) +
+                                             " scenario.effects[1].robot: unknown robot 'r2' "
+                                             "(robots: r1)"));
+  EXPECT_TRUE(Contains(ParseError(Replaced(SingleText(), "  tracker:\n    robot: r1\n",
+                                           "  tracker:\n    robot: r2\n")),
+                       "scenario.tracker.robot: unknown robot 'r2' (robots: r1)"));
+}
+
+TEST(ScenarioOneRobotTest, ImageNoiseHasNoCameraToActOn) {
+  const std::string text = Replaced(SingleText(), "    - type: encoder_noise\n",
+                                    "    - type: image_noise\n      sigma_levels: 1\n"
+                                    "    - type: encoder_noise\n");
+  EXPECT_TRUE(Contains(ParseError(text), At(LineOf(text, "    - type: image_noise") ) +
+                                             " scenario.effects[1]"));
+  EXPECT_TRUE(Contains(ParseError(text), "a one-robot cell does not have"));
 }
 
 TEST(ScenarioErrorTest, DuplicateRobotName) {

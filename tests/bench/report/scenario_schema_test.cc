@@ -317,7 +317,8 @@ TEST(ScenarioSchema, TheParserRequiresWhatTheTablesRequire) {
       node.remove(k.key);
       ++tried;
       const std::string error = ParserError("removed", YAML::Dump(copy));
-      if (k.required) {
+      // The demo has two robots: what two robots require is required.
+      if (k.required || k.required_with_robots == 2) {
         EXPECT_TRUE(Contains(error, "missing required key '" + k.key + "'")) << w.section;
       } else {
         EXPECT_EQ(error, "") << w.section << "." << k.key << " is optional in the table";
@@ -325,6 +326,40 @@ TEST(ScenarioSchema, TheParserRequiresWhatTheTablesRequire) {
     }
   }
   EXPECT_GE(tried, 25);
+}
+
+// The tables' robot counts drive the parser too: in the one-robot cell
+// (scenarios/tracker_single_reinovo.yaml) every key allowed only with two robots is refused at
+// its key, and every key required with one robot is required (the schema leaves both to the
+// parser: draft-07 conditions are beyond it, and the descriptions say so).
+TEST(ScenarioSchema, TheParserFollowsTheTablesRobotCounts) {
+  const std::string single = AbsoluteModels(
+      ReadFile(std::string(TWIN_SOURCE_DIR) + "/scenarios/tracker_single_reinovo.yaml"));
+  const nlohmann::ordered_json properties =
+      ScenarioSchema()["definitions"]["scenario"]["properties"];
+  EXPECT_EQ(ParserError("single", single), "");
+  int only = 0, required = 0;
+  for (const ScenarioKey& k : ScenarioSectionNamed("scenario").keys) {
+    if (k.only_with_robots == 2) {
+      ++only;
+      const std::string error = ParserError(
+          "added", Replaced(single, "  effects:\n", "  " + k.key + ": {}\n  effects:\n"));
+      EXPECT_TRUE(Contains(error, "scenario." + k.key + ": is not allowed with one robot"))
+          << k.key << ": " << error;
+      EXPECT_TRUE(Contains(properties[k.key]["description"].get<std::string>(),
+                           "only with two robots"))
+          << k.key;
+    }
+    if (k.required_with_robots == 1) {
+      ++required;
+      YAML::Node copy = YAML::Load(single);
+      copy["scenario"].remove(k.key);
+      EXPECT_TRUE(Contains(ParserError("removed", YAML::Dump(copy)), "lists one robot"))
+          << k.key;
+    }
+  }
+  EXPECT_EQ(only, 5);      // camera, board, intrinsics_target, calibration, handclasp
+  EXPECT_EQ(required, 1);  // tracker_calibration
 }
 
 TEST(ScenarioSchema, IsDraft07WithADefinitionPerSection) {

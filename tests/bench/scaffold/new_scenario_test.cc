@@ -12,6 +12,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -156,7 +157,8 @@ INSTANTIATE_TEST_SUITE_P(ShippedArmsAndAFixture, NewScenarioOnArm,
                                            "tests/data/ur5e.urdf"));
 
 // The other two procedures, on an arm whose flange frame points out of the face (Reinovo) and
-// one whose points into the wrist (KUKA), and with two different arms.
+// one whose points into the wrist (KUKA), and with two different arms. The tracker's file
+// without --second is a one-robot cell (issue 41, item 4).
 TEST(NewScenario, TrackerAndHandclaspFilesPassCheck) {
   const fs::path dir = TempDir("procedures");
   for (const char* model : {"models/reinovo_r1.yaml", "models/kuka_kr6r900sixx.urdf"}) {
@@ -170,8 +172,29 @@ TEST(NewScenario, TrackerAndHandclaspFilesPassCheck) {
                                                                         : "handclasp"),
                 std::string::npos)
           << checked.output;
+      // Without --second the tracker cell is the arm alone: one robot, no camera or board.
+      const Scenario sc = LoadScenario(out.string());
+      const bool tracker = procedure == std::string("tracker");
+      EXPECT_EQ(sc.twin.num_robots, tracker ? 1 : 2) << model << " " << procedure;
+      if (tracker) {
+        EXPECT_EQ(sc.robot_names, std::vector<std::string>{"r1"});
+        EXPECT_EQ(sc.twin.tracker.robot, 0);
+        const std::string text = ReadText(out);
+        for (const char* absent : {"camera:", "board:", "name: r2"}) {
+          EXPECT_EQ(text.find(absent), std::string::npos) << model << ": " << absent;
+        }
+      }
     }
   }
+  // With --second the tracker keeps the two-arm cell: camera, board, the reflector on r2.
+  const fs::path pair = dir / "two_arms_tracker.yaml";
+  const CliRun tracked = Twinbench("new-scenario --robot " + kSource + "/models/reinovo_r1.yaml" +
+                                   " --second " + kSource + "/models/reinovo_r2.yaml" +
+                                   " --procedure tracker --out " + pair.string());
+  ASSERT_EQ(tracked.code, 0) << tracked.output;
+  const Scenario two_sc = LoadScenario(pair.string());
+  EXPECT_EQ(two_sc.twin.num_robots, 2);
+  EXPECT_EQ(two_sc.twin.tracker.robot, 1);
   const fs::path two = dir / "two_arms.yaml";
   const CliRun made = Twinbench("new-scenario --robot " + kSource + "/models/reinovo_r1.yaml" +
                                 " --second " + kSource + "/models/reinovo_r2.yaml" +

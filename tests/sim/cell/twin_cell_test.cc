@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <string>
 #include <utility>
@@ -104,7 +105,7 @@ TEST_F(TwinCellTest, GeometryEffectsMakeTheTrueModel) {
       EffectOf("geometry_errors", {{"sigma_length_mm", 0.5}, {"sigma_angle_deg", 0.05}}, -1, -1));
   TwinCell cell(spec);
   const TwinTruth truth = cell.Truth();
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < kMaxRobots; ++k) {
     EXPECT_NE(truth.models[k].links[1].dh.a, spec.robots[k].model.links[1].dh.a);
     // The twin's frames follow the perturbed model exactly (see mjcf_writer_test for 1e-9).
     const FrameSet f = ForwardKinematics(truth.models[k], truth.q_link[k]);
@@ -123,7 +124,7 @@ TEST_F(TwinCellTest, StartsAtRestAtTheInitialPoseWithTheTrueGeometry) {
   const TwinSpec spec = DemoTwinSpec();
   TwinCell cell(spec);
   const TwinTruth truth = cell.Truth();
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < kMaxRobots; ++k) {
     // Gravity is fed forward: the link holds its target to rounding (see the move test).
     EXPECT_LT((truth.q_link[k] - DemoPose()).cwiseAbs().maxCoeff(), 1e-9);
     EXPECT_EQ(truth.q_motor[k], DemoPose());
@@ -183,7 +184,7 @@ TEST_F(TwinCellTest, CompliantJointSagsByGravityTorqueOverStiffness) {
   // MuJoCo's gravity torque on joint 2 in the final state, from a copy of the twin's model.
   const MjModelPtr m = LoadMjcfFromString(cell.mjcf());
   MjDataPtr d(mj_makeData(m.get()));
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < kMaxRobots; ++k) {
     for (int i = 0; i < 6; ++i) {
       const std::string name = "robot" + std::to_string(k + 1) + "_j" + std::to_string(i + 1);
       d->qpos[m->jnt_qposadr[mj_name2id(m.get(), mjOBJ_JOINT, name.c_str())]] = t.q_link[k](i);
@@ -275,11 +276,81 @@ TEST_F(TwinCellTest, RejectedTargetsMoveNothing) {
   nan(4) = std::nan("");
   EXPECT_EQ(cell.MoveTo(1, nan).status, MoveStatus::kInvalidInput);
   const TwinTruth after = cell.Truth();
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < kMaxRobots; ++k) {
     EXPECT_EQ(after.q_link[k], before.q_link[k]);
     EXPECT_EQ(after.q_motor[k], before.q_motor[k]);
   }
   EXPECT_THROW(cell.ReadEncoders(-1), InputError);
+}
+
+// A one-robot cell moves and measures its robot; what needs the camera, the board or a second
+// robot is refused with a reason (kInvalidInput or an InputError), never an index out of range.
+TEST_F(TwinCellTest, AOneRobotCellMovesAndMeasuresItsRobotAndRefusesTheRest) {
+  const TwinSpec spec = testing::OneRobotTwinSpec();
+  TwinCell cell(spec);
+  const MoveResult m = cell.MoveTo(0, FreeTarget());
+  ASSERT_EQ(m.status, MoveStatus::kSettled) << m.reason;
+  const TwinTruth t = cell.Truth();
+  EXPECT_EQ(t.num_robots, 1);
+  EXPECT_LT((t.q_link[0] - FreeTarget()).cwiseAbs().maxCoeff(), 1e-9);  // as the move test
+  EXPECT_EQ(cell.ReadEncoders(0), FreeTarget());
+  // The tracker sees the reflector where the flange holds it: 0.01 mm noise per axis, so
+  // 1e-4 m is 10 sigma.
+  const TrackerReading r = cell.MeasureTracker(0);
+  ASSERT_EQ(r.status, TrackerStatus::kOk) << r.reason;
+  const Vector3 p_T = spec.tracker.X_WT.inverse() * (t.X_WF[0] * spec.tracker.p_FR);
+  EXPECT_LT((r.p_T - p_T).norm(), 1e-4);
+  EXPECT_EQ(cell.mjcf().find("robot2_"), std::string::npos);
+  const cv::Mat overview = cell.RenderOverview(160, 120, 135, -25);
+  EXPECT_EQ(overview.cols, 160);
+  EXPECT_EQ(overview.rows, 120);
+
+  const MoveResult second = cell.MoveTo(1, FreeTarget());
+  EXPECT_EQ(second.status, MoveStatus::kInvalidInput);
+  EXPECT_NE(second.reason.find("not a robot of this cell (0..0)"), std::string::npos)
+      << second.reason;
+  EXPECT_THROW(cell.ReadEncoders(1), InputError);
+  EXPECT_THROW(cell.SiteFrames(1), InputError);
+  EXPECT_EQ(cell.MeasureTracker(1).status, TrackerStatus::kNoTracker);
+  for (const auto& call : std::vector<std::function<void()>>{
+           [&] { cell.GrabImage(); }, [&] { cell.GrabImageRegion(cv::Rect(0, 0, 8, 8)); },
+           [&] { cell.CameraRobot(); }, [&] { cell.RenderBare(); }}) {
+    try {
+      call();
+      ADD_FAILURE() << "expected an InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("no hand camera"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(cell.ExchangeTools().status, MoveStatus::kInvalidInput);
+  for (BracketTarget target : {BracketTarget::kFeatureBoard, BracketTarget::kIntrinsicsTarget}) {
+    EXPECT_EQ(cell.MountTarget(target).status, MoveStatus::kInvalidInput) << ToString(target);
+  }
+  const MoveResult clasp = cell.JogTipToContact(0);
+  EXPECT_EQ(clasp.status, MoveStatus::kInvalidInput);
+  EXPECT_NE(clasp.reason.find("needs two robots"), std::string::npos) << clasp.reason;
+  // Nothing of it moved the robot.
+  EXPECT_EQ(cell.Truth().q_link[0], t.q_link[0]);
+}
+
+// An effect that acts through the camera or the board has nothing to act on in a one-robot
+// cell: refused at its where, as a two-robot cell takes it.
+TEST_F(TwinCellTest, AOneRobotCellRefusesCameraAndBoardEffects) {
+  for (const EffectSpec& e : {EffectOf("image_noise", {{"sigma_levels", 1.0}}, -1, -1),
+                              EffectOf("mount_deflection", {}, -1, -1)}) {
+    TwinSpec spec = testing::OneRobotTwinSpec();
+    spec.effects.push_back(e);
+    try {
+      TwinCell cell(spec);
+      ADD_FAILURE() << e.type << ": expected an InputError";
+    } catch (const InputError& error) {
+      EXPECT_EQ(error.where(), "test effects");
+      EXPECT_NE(std::string(error.what()).find("one-robot cell"), std::string::npos)
+          << error.what();
+    }
+    spec.num_robots = 2;
+    EXPECT_NO_THROW(MakeEffects(spec)) << e.type;
+  }
 }
 
 TEST_F(TwinCellTest, MoveRunsOutOfStepsWithATinyLimit) {
@@ -299,7 +370,7 @@ TEST_F(TwinCellTest, QuantizedEncodersReadWholeCounts) {
   TwinCell cell(spec);
   ASSERT_EQ(cell.MoveTo(0, FreeTarget()).status, MoveStatus::kSettled);
   const double count = 2 * kPi / kCounts;
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < kMaxRobots; ++k) {
     const JointVector reading = cell.ReadEncoders(k);
     for (int i = 0; i < 6; ++i) {
       const double n = reading(i) / count;

@@ -94,7 +94,7 @@ KinematicModel WithTwinMasses(KinematicModel chain, const TwinCell& cell, int k)
   const MjModelPtr m = LoadMjcfFromString(cell.mjcf());
   MjDataPtr d(mj_makeData(m.get()));
   const TwinTruth t = cell.Truth();
-  for (int r = 0; r < kNumRobots; ++r) {
+  for (int r = 0; r < kMaxRobots; ++r) {
     for (int i = 0; i < 6; ++i) {
       const std::string name = "robot" + std::to_string(r + 1) + "_j" + std::to_string(i + 1);
       d->qpos[m->jnt_qposadr[mj_name2id(m.get(), mjOBJ_JOINT, name.c_str())]] = t.q_link[r](i);

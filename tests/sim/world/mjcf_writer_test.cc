@@ -26,15 +26,15 @@ class MjcfWriterTest : public ::testing::Test {
   void SetUp() override { InstallMujocoErrorHandlers(); }
 };
 
-std::array<std::vector<JointDrive>, kNumRobots> Drives(const TwinSpec& spec) {
-  std::array<std::vector<JointDrive>, kNumRobots> drives;
-  for (int k = 0; k < kNumRobots; ++k) {
+std::array<std::vector<JointDrive>, kMaxRobots> Drives(const TwinSpec& spec) {
+  std::array<std::vector<JointDrive>, kMaxRobots> drives;
+  for (int k = 0; k < kMaxRobots; ++k) {
     drives[k].assign(spec.robots[k].model.num_joints(), {spec.physics.stiffness, true});
   }
   return drives;
 }
 
-std::array<KinematicModel, kNumRobots> Models(const TwinSpec& spec) {
+std::array<KinematicModel, kMaxRobots> Models(const TwinSpec& spec) {
   return {spec.robots[0].model, spec.robots[1].model};
 }
 
@@ -113,14 +113,14 @@ TEST_F(MjcfWriterTest, SitesMatchCalibForwardKinematicsForEveryInstallation) {
     spec.robots[1].model.links[6].dh.beta = -0.01;
     World w(spec);
     for (int c = 0; c < kConfigs; ++c) {
-      std::array<JointVector, kNumRobots> q;
-      for (int k = 0; k < kNumRobots; ++k) {
+      std::array<JointVector, kMaxRobots> q;
+      for (int k = 0; k < kMaxRobots; ++k) {
         q[k] = RandomJoints(spec.robots[k].model, rng);
         w.SetJoints(k, q[k]);
       }
       mj_kinematics(w.m.get(), w.d.get());
       mj_camlight(w.m.get(), w.d.get());  // camera poses
-      for (int k = 0; k < kNumRobots; ++k) {
+      for (int k = 0; k < kMaxRobots; ++k) {
         const FrameSet f = ForwardKinematics(spec.robots[k].model, q[k]);
         const Transform& X_WB = spec.robots[k].X_WB;
         for (int i = 0; i <= 7; ++i) {
@@ -169,7 +169,7 @@ TEST_F(MjcfWriterTest, InertialsAreTheModelsExpressedInTheBodyFrames) {
   w.SetJoints(0, q);
   w.SetJoints(1, q);
   mj_forward(w.m.get(), w.d.get());
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < kMaxRobots; ++k) {
     const KinematicModel& model = spec.robots[k].model;
     const FrameSet f = ForwardKinematics(model, q);
     for (int i = 0; i < 6; ++i) {
@@ -198,7 +198,7 @@ TEST_F(MjcfWriterTest, DrivesJointsAndOptionsFollowTheSpec) {
   TwinSpec spec = DemoTwinSpec();
   spec.physics.timestep_s = 0.001;
   spec.camera.msaa_samples = 2;
-  std::array<std::vector<JointDrive>, kNumRobots> drives = Drives(spec);
+  std::array<std::vector<JointDrive>, kMaxRobots> drives = Drives(spec);
   drives[1][2].stiffness = 2e4;
   World w(spec);  // default drives, for the damping check below
   const MjModelPtr m = LoadMjcfFromString(WriteTwinMjcf(spec, Models(spec), drives));
@@ -209,7 +209,7 @@ TEST_F(MjcfWriterTest, DrivesJointsAndOptionsFollowTheSpec) {
   EXPECT_GE(m->vis.global.offwidth, 1600);
   EXPECT_GE(m->vis.global.offheight, 1200);
   ASSERT_EQ(m->nu, 2 * 6);
-  for (int k = 0; k < kNumRobots; ++k) {
+  for (int k = 0; k < kMaxRobots; ++k) {
     for (int i = 0; i < 6; ++i) {
       const std::string s = "robot" + std::to_string(k + 1) + "_";
       const int a = mj_name2id(m.get(), mjOBJ_ACTUATOR, (s + "a" + std::to_string(i + 1)).c_str());
@@ -333,6 +333,37 @@ TEST_F(MjcfWriterTest, RobotRobotToolAndSelfContactsAreDetected) {
   w.SetJoints(0, wrist);
   mj_forward(w.m.get(), w.d.get());
   EXPECT_TRUE(HasPair(ContactBodies(w), "robot1_link4", "robot1_camera")) << w.d->ncon << " contacts";
+}
+
+// A one-robot cell's world holds that robot and nothing of a second robot, the camera or the
+// board; it compiles and rests without contacts, and its sites are calib's frames.
+TEST_F(MjcfWriterTest, AOneRobotCellHasOneRobotAndNoCameraOrBoard) {
+  const TwinSpec spec = testing::OneRobotTwinSpec();
+  const World w(spec);
+  EXPECT_EQ(w.mjcf.find("robot2_"), std::string::npos);
+  EXPECT_EQ(w.mjcf.find("<camera"), std::string::npos);
+  EXPECT_EQ(w.mjcf.find("board"), std::string::npos);
+  EXPECT_EQ(w.m->ncam, 0);
+  EXPECT_EQ(mj_name2id(w.m.get(), mjOBJ_BODY, "robot1_camera"), -1);
+  EXPECT_EQ(mj_name2id(w.m.get(), mjOBJ_BODY, "robot1_board"), -1);
+  EXPECT_EQ(w.m->nu, spec.robots[0].model.num_joints());  // one actuator per joint of robot 1
+  EXPECT_EQ(w.m->njnt, spec.robots[0].model.num_joints());
+  EXPECT_GE(w.Id(mjOBJ_BODY, "robot1_tip"), 0);
+  // The two-robot cell has both (so the checks above can fail).
+  const World both(DemoTwinSpec());
+  EXPECT_NE(both.mjcf.find("robot2_"), std::string::npos);
+  EXPECT_EQ(both.m->ncam, 1);
+  EXPECT_GE(both.Id(mjOBJ_BODY, "robot2_board"), 0);
+
+  World rest(spec);
+  rest.SetJoints(0, spec.robots[0].q_initial);
+  mj_forward(rest.m.get(), rest.d.get());
+  EXPECT_EQ(rest.d->ncon, 0);
+  const FrameSet f = ForwardKinematics(spec.robots[0].model, spec.robots[0].q_initial);
+  // The flange site against calib's FK (base at the origin), to the 1 nm of the
+  // every-installation test above (double rounding of six composed transforms, ~1e-15 m).
+  const Transform X_WF = rest.SitePose("robot1_L6");
+  EXPECT_LT((X_WF.translation() - f.flange().translation()).norm(), 1e-9);
 }
 
 TEST_F(MjcfWriterTest, TipsCollideWithTheOtherRobotButNotWithEachOther) {

@@ -4,6 +4,8 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -22,7 +24,7 @@ Matrix3 RotZ(double deg) { return Eigen::AngleAxisd(DegToRad(deg), Vector3::Unit
 /// A valid cell: two Reinovo-like arms on the floor, 1.2 m apart and facing each other.
 TwinSpec ValidSpec() {
   TwinSpec spec;
-  for (int i = 0; i < kNumRobots; ++i) {
+  for (int i = 0; i < kMaxRobots; ++i) {
     spec.robots[i].model = testing::ReinovoLikeModel();
     spec.robots[i].model.name = i == 0 ? "r1" : "r2";
   }
@@ -412,6 +414,65 @@ TEST(TwinSpecErrorTest, EffectIndices) {
                              std::numeric_limits<double>::infinity();
                        }),
                        "effects[0].params.amplitude_deg must be a finite number, got inf"));
+}
+
+// ---- A one-robot cell (a laser-tracker cell): no camera, board or second robot ----
+
+/// ValidSpec's robot 1 alone with a tracker on it; camera and board left as the two-robot
+/// cell had them, to show they are not looked at.
+TwinSpec OneRobotSpec() {
+  TwinSpec spec = ValidSpec();
+  spec.num_robots = 1;
+  spec.effects[0].robot = 0;
+  spec.tracker.present = true;
+  spec.tracker.robot = 0;
+  spec.tracker.X_WT.translation() = Vector3(-2.0, -0.4, 0.9);
+  spec.tracker.p_FR = Vector3(0.04, -0.03, 0.08);
+  return spec;
+}
+
+TEST(TwinSpecOneRobotTest, ValidWithoutCameraAndBoard) {
+  TwinSpec spec = OneRobotSpec();
+  EXPECT_FALSE(spec.HasCameraAndBoard());
+  EXPECT_NO_THROW(ValidateTwinSpec(spec, kWhere));
+  // Camera, board and a second robot's entries are not checked: each value below is refused
+  // by a two-robot cell and passes here.
+  const std::vector<std::pair<std::string, std::function<void(TwinSpec*)>>> unused = {
+      {"camera.intrinsics.fx", [](TwinSpec* s) { s->camera.intrinsics.fx = 0.0; }},
+      {"board.square_m", [](TwinSpec* s) { s->board.square_m = -1.0; }},
+      {"board.robot must differ", [](TwinSpec* s) { s->camera.robot = s->board.robot = 1; }},
+      {"robots[1].X_WB",
+       [](TwinSpec* s) { s->robots[1].X_WB.translation() = Vector3(500, 0, 0); }},
+      {"tips[1].length_m", [](TwinSpec* s) { s->tips[1].length_m = -1.0; }}};
+  for (const auto& [field, change] : unused) {
+    TwinSpec one = OneRobotSpec();
+    change(&one);
+    EXPECT_NO_THROW(ValidateTwinSpec(one, kWhere)) << field;
+    one.num_robots = 2;
+    EXPECT_TRUE(Contains(ErrorOf(one), field));
+  }
+}
+
+TEST(TwinSpecOneRobotTest, RefusesAnIntrinsicsTargetAndIndicesOfASecondRobot) {
+  TwinSpec spec = OneRobotSpec();
+  spec.intrinsics_target = spec.board;
+  EXPECT_TRUE(Contains(ErrorOf(spec), "intrinsics_target must be absent on a one-robot cell"));
+  spec = OneRobotSpec();
+  spec.tracker.robot = 1;
+  EXPECT_TRUE(Contains(ErrorOf(spec), "tracker.robot must be from 0 to 0, got 1"));
+  spec = OneRobotSpec();
+  spec.effects[0].robot = 1;
+  EXPECT_TRUE(Contains(ErrorOf(spec), "effects[0].robot must be from -1 to 0, got 1"));
+  spec = OneRobotSpec();
+  spec.robots[0].q_initial(1) = 10.0;  // still checked: the cell's own robot
+  EXPECT_TRUE(Contains(ErrorOf(spec), "robots[0].q_initial[1]"));
+}
+
+TEST(TwinSpecErrorTest, NumberOfRobotsIsOneOrTwo) {
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->num_robots = 0; }),
+                       "num_robots must be from 1 to 2, got 0"));
+  EXPECT_TRUE(Contains(ErrorAfter([](TwinSpec* s) { s->num_robots = 3; }),
+                       "num_robots must be from 1 to 2, got 3"));
 }
 
 }  // namespace
