@@ -5,6 +5,8 @@
 # seeds"), the median and worst rigid, similarity and validation (misaligned, held-out axes)
 # errors, the scale error (estimated / true - 1) RMS and worst; then, over the trials both
 # hold, the paired change of each robot's similarity figure.
+# Last, the acceptance rule for a change that moves figures (scripts/paired_verdict.py): its
+# figures and verdict, and its exit status (0 accepted, 1 rejected, 2 bad input).
 # Usage: scripts/compare_studies.sh BEFORE_DIR AFTER_DIR [FIRST-LAST ...]
 #   (default ranges: 1-20 21-40 41-60); each DIR holds a study's trials.jsonl.
 set -euo pipefail
@@ -70,3 +72,5 @@ join -t $'\t' <(rows "$BEFORE" | awk -F'\t' '{print $1 ":" $2 "\t" $4}' | sort) 
       m = n % 2 ? d[(n + 1) / 2] : (d[n / 2] + d[n / 2 + 1]) / 2
       printf "paired similarity change (after - before) over %d robot calibrations: median %+.4f mm, lower after in %d\n", n, m, lower
     }'
+# The acceptance rule over every paired trial.
+exec python3 "$(dirname "$0")/paired_verdict.py" "$(dirname "$BEFORE")" "$(dirname "$AFTER")"

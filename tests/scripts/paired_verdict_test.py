@@ -1,0 +1,108 @@
+#!/usr/bin/env python3
+"""scripts/paired_verdict.py on synthetic paired studies whose verdict follows from how they
+are built: the same figures after as before are accepted; every figure 10 % worse, a robot
+newly above 0.6 mm rigid, a seed that stops meeting the targets and too few trials are each
+rejected; trials of the same number on other seeds are bad input (exit 2)."""
+import json
+import os
+import random
+import subprocess
+import sys
+import tempfile
+import unittest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SCRIPT = os.path.join(ROOT, "scripts", "paired_verdict.py")
+
+
+def record(trial, r1_rigid, r2_rigid, similarity_share=0.4, seed_offset=0, status="ok"):
+    figures = {}
+    for robot, rigid in (("r1", r1_rigid), ("r2", r2_rigid)):
+        figures["robots.%s.truth_position_error_mm.rigid.after.rms" % robot] = rigid
+        figures["robots.%s.truth_position_error_mm.similarity.after.rms" % robot] = (
+            similarity_share * rigid)
+    return {"trial": trial, "status": status, "scenario_hash": "0123456789abcdef",
+            "seeds": {"truth": 7 + trial + seed_offset, "estimator": 7 + trial},
+            "figures": figures if status == "ok" else {}}
+
+
+def base_study(n=40):
+    rng = random.Random(11)
+    # rigid 0.05-0.2 mm, similarity 0.4 of it (0.02-0.08 mm): every seed meets the targets.
+    return [record(t, rng.uniform(0.05, 0.2), rng.uniform(0.05, 0.2)) for t in range(n)]
+
+
+class PairedVerdictTest(unittest.TestCase):
+    def run_verdict(self, before, after, *extra):
+        with tempfile.TemporaryDirectory() as d:
+            for name, records in (("before", before), ("after", after)):
+                os.mkdir(os.path.join(d, name))
+                with open(os.path.join(d, name, "trials.jsonl"), "w") as f:
+                    f.write("".join(json.dumps(r) + "\n" for r in records))
+            p = subprocess.run([sys.executable, SCRIPT, os.path.join(d, "before"),
+                                os.path.join(d, "after")] + list(extra),
+                               capture_output=True, text=True)
+            return p.returncode, p.stdout + p.stderr
+
+    def test_the_same_figures_are_accepted(self):
+        code, out = self.run_verdict(base_study(), base_study())
+        self.assertEqual(code, 0, out)
+        self.assertIn("verdict: ACCEPTED", out)
+        self.assertIn("mean after/before 1.0000 over 40 trials", out)
+
+    def test_ten_percent_worse_everywhere_is_rejected(self):
+        after = base_study()
+        for r in after:
+            for k in r["figures"]:
+                r["figures"][k] *= 1.10
+        code, out = self.run_verdict(base_study(), after)
+        self.assertEqual(code, 1, out)
+        self.assertIn("mean after/before 1.1000", out)
+        self.assertIn("verdict: REJECTED", out)
+
+    def test_three_percent_worse_with_scatter_is_accepted(self):
+        # Ratios 1.03 +- 0.02 (uniform, sd 0.0115): the bound is about 1.03 + 1.68 x 0.0115 /
+        # sqrt(40) = 1.033, below 1.05.
+        rng = random.Random(3)
+        after = base_study()
+        for r in after:
+            f = 1.03 + rng.uniform(-0.02, 0.02)
+            for k in r["figures"]:
+                r["figures"][k] *= f
+        code, out = self.run_verdict(base_study(), after)
+        self.assertEqual(code, 0, out)
+
+    def test_a_robot_newly_above_0_6_mm_is_rejected(self):
+        before, after = base_study(), base_study()
+        # 0.55 -> 0.65 mm in one trial: newly above 0.6 (and the target missed both times, so
+        # the share of seeds meeting it does not change).
+        for r, v in ((before[5], 0.55), (after[5], 0.65)):
+            r["figures"]["robots.r2.truth_position_error_mm.rigid.after.rms"] = v
+        code, out = self.run_verdict(before, after)
+        self.assertEqual(code, 1, out)
+        self.assertIn("trial 5 r2 0.550 -> 0.650", out)
+
+    def test_a_seed_that_stops_meeting_the_targets_is_rejected(self):
+        after = base_study()
+        after[7] = record(7, 0.1, 0.1, status="failed")
+        code, out = self.run_verdict(base_study(), after)
+        self.assertEqual(code, 1, out)
+        self.assertIn("40 before, 39 after (not fewer: NO)", out)
+
+    def test_too_few_paired_trials_are_rejected(self):
+        code, out = self.run_verdict(base_study(39), base_study(39))
+        self.assertEqual(code, 1, out)
+        self.assertIn("too few paired trials: 39, the rule needs 40", out)
+        code, out = self.run_verdict(base_study(39), base_study(39), "--min-trials", "30")
+        self.assertEqual(code, 0, out)
+
+    def test_other_seeds_are_bad_input(self):
+        after = base_study()
+        after[3] = record(3, 0.1, 0.1, seed_offset=1)
+        code, out = self.run_verdict(base_study(), after)
+        self.assertEqual(code, 2, out)
+        self.assertIn("trial 3 ran on other seeds", out)
+
+
+if __name__ == "__main__":
+    unittest.main()
