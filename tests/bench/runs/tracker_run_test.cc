@@ -36,6 +36,19 @@ fs::path Folder(const std::string& name) {
   return d;
 }
 
+// `twinbench run --no-diagnosis` of scenario `text`, written to dir/s.yaml, into dir/out.
+testing::ProcessRun RunScenario(const fs::path& dir, const std::string& text) {
+  std::ofstream(dir / "s.yaml") << text;
+  return testing::TwinbenchArgs(
+      {"run", (dir / "s.yaml").string(), "--out", (dir / "out").string(), "--no-diagnosis"}, 300);
+}
+
+// The report.json RunScenario wrote.
+nlohmann::json Report(const fs::path& dir) {
+  std::ifstream in(dir / "out" / "report.json");
+  return nlohmann::json::parse(in);
+}
+
 // 40 poses with 0.01 mm of tracker noise: the truth RMS after the rigid gauge is well under
 // the 0.03 mm of the full scenario (measured 0.005-0.006 mm with 100 poses; 40 poses give
 // about sqrt(100/40) = 1.6 times that), and the identifiable combinations lie within 3 of
@@ -43,13 +56,9 @@ fs::path Folder(const std::string& name) {
 // The measurements.csv it writes is a tracker file that `twinbench identify` reads back.
 TEST(TrackerRun, ReducedRunMeetsTheTruthTargetAndItsFileReadsBack) {
   const fs::path dir = Folder("reduced");
-  std::ofstream(dir / "s.yaml") << Scenario(40, true);
-  const testing::ProcessRun r = testing::TwinbenchArgs(
-      {"run", (dir / "s.yaml").string(), "--out", (dir / "out").string(), "--no-diagnosis"},
-      300);
+  const testing::ProcessRun r = RunScenario(dir, Scenario(40, true));
   ASSERT_EQ(r.code, 0) << r.output;
-  std::ifstream in(dir / "out" / "report.json");
-  const nlohmann::json j = nlohmann::json::parse(in);
+  const nlohmann::json j = Report(dir);
   EXPECT_EQ(j["tracker"]["poses"], 40);
   EXPECT_LT(j["truth_position_error_mm"]["rigid"]["after"]["rms"].get<double>(), 0.03);
   EXPECT_GT(j["truth_position_error_mm"]["rigid"]["before"]["rms"].get<double>(), 1.0);
@@ -95,13 +104,9 @@ std::string SingleScenario(int poses) {
 // its usual files. The nominal model is off the truth by millimetres before.
 TEST(TrackerRun, AOneRobotCellRunsEndToEndWithinItsAcceptance) {
   const fs::path dir = Folder("single");
-  std::ofstream(dir / "s.yaml") << SingleScenario(40);
-  const testing::ProcessRun r = testing::TwinbenchArgs(
-      {"run", (dir / "s.yaml").string(), "--out", (dir / "out").string(), "--no-diagnosis"},
-      300);
+  const testing::ProcessRun r = RunScenario(dir, SingleScenario(40));
   ASSERT_EQ(r.code, 0) << r.output;
-  std::ifstream in(dir / "out" / "report.json");
-  const nlohmann::json j = nlohmann::json::parse(in);
+  const nlohmann::json j = Report(dir);
   EXPECT_EQ(j["robot"], "r1");
   EXPECT_EQ(j["tracker"]["poses"], 40);
   EXPECT_LT(j["truth_position_error_mm"]["rigid"]["after"]["rms"].get<double>(), 0.03);
