@@ -204,17 +204,6 @@ struct PoseChoice {
   double score = -1, sv = 0, margin = 0;
 };
 
-// q with each joint turned by whole turns (the same pose) to the angle within its limits
-// nearest `ref`.
-JointVector NearestTurns(const KinematicModel& m, JointVector q, const JointVector& ref) {
-  for (int i = 0; i < m.num_joints(); ++i) {
-    const JointLimits& l = m.links[i].limits;
-    const double v = q(i) + 2.0 * kPi * std::round((ref(i) - q(i)) / (2.0 * kPi));
-    if (v >= l.lower && v <= l.upper) q(i) = v;
-  }
-  return q;
-}
-
 // Whether the elbow (the origin of DH frame L2, joint 3's axis) stands above the shoulder
 // (L1) by a tenth of the upper arm at `q`: the posture arms work in. An arm whose upper arm
 // lies level or hangs (a UR's shoulder at -180 deg) is a small move away from its own base.

@@ -107,4 +107,16 @@ JointVector MidRange(const KinematicModel& model) {
   return q;
 }
 
+JointVector NearestTurns(const KinematicModel& model, JointVector q, const JointVector& ref) {
+  for (int i = 0; i < model.num_joints(); ++i) {
+    const JointLimits& l = model.links[i].limits;
+    const double turns = std::round((ref(i) - q(i)) / (2.0 * kPi));
+    for (const double k : {turns, turns - 1.0, turns + 1.0}) {
+      const double v = q(i) + 2.0 * kPi * k;
+      if (v >= l.lower && v <= l.upper && std::abs(v - ref(i)) < std::abs(q(i) - ref(i))) q(i) = v;
+    }
+  }
+  return q;
+}
+
 }  // namespace twin

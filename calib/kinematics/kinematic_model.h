@@ -105,4 +105,9 @@ bool WithinLimits(const KinematicModel& model, const JointVector& q);
 /// Midpoint of each joint's travel [rad].
 JointVector MidRange(const KinematicModel& model);
 
+/// q with each joint turned by whole turns (the same pose) to the angle within its limits
+/// nearest ref's (unchanged where no such angle is nearer): on joints that turn more than a full
+/// turn (a UR's +-360 deg) an IK solution may lie a turn away from where the arm is.
+JointVector NearestTurns(const KinematicModel& model, JointVector q, const JointVector& ref);
+
 }  // namespace twin

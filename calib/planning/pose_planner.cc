@@ -26,21 +26,6 @@ constexpr int kAxisHead = 7;     // P_c (3), yaw, pitch, camera roll, D
 constexpr int kPerPosition = 3;  // tilt a, tilt b, board roll
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// q with each joint turned by whole turns (the same pose) to the angle within its limits
-// nearest `ref`: the IK's wrap into the limits takes the lowest such angle, which on joints
-// that turn more than a full turn can be a turn away from where the arm is.
-JointVector NearestTurn(const KinematicModel& m, JointVector q, const JointVector& ref) {
-  for (int i = 0; i < m.num_joints(); ++i) {
-    const JointLimits& l = m.links[i].limits;
-    const double turns = std::round((ref(i) - q(i)) / (2.0 * kPi));
-    for (const double k : {turns, turns - 1.0, turns + 1.0}) {
-      const double v = q(i) + 2.0 * kPi * k;
-      if (v >= l.lower && v <= l.upper && std::abs(v - ref(i)) < std::abs(q(i) - ref(i))) q(i) = v;
-    }
-  }
-  return q;
-}
-
 enum class Cause { kNone, kActiveIk, kPassiveIk, kC1, kC2, kC3, kC4, kC5 };
 
 void Count(Cause c, RejectionCounts* r) {
@@ -122,7 +107,7 @@ struct Planner {
     IkResult ik_a = SolveIk(active, X_BaBp * X_BpC * X_CF,
                             o.active_ik_seed.size() ? o.active_ik_seed : MidRange(active), ik);
     if (ik_a.status != IkStatus::kSuccess) return Cause::kActiveIk;
-    if (o.active_ik_seed.size()) ik_a.q = NearestTurn(active, ik_a.q, o.active_ik_seed);
+    if (o.active_ik_seed.size()) ik_a.q = NearestTurns(active, ik_a.q, o.active_ik_seed);
     if (Cause c = CheckConfiguration(active, ik_a.q, o, active_trig); c != Cause::kNone) return c;
     // Camera as the active robot actually reaches it (within IK tolerance).
     const Transform X_BpC_fk = X_BpBa * EndPose(active, ik_a.q, &active_trig) * X_CF.inverse();
@@ -147,7 +132,7 @@ struct Planner {
       X_BpE.translation() = p_c + d_i * mu;
       IkResult ik_p = SolveIk(passive, X_BpE, seed, ik);
       if (ik_p.status != IkStatus::kSuccess) return Cause::kPassiveIk;
-      if (o.passive_ik_seed.size()) ik_p.q = NearestTurn(passive, ik_p.q, seed);
+      if (o.passive_ik_seed.size()) ik_p.q = NearestTurns(passive, ik_p.q, seed);
       if (Cause c = CheckConfiguration(passive, ik_p.q, o, passive_trig); c != Cause::kNone) {
         return c;
       }

@@ -100,5 +100,30 @@ TEST(JointLimits, WithinLimitsAndMidRange) {
   EXPECT_TRUE(WithinLimits(m, q));
 }
 
+// Whole turns only, to the angle nearest the reference inside the limits: a +-360 deg joint at
+// -310 deg next to a reference of 0 goes to 50 deg; a +-180 deg joint stays where no turned
+// angle fits (170 deg next to -170 deg: 170 - 360 = -190 is outside); a turn that moves away
+// from the reference is not made.
+TEST(NearestTurns, TurnsByWholeTurnsTowardsTheReferenceInsideTheLimits) {
+  KinematicModel m = testing::ReinovoLikeModel();
+  m.links[0].limits = JointLimits{-2 * kPi, 2 * kPi};
+  m.links[1].limits = JointLimits{-kPi, kPi};
+  const auto deg = [](double d) { return DegToRad(d); };
+  JointVector q = JointVector::Zero(6), ref = JointVector::Zero(6);
+  q(0) = deg(-310);
+  q(1) = deg(170);
+  ref(1) = deg(-170);
+  q(2) = deg(10);
+  const JointVector r = NearestTurns(m, q, ref);
+  EXPECT_NEAR(RadToDeg(r(0)), 50.0, 1e-9);
+  EXPECT_NEAR(RadToDeg(r(1)), 170.0, 1e-9);
+  EXPECT_NEAR(RadToDeg(r(2)), 10.0, 1e-9);
+  // Every joint keeps its pose: the angles differ by whole turns.
+  for (int i = 0; i < 6; ++i) {
+    const double turns = (r(i) - q(i)) / (2 * kPi);
+    EXPECT_NEAR(turns, std::round(turns), 1e-12) << i;
+  }
+}
+
 }  // namespace
 }  // namespace twin
