@@ -595,6 +595,12 @@ std::string Header(const Texts& t, const std::string& title) {
   return s.str();
 }
 
+// The truth's geometry errors and encoder noise of every procedure's file: Table 3's
+// magnitudes (sigma 2 mm and 0.25 deg per DH parameter) and paper_reinovo.yaml's noise.
+constexpr const char* kTruthEffects =
+    "  effects:\n    - type: geometry_errors\n      sigma_length_mm: 2.0\n"
+    "      sigma_angle_deg: 0.25\n    - type: encoder_noise\n      sigma_deg: 0.0005\n";
+
 // Whether one of the joints that set the arm's posture (1-3) turns more than a full turn
 // (a UR's +-360 deg): the middle of its range is then no posture. (A +-180 deg base joint
 // turns exactly one turn and keeps its middle.)
@@ -634,8 +640,7 @@ std::string OpticalAxisText(const Texts& t) {
     << "    mass_kg: 0.6\n"
     << "  # The truth's errors: Table 3's magnitudes (sigma 2 mm and 0.25 deg per DH parameter)\n"
     << "  # and the noise of paper_reinovo.yaml.\n"
-    << "  effects:\n    - type: geometry_errors\n      sigma_length_mm: 2.0\n"
-    << "      sigma_angle_deg: 0.25\n    - type: encoder_noise\n      sigma_deg: 0.0005\n"
+    << kTruthEffects
     << "    - type: image_noise\n      sigma_levels: 1.0\n"
     << "  # What the estimator is told, and the procedure's options.\n"
     << "  calibration:\n    robots: [r2, r1]\n"
@@ -686,8 +691,7 @@ std::string TrackerText(const Texts& t) {
     << "  name: " << fs::path(t.o.out).stem().string() << "\n"
     << "  seeds: {truth: 2019, estimator: 2019}\n"
     << "  robots:\n" << RobotEntries(t) << CameraAndBoard(t, true)
-    << "  effects:\n    - type: geometry_errors\n      sigma_length_mm: 2.0\n"
-    << "      sigma_angle_deg: 0.25\n    - type: encoder_noise\n      sigma_deg: 0.0005\n"
+    << kTruthEffects
     << "  # The tracker (truth): behind r2, max(2 m, 2 R) beyond its base, facing back at it.\n"
     << "  tracker:\n    robot: r2\n"
     << "    pose: {xyz_mm: [" << Num(behind_mm, 0) << ", 400, " << Num(c.height_mm, 0)
@@ -750,8 +754,7 @@ std::string SingleTrackerText(const NewScenarioOptions& o, const Arm& a, const A
   s << "      installation: floor\n"
     << "      base: {xyz_mm: [0, 0, 0], rpy_deg: [0, 0, 0]}\n"
     << "      initial_joints_deg: " << JointsDeg(st.pose.q) << "\n"
-    << "  effects:\n    - type: geometry_errors\n      sigma_length_mm: 2.0\n"
-    << "      sigma_angle_deg: 0.25\n    - type: encoder_noise\n      sigma_deg: 0.0005\n"
+    << kTruthEffects
     << "  # The tracker (truth): max(2 m, 2 R) behind the base, facing it.\n"
     << "  tracker:\n    robot: r1\n"
     << "    pose: {xyz_mm: [" << Num(-behind_mm, 0) << ", -400, " << Num(st.height_mm, 0)
