@@ -270,6 +270,22 @@ void AddLinkOptions(CLI::App* sub, ModelLinks* links) {
                   "most moving joints above it)");
 }
 
+// --cell and its credentials, and --record: where a verb's cell is (bench/runs/bench_cell.h).
+void AddCellOptions(CLI::App* sub, CellOptions* cell) {
+  sub->add_option("--cell", cell->address,
+                  "drive the cell served at grpc://HOST:PORT (default: the scenario's twin, "
+                  "in this process)");
+  sub->add_option("--cell-ca", cell->tls_ca_file,
+                  "TLS: CA certificate (PEM) of the served cell's certificate");
+  sub->add_option("--cell-cert", cell->tls_cert_file, "TLS: client certificate (PEM)");
+  sub->add_option("--cell-key", cell->tls_key_file, "TLS: the client certificate's key (PEM)");
+  sub->add_option("--cell-token-file", cell->token_file,
+                  "a file holding the served cell's bearer token");
+  sub->add_option("--record", cell->record_dir,
+                  "record every exchange with the cell into this new folder (`twinbench "
+                  "replay` reruns it)");
+}
+
 // info, fk, ik, export-urdf and demo: a robot model's kinematics.
 void AddKinematicsVerbs(CLI::App* app, CliValues* v, Verbs* verbs) {
   auto* info = app->add_subcommand("info", "print a robot model's parameters (mm, deg)");
@@ -334,6 +350,7 @@ void AddTwinVerbs(CLI::App* app, CliValues* v, Verbs* verbs) {
   run->add_flag("--no-images", v->no_images, "write neither servo images nor report.html");
   run->add_option("--junit", v->run_options.junit,
                   "write the acceptance criteria's verdict as JUnit XML to this file");
+  AddCellOptions(run, &v->run_options.cell);
 
   auto* bench_planning = app->add_subcommand(
       "benchmark-planning", "time the pose planning of a scenario's calibration (no twin)");

@@ -405,7 +405,7 @@ void RecordSetting(const TwinTruth& truth, const CalibrationConfig& config,
 
 }  // namespace
 
-CalibrationStageResult RunCalibrationStage(TwinCell& cell, const Scenario& sc,
+CalibrationStageResult RunCalibrationStage(BenchCell& cell, const Scenario& sc,
                                            CalibrationConfig config, const fs::path& staging,
                                            bool quiet,
                                            std::chrono::steady_clock::time_point t_start) {
@@ -448,7 +448,7 @@ namespace {
 // What the physical-truth measurement of one robot compares: the twin moves the robot, and
 // each settled pose is measured there and predicted by both models at the same readings.
 struct PhysicalTruthSetup {
-  TwinCell& cell;
+  BenchCell& cell;
   const RobotCalibration& rc;
   const RobotModel& delivered;         ///< the calibration's model
   const RobotModel& discovered_model;  ///< the diagnosis' model (or the delivered one)
@@ -467,7 +467,7 @@ struct PhysicalMeasurements {
 // shorter way round them (about half the moves' simulated time on the paper scenario).
 PhysicalMeasurements MeasurePhysicalTruth(const PhysicalTruthSetup& s,
                                           const std::vector<JointVector>& configurations) {
-  TwinCell& cell = s.cell;
+  BenchCell& cell = s.cell;
   const RobotCalibration& rc = s.rc;
   PhysicalMeasurements m;
   const size_t want = static_cast<size_t>(s.wanted);
@@ -545,7 +545,7 @@ std::vector<JointVector> WholeJointSpaceConfigurations(const Scenario& sc,
 
 // One diagnosed robot that holds the board: the physical truth over the whole joint space and
 // over the region its aligned poses covered, into its scores `s`.
-void ScoreRobotPhysicalTruth(TwinCell& cell, const Scenario& sc, const CalibrationConfig& config,
+void ScoreRobotPhysicalTruth(BenchCell& cell, const Scenario& sc, const CalibrationConfig& config,
                              const RobotCalibration& rc, const DiscoveryResult& diagnosis,
                              RobotStageResult* s) {
   const RobotModel delivered = MakeRobotModel(rc.identified);
@@ -587,7 +587,7 @@ void ScoreRobotPhysicalTruth(TwinCell& cell, const Scenario& sc, const Calibrati
 // random poses of each diagnosed robot that holds the board now, against the delivered model
 // and the discovered one at the same readings; raw and rigid gauges as the tracker runs.
 // The robot ends where the last pose left it.
-void ScorePhysicalTruth(TwinCell& cell, const Scenario& sc, const CalibrationConfig& config,
+void ScorePhysicalTruth(BenchCell& cell, const Scenario& sc, const CalibrationConfig& config,
                         CalibrationStageResult* stage) {
   for (size_t i = 0; i < stage->robots.size(); ++i) {
     const RobotCalibration& rc = stage->procedure.robots[i];
@@ -623,7 +623,7 @@ struct OpticalAxisRun {
 // Runs the calibration stage and the physical truth into `stage`, judges the acceptance
 // criteria on the report, writes report.json (and report.html) and publishes the staging
 // folder. On failure the staging folder is discarded and an InputError names the scenario file.
-AcceptanceVerdict RunAndPublishReport(TwinCell& cell, const OpticalAxisRun& run,
+AcceptanceVerdict RunAndPublishReport(BenchCell& cell, const OpticalAxisRun& run,
                                       CalibrationStageResult* stage) {
   AcceptanceVerdict verdict;
   try {
@@ -774,13 +774,13 @@ int RunCalibrationScenario(const RunOptions& o) {
   ValidateOutputFolder(o.out_dir, "--out");
   if (!o.junit.empty()) ValidateJunitFile(o.junit, o.out_dir);
   InstallMujocoErrorHandlers();
-  TwinCell cell(sc.twin, sc.path);
+  const std::unique_ptr<BenchCell> cell = OpenBenchCell(sc.twin, sc.path, o.cell);
   const fs::path out(o.out_dir);
   const fs::path staging = CreateStagingDirectory(o.out_dir);
   // The calibration, scored and judged, written and published as out_dir.
   CalibrationStageResult stage;
   const AcceptanceVerdict verdict = RunAndPublishReport(
-      cell, OpticalAxisRun{o, sc, config, acceptance, t_start, out, staging}, &stage);
+      *cell, OpticalAxisRun{o, sc, config, acceptance, t_start, out, staging}, &stage);
   // Summary of the typed results.
   PrintRunSummary(stage, out);
   // JUnit file, verdict, exit code.

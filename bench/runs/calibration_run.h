@@ -15,6 +15,7 @@
 #include "bench/scoring/calibration_results.h"
 #include "calib/diagnosis/model_discovery.h"
 #include "calib/procedures/optical_axis_procedure.h"
+#include "bench/runs/bench_cell.h"
 #include "sim/cell/twin_cell.h"
 
 namespace twin {
@@ -31,6 +32,7 @@ struct RunOptions {
   bool images = true;    ///< write servo_*.png and report.html (studies leave them out)
   std::string junit;     ///< JUnit XML of the acceptance criteria to write (empty: none)
   bool diagnosis = true; ///< model discovery after the calibration (--no-diagnosis)
+  CellOptions cell;      ///< the cell to drive (--cell) and the recording (--record)
 };
 
 /// Runs the scenario and writes out_dir/report.json, measurements.csv, servo_*.png and
@@ -51,7 +53,7 @@ void ApplyRunOptions(const RunOptions& options, CalibrationConfig* config);
 /// runs on each calibrated robot's aligned poses (estimator side, before any truth is read)
 /// into robots[i].diagnosis; otherwise that says why it was skipped. The physical truth is
 /// left to the caller (robots[i].physical* stay empty).
-CalibrationStageResult RunCalibrationStage(TwinCell& cell, const Scenario& scenario,
+CalibrationStageResult RunCalibrationStage(BenchCell& cell, const Scenario& scenario,
                                            CalibrationConfig config,
                                            const std::filesystem::path& staging, bool quiet,
                                            std::chrono::steady_clock::time_point t_start);

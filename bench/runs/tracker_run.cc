@@ -176,7 +176,7 @@ struct ProcedureOutcome {
 
 // Announces the run, builds the declared starting model and runs the tracker procedure.
 ProcedureOutcome RunProcedure(const RunOptions& o, const TrackerRunSetup& setup,
-                              const KinematicModel& nominal, TwinCell* cell) {
+                              const KinematicModel& nominal, BenchCell* cell) {
   const Scenario& sc = setup.sc;
   const int robot = setup.config.robot;
   const std::string name = sc.robot_names[robot];
@@ -231,7 +231,7 @@ struct PhysicalTruth {
 // geometric plus declared terms) model and the discovered one, at the same readings.
 PhysicalTruth MeasurePhysicalTruth(const TrackerRunSetup& setup, const KinematicModel& nominal,
                                    const ProcedureOutcome& procedure,
-                                   const TrackerDiagnosis& diagnosis, TwinCell* cell) {
+                                   const TrackerDiagnosis& diagnosis, BenchCell* cell) {
   const TrackerRunConfig& config = setup.config;
   const int robot = config.robot;
   const TrackerProcedureResult& result = procedure.result;
@@ -462,7 +462,8 @@ int RunTrackerScenario(const RunOptions& o) {
   // The scenario (as the trial) and its tracker section, checked with the output paths.
   const TrackerRunSetup setup = LoadTrackerRun(o);
   InstallMujocoErrorHandlers();
-  TwinCell cell(setup.sc.twin, setup.sc.path);
+  const std::unique_ptr<BenchCell> owned_cell = OpenBenchCell(setup.sc.twin, setup.sc.path, o.cell);
+  BenchCell& cell = *owned_cell;
   // Told: the nominal model with the drawn reflector and payload. Never the truth.
   const KinematicModel nominal = ToldModel(setup);
   // The tracker procedure on the twin, from the declared starting model.

@@ -113,8 +113,9 @@ std::array<KinematicModel, 2> RunOpticalAxisCalibration(
     ctx.progress << "[" << SecondsSince(ctx.t_start)
                  << " s] (b) optical-axis calibration of both robots\n";
     std::fflush(stdout);
+    LocalTwinCell bench_cell(ctx.cell);
     state->calibration =
-        RunCalibrationStage(ctx.cell, ctx.sc, *config, ctx.staging, ctx.quiet, ctx.t_start);
+        RunCalibrationStage(bench_cell, ctx.sc, *config, ctx.staging, ctx.quiet, ctx.t_start);
     std::array<bool, 2> done = {false, false};
     for (const RobotCalibration& rc_robot : state->calibration->procedure.robots) {
       // The identified model's link 7 is the board mount; WithTipTool (in the stage) puts
