@@ -20,6 +20,7 @@
 #include "bench/report/acceptance.h"
 #include "bench/report/scenario_schema.h"
 #include "bench/runs/calibration_run.h"
+#include "remote/cell_check.h"
 #include "bench/runs/kinematics_benchmark.h"
 #include "bench/runs/planning_benchmark.h"
 #include "bench/runs/study_merge.h"
@@ -238,6 +239,7 @@ struct CliValues {
   SynthesizeOptions synth_options;
   KinematicsBenchmarkOptions kb_options;
   NewScenarioOptions new_scenario;
+  remote::CellCheckOptions cell_check;
 };
 
 // The verbs (subcommands) of the command line, owned by the CLI::App.
@@ -259,6 +261,7 @@ struct Verbs {
   CLI::App* synth = nullptr;
   CLI::App* kbench = nullptr;
   CLI::App* new_scenario = nullptr;
+  CLI::App* cell_check = nullptr;
 };
 
 // The chain of a URDF model: one pair for every verb that takes a model file.
@@ -284,6 +287,29 @@ void AddCellOptions(CLI::App* sub, CellOptions* cell) {
   sub->add_option("--record", cell->record_dir,
                   "record every exchange with the cell into this new folder (`twinbench "
                   "replay` reruns it)");
+}
+
+// cell-check: the conformance battery of a served cell (remote/cell_check.h).
+void AddCellCheckVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
+  remote::CellCheckOptions& o = v->cell_check;
+  auto* sub = app->add_subcommand(
+      "cell-check", "check that a served cell (grpc://HOST:PORT) keeps the cell protocol");
+  verbs->cell_check = sub;
+  sub->add_option("address", o.address, "the cell, grpc://HOST:PORT")->required();
+  sub->add_option("--cell-ca", o.tls_ca_file,
+                  "TLS: CA certificate (PEM) of the served cell's certificate");
+  sub->add_option("--cell-cert", o.tls_cert_file, "TLS: client certificate (PEM)");
+  sub->add_option("--cell-key", o.tls_key_file, "TLS: the client certificate's key (PEM)");
+  sub->add_option("--cell-token-file", o.token_file,
+                  "a file holding the served cell's bearer token");
+  sub->add_flag("--allow-motion", o.allow_motion,
+                "run the checks that move a robot (the cell must be clear); without it they "
+                "are skipped");
+  sub->add_option("--robot", o.robot, "the robot the motion checks move (default 0)")
+      ->check(CLI::Range(0, 1));
+  sub->add_option("--stop-move-rad", o.stop_move_rad,
+                  "joint 1's move in the stop-on-disconnect check (default 1.0 rad)")
+      ->check(CLI::Range(0.05, 3.0));
 }
 
 // info, fk, ik, export-urdf and demo: a robot model's kinematics.
@@ -575,6 +601,7 @@ int RunVerb(const Verbs& verbs, CliValues* v) {
   }
   if (*verbs.merge) return RunStudyMerge(v->merge_options);
   if (*verbs.new_scenario) return RunNewScenario(v->new_scenario);
+  if (*verbs.cell_check) return remote::RunCellCheckVerb(v->cell_check);
   if (*verbs.bench_planning) return RunPlanningBenchmark(v->planning_options);
   if (*verbs.identify) return RunIdentifyVerb(*verbs.identify, v);
   if (*verbs.synth) {
@@ -621,6 +648,7 @@ int main(int argc, char** argv) {
   AddNewScenarioVerb(&app, &values, &verbs);
   AddIdentifyVerb(&app, &values, &verbs);
   AddModelBenchmarkVerbs(&app, &values, &verbs);
+  AddCellCheckVerb(&app, &values, &verbs);
   std::string completion_shell;
   CLI::App* completion = AddCompletionVerb(&app, &completion_shell);
 
