@@ -69,10 +69,12 @@ def tools():
         plugin = "/usr/bin/grpc_python_plugin"
         if not os.access(plugin, os.X_OK):
             plugin = shutil.which("grpc_python_plugin")
-    if not protoc:
-        raise StubError("protoc not found (Debian: apt-get install protobuf-compiler)")
-    if not plugin:
-        raise StubError("grpc_python_plugin not found (Debian: apt-get install protobuf-compiler-grpc)")
+    if not protoc or not os.access(protoc, os.X_OK):
+        raise StubError("protoc not found (%s; Debian: apt-get install protobuf-compiler)"
+                        % (protoc or "not on PATH"))
+    if not plugin or not os.access(plugin, os.X_OK):
+        raise StubError("grpc_python_plugin not found (%s; Debian: apt-get install "
+                        "protobuf-compiler-grpc)" % (plugin or "not on PATH"))
     return protoc, plugin
 
 
@@ -92,10 +94,14 @@ def generate(out_dir=None):
     tmp = tempfile.mkdtemp(prefix=".gen-", dir=root)
     cmd = [protoc, "--python_out=" + tmp, "--grpc_out=" + tmp,
            "--plugin=protoc-gen-grpc=" + plugin, "-I", src, os.path.join(src, PROTO_REL)]
-    run = subprocess.run(cmd, capture_output=True, text=True)
-    if run.returncode != 0:
+    try:
+        run = subprocess.run(cmd, capture_output=True, text=True)
+        failure = run.stderr if run.returncode != 0 else None
+    except OSError as e:
+        failure = str(e)
+    if failure is not None:
         shutil.rmtree(tmp, ignore_errors=True)
-        raise StubError("protoc failed (%s):\n%s" % (" ".join(cmd), run.stderr))
+        raise StubError("protoc failed (%s):\n%s" % (" ".join(cmd), failure))
     try:
         os.rename(tmp, target)
     except OSError:  # another process was faster: its copy is the same
