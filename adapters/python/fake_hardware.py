@@ -147,8 +147,14 @@ def _extra(parser):
                         help="serve a deliberately broken adapter (for conformance checks)")
 
 
+def make_drivers(args):
+    """The fake's drivers (also for `python3 -m twinbench_cell.server --driver fake_hardware`)."""
+    return (FakeRobots(getattr(args, "joint_speed", 1.0), getattr(args, "broken", None)),
+            FakeCamera())
+
+
 def main(argv=None):
-    return serve_main(lambda a: (FakeRobots(a.joint_speed, a.broken), FakeCamera()), argv,
+    return serve_main(make_drivers, argv,
                       description="A fake two-robot cell with a camera, for the cell protocol.",
                       add_extra_arguments=_extra)
 

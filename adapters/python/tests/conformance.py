@@ -5,7 +5,7 @@ import math
 import os
 import signal
 import subprocess
-import sys
+import tempfile
 import time
 
 import grpc
@@ -85,13 +85,16 @@ def check_stop_on_disconnect(address, heartbeat_s, kill_after_s=0.7):
     kill) a new session opens, the old session is refused, and the robot is still (two reads
     0.3 s apart are equal) and short of the target."""
     problems = []
+    err = tempfile.TemporaryFile(mode="w+")
     mover = subprocess.Popen([PYTHON, "-c", _MOVER, address, ADAPTER], stdout=subprocess.PIPE,
-                             text=True)
+                             stderr=err, text=True)
     channel, s = stub(address)
     try:
         words = mover.stdout.readline().split()
         if not words or words[0] != "moving":
-            return ["the moving client did not start"]
+            mover.wait()
+            err.seek(0)
+            return ["the moving client did not start:\n" + err.read()]
         old_sid, target = words[1], float(words[2])
         time.sleep(kill_after_s)
         os.kill(mover.pid, signal.SIGKILL)
@@ -131,5 +134,6 @@ def check_stop_on_disconnect(address, heartbeat_s, kill_after_s=0.7):
             mover.kill()
             mover.wait()
         mover.stdout.close()
+        err.close()
         channel.close()
     return problems

@@ -114,7 +114,8 @@ class FuzzTest(unittest.TestCase):
                 if code != expected or (check is not None and not check(answer)):
                     wrong.append("#%d %s(%s): %s, expected %s" % (
                         i, name, str(req).replace("\n", " ")[:200], code, expected))
-            self.assertEqual(wrong, [], "\n".join(wrong[:10]))
+            self.assertFalse(wrong, "%d of %d answers wrong, the first:\n%s"
+                             % (len(wrong), N_REQUESTS, "\n".join(wrong[:10])))
             # All three kinds of answer came (the generator is not degenerate).
             self.assertGreater(codes.get(INVALID, 0), 300)
             self.assertGreater(codes.get(NO_SESSION, 0), 100)

@@ -318,7 +318,8 @@ class CellServer:
             q = [float(v) for v in self.robot.read_joints(robot)]
             n = len(self.robots[robot].limits_rad)
             if len(q) != n:
-                raise ValueError("the driver read %d joints of robot %d, not %d" % (len(q), robot, n))
+                raise ValueError("the driver read %d joints of robot %d, not %d"
+                                 % (len(q), robot, n))
             return self.pb.ReadEncodersResponse(q_rad=q)
 
     @_rpc
@@ -422,13 +423,14 @@ class CellServer:
             robot = self._robot_index(request.robot)
             m = self.robot.measure_tracker(robot)
             x, y, z = (float(v) for v in m.p_m)
-            return self.pb.MeasureTrackerResponse(status=int(m.status), reason=str(m.reason or ""),
-                                                  x_m=x, y_m=y, z_m=z, time_s=float(m.time_s))
+            return self.pb.MeasureTrackerResponse(
+                status=int(m.status), reason=str(m.reason or ""), x_m=x, y_m=y, z_m=z,
+                time_s=float(m.time_s))
 
     # --- running it ---------------------------------------------------------------------------
 
     def start(self, listen, tls_cert=None, tls_key=None, client_ca=None, token=None,
-              max_workers=8):
+              max_workers=16):
         """Listens on `listen` (host:port, port 0 picks one) and returns the bound address.
         ConfigError for a configuration that must not start (see check_security)."""
         check_security(listen, tls_cert is not None, client_ca is not None, token is not None)

@@ -34,7 +34,8 @@ def proto_dir():
     d = os.environ.get("TWINBENCH_PROTO_DIR") or os.path.join(
         os.path.dirname(os.path.dirname(_ADAPTER_DIR)), "proto")
     if not os.path.isfile(os.path.join(d, PROTO_REL)):
-        raise StubError("no %s under %s (set TWINBENCH_PROTO_DIR to the proto root)" % (PROTO_REL, d))
+        raise StubError("no %s under %s (set TWINBENCH_PROTO_DIR to the proto root)"
+                        % (PROTO_REL, d))
     return d
 
 
