@@ -14,9 +14,9 @@ gets it right:
 - A MoveTo whose call ends early (the client disconnected or was killed, or its deadline
   passed) stops its motion at once; the silence then counts from that moment.
 - Malformed requests are INVALID_ARGUMENT (robot index the cell lacks, wrong vector length,
-  NaN or infinity, a region of zero or negative width or height, an enum value outside the
-  proto's named values other than UNSPECIFIED... see _bracket_target); targets outside the
-  joint limits are MOVE_STATUS_OUT_OF_LIMITS and the driver is not called. A driver that
+  NaN or infinity, a region of zero or negative width or height, a BracketTarget that is
+  UNSPECIFIED or a number the proto does not name); targets outside the joint limits are
+  MOVE_STATUS_OUT_OF_LIMITS and the driver is not called. A driver that
   raises or answers nonsense gives INTERNAL; the server never goes down on a request.
 - The camera methods (GrabImage, CameraRobot, ExchangeTools) are UNIMPLEMENTED without a
   camera; the optional extras (clock, temperature, tracker, handclasp, mount target) answer as
