@@ -18,6 +18,10 @@ PACKAGES=(
   ccache           # scripts/build.sh and test_sanitizers.sh compile through it (cmake/Ccache.cmake)
   universal-ctags  # scripts/function_lengths.sh
   dpkg-dev file    # the packaging test: cpack -G DEB derives Depends with dpkg-shlibdeps
+  # issue 40, the remote cell: gRPC protocol (proto/twinbench/cell/v1), C++ server and client,
+  # and the Python adapter (adapters/python/)
+  python3-grpcio python3-protobuf protobuf-compiler protobuf-compiler-grpc
+  libgrpc++-dev libprotobuf-dev
 )
 
 missing=()
