@@ -1,18 +1,23 @@
 #!/usr/bin/env python3
 """Two report.json files equal but for their timing (issue 40: a remote run, a replay and an
-in-process run of the same scenario and trial write the same report). Every key whose name starts
-with "timing" (timing_s of the tracker report, timing of the optical-axis report: wall-clock
-seconds, which differ from run to run) is left out at any depth; everything else must be equal,
-numbers bit for bit (json reads them back exactly as written).
+in-process run of the same scenario and trial write the same report). The keys that hold
+wall-clock time, as bench/report/trial_record.cc sorts them (timing_s, time_s, *_time_s,
+from_plan_store), are left out at any depth; everything else must be equal, numbers bit for bit
+(json reads them back exactly as written).
 Usage: report_equal.py A.json B.json   exit 0 equal, 1 different (the first differences printed),
 2 unreadable input."""
 import json
 import sys
 
 
+def is_timing(key):
+    return key in ("timing_s", "time_s", "from_plan_store") or (
+        len(key) > 7 and key.endswith("_time_s"))
+
+
 def strip(x):
     if isinstance(x, dict):
-        return {k: strip(v) for k, v in x.items() if not k.startswith("timing")}
+        return {k: strip(v) for k, v in x.items() if not is_timing(k)}
     if isinstance(x, list):
         return [strip(v) for v in x]
     return x
