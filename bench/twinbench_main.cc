@@ -376,7 +376,8 @@ void AddReplayVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
       ->required();
   replay->add_flag("--quiet", v->replay_quiet, "no progress lines");
   replay->add_flag("--no-images", v->replay_no_images,
-                   "write neither servo images nor report.html");
+                   "write neither servo images nor report.html (a run recorded with "
+                   "--no-images replays without them)");
 }
 
 // replay: the recorded scenario, trial and options, the cell a ReplayCell of the recording
@@ -391,7 +392,7 @@ int RunReplay(const CliValues& v) {
   o.quiet = v.replay_quiet;
   o.trial = m.trial;
   o.diagnosis = m.diagnosis;
-  o.images = !v.replay_no_images;
+  o.images = m.images && !v.replay_no_images;  // as recorded, or fewer
   o.cell.replay_dir = v.replay_dir;
   std::printf("twinbench replay: %s (%s, trial %d, recorded %s%s)\n", v.replay_dir.c_str(),
               m.scenario_path.c_str(), m.trial, m.started_utc.c_str(),

@@ -23,6 +23,38 @@ namespace fs = std::filesystem;
 namespace pb = remote::pb;
 namespace bpb = remote::bpb;
 
+namespace {
+
+// Protobuf prints a negative zero as -0 but reads -0 back as +0 (an integer token); -0.0 reads
+// back as the negative zero. Rewrites every number token -0 (outside strings) as -0.0.
+std::string KeepNegativeZeros(const std::string& json) {
+  std::string out;
+  out.reserve(json.size());
+  bool in_string = false;
+  for (size_t i = 0; i < json.size(); ++i) {
+    const char c = json[i];
+    out += c;
+    if (in_string) {
+      if (c == '\\') {
+        if (++i < json.size()) out += json[i];
+      } else if (c == '"') {
+        in_string = false;
+      }
+      continue;
+    }
+    if (c == '"') {
+      in_string = true;
+    } else if (c == '-' && i + 1 < json.size() && json[i + 1] == '0' &&
+               (i + 2 == json.size() || std::strchr(",]} ", json[i + 2]) != nullptr)) {
+      out += "0.0";
+      ++i;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 std::string RecordingJson(const google::protobuf::Message& message) {
   google::protobuf::util::JsonPrintOptions options;
   options.preserve_proto_field_names = true;
@@ -32,7 +64,7 @@ std::string RecordingJson(const google::protobuf::Message& message) {
     throw std::runtime_error("protobuf JSON of " + message.GetTypeName() + ": " +
                              std::string(status.message()));
   }
-  return text;
+  return KeepNegativeZeros(text);
 }
 
 std::string UtcNow() {

@@ -65,7 +65,8 @@ class RecordingCell : public ForwardingBenchCell {
 
 /// Protobuf's JSON of a message as a recording holds it: field names as in the .proto, fields
 /// at their default value left out (the mapping's default), doubles printed so that they read
-/// back to the same bits. Throws std::runtime_error when protobuf cannot print it.
+/// back to the same bits (a negative zero as -0.0: protobuf reads its own -0 as +0). Throws
+/// std::runtime_error when protobuf cannot print it.
 std::string RecordingJson(const google::protobuf::Message& message);
 
 /// Now as ISO 8601 UTC ("2026-12-06T13:45:51Z").

@@ -6,6 +6,7 @@
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 #include <google/protobuf/util/json_util.h>
+#include <google/protobuf/util/message_differencer.h>
 
 #include "bench/io/yaml_util.h"
 #include "bench/runs/recording_cell.h"
@@ -48,6 +49,21 @@ bool SameMessage(const google::protobuf::Message& a, const google::protobuf::Mes
     b.SerializeToCodedStream(&coded);
   }
   return sa == sb;
+}
+
+// What differs between the asked and the recorded request, field by field ("" where the
+// differencer sees none: a -0 against a 0).
+std::string Differences(const google::protobuf::Message& asked,
+                        const google::protobuf::Message& recorded) {
+  std::string report;
+  google::protobuf::util::MessageDifferencer differencer;
+  differencer.ReportDifferencesToString(&report);
+  differencer.Compare(recorded, asked);
+  while (!report.empty() && report.back() == '\n') report.pop_back();
+  for (char& c : report) {
+    if (c == '\n') c = ';';
+  }
+  return report.empty() ? "" : " (recorded -> asked: " + report + ")";
 }
 
 [[noreturn]] void Bad(const std::exception& e, const std::string& where) {
@@ -96,22 +112,22 @@ void ReplayCell::Next(const char* method, const google::protobuf::Message& reque
   if (next_ >= exchanges_.size()) {
     throw InputError(file_, "the recording ended at seq " + std::to_string(total) +
                                 ", and the replay asked for more: " + asked +
-                                (manifest_.complete
-                                     ? " (the replayed procedure diverged from the recorded one)"
-                                     : " (a partial recording: its run stopped there)"));
+                                Truncation());
   }
   const RecordedExchange& e = exchanges_[next_];
   const std::string where = file_ + ":" + std::to_string(e.seq) + " (seq " +
                             std::to_string(e.seq) + ")";
   std::unique_ptr<google::protobuf::Message> recorded(request.New());
   bool same = e.method == method;
+  std::string differences;
   if (same) {
     ParseMessage(e.request_json, where + " request", recorded.get());
     same = SameMessage(request, *recorded);
+    if (!same) differences = Differences(request, *recorded);
   }
   if (!same) {
     throw InputError(where, "the estimator asked " + asked + ", the recording has " + e.method +
-                                " " + e.request_json +
+                                " " + e.request_json + differences +
                                 ": the replayed procedure diverged from the recorded one "
                                 "(other options, code or scenario)");
   }
@@ -123,6 +139,16 @@ void ReplayCell::Next(const char* method, const google::protobuf::Message& reque
     image->set_data(ReadTextFile(png, std::numeric_limits<std::uintmax_t>::max()));
   }
   ++next_;
+}
+
+std::string ReplayCell::Truncation() const {
+  if (!manifest_.complete) return " (a partial recording: its run stopped there)";
+  if (manifest_.exchanges > recorded()) {
+    return " (" + std::string(kRecordingManifestFile) + " counts " +
+           std::to_string(manifest_.exchanges) + " exchanges: the file lost its last lines)";
+  }
+  return " (the replayed procedure diverged from the recorded one: other options, code or "
+         "scenario)";
 }
 
 MoveResult ReplayCell::MoveTo(int robot, const JointVector& q) {

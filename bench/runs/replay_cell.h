@@ -47,6 +47,8 @@ class ReplayCell : public BenchCell {
   void Next(const char* method, const google::protobuf::Message& request,
             google::protobuf::Message* response);
   cv::Mat NextImage(const cv::Rect* roi);
+  /// Why the recording ran out: partial, truncated, or a replay that asks more.
+  std::string Truncation() const;
 
   std::string dir_, file_;
   RecordingManifest manifest_;
