@@ -394,9 +394,9 @@ int RunReplay(const CliValues& v) {
   o.diagnosis = m.diagnosis;
   o.images = m.images && !v.replay_no_images;  // as recorded, or fewer
   o.cell.replay_dir = v.replay_dir;
-  std::printf("twinbench replay: %s (%s, trial %d, recorded %s%s)\n", v.replay_dir.c_str(),
-              m.scenario_path.c_str(), m.trial, m.started_utc.c_str(),
-              m.complete ? "" : "; partial: its run stopped midway");
+  std::printf("twinbench replay: %s (%s, trial %d, recorded %s by twinbench %s%s)\n",
+              v.replay_dir.c_str(), m.scenario_path.c_str(), m.trial, m.started_utc.c_str(),
+              m.twinbench.c_str(), m.complete ? "" : "; partial: its run stopped midway");
   return RunCalibrationScenario(o);
 }
 
@@ -626,6 +626,8 @@ int RunVerb(const Verbs& verbs, CliValues* v) {
   if (*verbs.run) {
     v->run_options.images = !v->no_images;
     v->run_options.diagnosis = verbs.run->count("--no-diagnosis") == 0;
+    v->run_options.cell.record_info.twinbench =
+        std::string(TWINBENCH_VERSION) + " (" + TWINBENCH_GIT_DESCRIBE + ")";
     return RunCalibrationScenario(v->run_options);
   }
   if (*verbs.study) {

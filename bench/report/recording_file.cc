@@ -113,6 +113,7 @@ std::string RecordingManifestText(const RecordingManifest& m) {
   j["format"] = kRecordingFormat;
   j["version"] = kRecordingVersion;
   j["protocol"] = kRecordingProtocol;
+  j["twinbench"] = m.twinbench;
   j["started_utc"] = m.started_utc;
   j["complete"] = m.complete;
   if (m.complete) {
@@ -145,6 +146,7 @@ RecordingManifest ParseRecordingManifest(const std::string& text, const std::str
                                 std::to_string(kRecordingVersion));
   }
   RecordingManifest m;
+  m.twinbench = GetOr<std::string>(j, "twinbench", "", where);
   m.started_utc = GetOr<std::string>(j, "started_utc", "", where);
   m.complete = GetOr<bool>(j, "complete", false, where);
   m.ended_utc = GetOr<std::string>(j, "ended_utc", "", where);

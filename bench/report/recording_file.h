@@ -37,6 +37,7 @@ struct RecordingManifest {
   std::string plan_cache;     ///< --plan-cache (information: a replay plans afresh)
   std::string cell;           ///< --cell (empty: the scenario's twin in the recording process)
   std::string started_utc;    ///< ISO 8601, when the recording started
+  std::string twinbench;      ///< the recording program's version and git describe
   /// Written when the run has made its last call (RecordingCell::Finish): a recording
   /// without them is partial (the run stopped midway).
   bool complete = false;

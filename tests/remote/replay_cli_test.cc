@@ -96,6 +96,7 @@ int CheckRecordingFiles(const fs::path& dir, const std::string& scenario) {
   EXPECT_EQ(manifest["version"], 1);
   EXPECT_EQ(manifest["protocol"], "twinbench.cell.v1");
   EXPECT_EQ(manifest["complete"], true);
+  EXPECT_FALSE(manifest["twinbench"].get<std::string>().empty());
   EXPECT_EQ(manifest["scenario"]["content"], ReadFile(Scenario(scenario)));
   std::ifstream in(dir / "exchanges.jsonl");
   std::string line;
