@@ -219,7 +219,9 @@ TEST(ReplayCli, RecordIntoAFolderThatExistsIsRefusedAndLeavesItAlone) {
     std::vector<std::string> names;
     for (const auto& e : fs::directory_iterator(record)) names.push_back(e.path().filename());
     EXPECT_EQ(names, empty ? std::vector<std::string>{} : std::vector<std::string>{"notes.txt"});
-    if (!empty) EXPECT_EQ(ReadFile(record / "notes.txt"), "mine\n");
+    if (!empty) {
+      EXPECT_EQ(ReadFile(record / "notes.txt"), "mine\n");
+    }
     EXPECT_FALSE(fs::exists(base / "A"));
   }
   // Inside --out, or --out inside it: refused too.
