@@ -23,6 +23,7 @@
 #include "remote/cell_check.h"
 #include "bench/runs/kinematics_benchmark.h"
 #include "bench/runs/planning_benchmark.h"
+#include "bench/runs/replay_cell.h"
 #include "bench/runs/study_merge.h"
 #include "bench/runs/study_run.h"
 #include "bench/runs/synthetic_measurements.h"
@@ -240,6 +241,8 @@ struct CliValues {
   KinematicsBenchmarkOptions kb_options;
   NewScenarioOptions new_scenario;
   remote::CellCheckOptions cell_check;
+  std::string replay_dir, replay_out;
+  bool replay_quiet = false, replay_no_images = false;
 };
 
 // The verbs (subcommands) of the command line, owned by the CLI::App.
@@ -262,6 +265,7 @@ struct Verbs {
   CLI::App* kbench = nullptr;
   CLI::App* new_scenario = nullptr;
   CLI::App* cell_check = nullptr;
+  CLI::App* replay = nullptr;
 };
 
 // The chain of a URDF model: one pair for every verb that takes a model file.
@@ -386,6 +390,42 @@ void AddTwinVerbs(CLI::App* app, CliValues* v, Verbs* verbs) {
                              "planner threads (default: one per core)");
 }
 
+// replay: a recorded run (`run --record`) rerun from its recording, with no cell.
+void AddReplayVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
+  auto* replay = app->add_subcommand(
+      "replay", "rerun a recorded run's procedure and scoring from its recording (`run "
+                "--record`), with no cell; writes the same report");
+  verbs->replay = replay;
+  replay->add_option("recording", v->replay_dir, "recording folder (`run --record`)")
+      ->required();
+  replay->add_option("--out", v->replay_out, "output folder (replaced when complete)")
+      ->required();
+  replay->add_flag("--quiet", v->replay_quiet, "no progress lines");
+  replay->add_flag("--no-images", v->replay_no_images,
+                   "write neither servo images nor report.html (a run recorded with "
+                   "--no-images replays without them)");
+}
+
+// replay: the recorded scenario, trial and options, the cell a ReplayCell of the recording
+// (bench/runs/replay_cell.h); every recorded exchange must be used.
+int RunReplay(const CliValues& v) {
+  const RecordingManifest m = ReadRecordingManifest(v.replay_dir);
+  RunOptions o;
+  o.scenario = m.scenario_path;
+  o.scenario_text = m.scenario_text;
+  o.scenario_dir = m.scenario_dir;
+  o.out_dir = v.replay_out;
+  o.quiet = v.replay_quiet;
+  o.trial = m.trial;
+  o.diagnosis = m.diagnosis;
+  o.images = m.images && !v.replay_no_images;  // as recorded, or fewer
+  o.cell.replay_dir = v.replay_dir;
+  std::printf("twinbench replay: %s (%s, trial %d, recorded %s by twinbench %s%s)\n",
+              v.replay_dir.c_str(), m.scenario_path.c_str(), m.trial, m.started_utc.c_str(),
+              m.twinbench.c_str(), m.complete ? "" : "; partial: its run stopped midway");
+  return RunCalibrationScenario(o);
+}
+
 // study and study-merge: Monte Carlo studies and their shards.
 void AddStudyVerbs(CLI::App* app, CliValues* v, Verbs* verbs) {
   auto* study = app->add_subcommand(
@@ -504,6 +544,21 @@ void AddModelBenchmarkVerbs(CLI::App* app, CliValues* v, Verbs* verbs) {
   kbench->add_option("--evaluations", kb_options.evaluations, "evaluations per figure");
 }
 
+// --record: a new folder (never one that exists, whatever it holds), outside --out and the
+// inputs.
+void ValidateRecordFolder(const std::string& record, const std::string& out_dir) {
+  if (std::filesystem::exists(std::filesystem::symlink_status(record))) {
+    throw InputError("--record", "'" + record + "' exists; a recording goes into a new folder "
+                                 "(twinbench never writes into what it did not create)");
+  }
+  ValidateOutputFolder(record, "--record", "record", false);
+  if (PathIsWithin(record, out_dir) || PathIsWithin(out_dir, record)) {
+    throw InputError("--record", "'" + record + "' and --out '" + out_dir +
+                                     "' overlap; name a recording folder beside the output "
+                                     "folder");
+  }
+}
+
 // The output-safety rule (bench/io/output_files.h): the verb marks the folders it writes
 // and accepts only its own marks; the inputs named here are never written over, and every
 // output path is checked before anything runs.
@@ -520,11 +575,16 @@ void CheckOutputsBeforeRun(const CLI::App& app, const Verbs& verbs, const CliVal
     NoteInput(*input);
   }
   for (const std::string& dir : v.merge_options.dirs) NoteInput(dir, true);
+  if (*verbs.replay) NoteInput(v.replay_dir, true);
   const std::vector<std::pair<CLI::App*, const std::string*>> outputs = {
       {verbs.render, &v.render_options.out_dir}, {verbs.run, &run_options.out_dir},
-      {verbs.identify, &v.identify_options.out_dir}, {verbs.merge, &v.merge_options.out_dir}};
+      {verbs.identify, &v.identify_options.out_dir}, {verbs.merge, &v.merge_options.out_dir},
+      {verbs.replay, &v.replay_out}};
   for (const auto& [sub, folder] : outputs) {
     if (*sub) ValidateOutputFolder(*folder, "--out");
+  }
+  if (*verbs.run && !run_options.cell.record_dir.empty()) {
+    ValidateRecordFolder(run_options.cell.record_dir, run_options.out_dir);
   }
   if (*verbs.run && !run_options.junit.empty()) {
     ValidateJunitFile(run_options.junit, run_options.out_dir);
@@ -592,6 +652,8 @@ int RunVerb(const Verbs& verbs, CliValues* v) {
   if (*verbs.run) {
     v->run_options.images = !v->no_images;
     v->run_options.diagnosis = verbs.run->count("--no-diagnosis") == 0;
+    v->run_options.cell.record_info.twinbench =
+        std::string(TWINBENCH_VERSION) + " (" + TWINBENCH_GIT_DESCRIBE + ")";
     return RunCalibrationScenario(v->run_options);
   }
   if (*verbs.study) {
@@ -600,6 +662,7 @@ int RunVerb(const Verbs& verbs, CliValues* v) {
     return RunStudy(v->study_options);
   }
   if (*verbs.merge) return RunStudyMerge(v->merge_options);
+  if (*verbs.replay) return RunReplay(*v);
   if (*verbs.new_scenario) return RunNewScenario(v->new_scenario);
   if (*verbs.cell_check) return remote::RunCellCheckVerb(v->cell_check);
   if (*verbs.bench_planning) return RunPlanningBenchmark(v->planning_options);
@@ -643,6 +706,7 @@ int main(int argc, char** argv) {
   Verbs verbs;
   AddKinematicsVerbs(&app, &values, &verbs);
   AddTwinVerbs(&app, &values, &verbs);
+  AddReplayVerb(&app, &values, &verbs);
   AddStudyVerbs(&app, &values, &verbs);
   AddCheckVerb(&app, &values, &verbs);
   AddNewScenarioVerb(&app, &values, &verbs);

@@ -1,5 +1,7 @@
 #include "bench/runs/bench_cell.h"
 
+#include "bench/runs/recording_cell.h"
+#include "bench/runs/replay_cell.h"
 #include "calib/common/errors.h"
 
 namespace twin {
@@ -23,11 +25,17 @@ class OwnedLocalTwinCell : private TwinHolder, public LocalTwinCell {
 
 std::unique_ptr<BenchCell> OpenBenchCell(const TwinSpec& twin, const std::string& where,
                                          const CellOptions& options) {
+  // A recording played back: no cell at all (a replay records nothing).
+  if (!options.replay_dir.empty()) return std::make_unique<ReplayCell>(options.replay_dir);
   std::unique_ptr<BenchCell> cell;
   if (options.address.empty()) {
     cell = std::make_unique<OwnedLocalTwinCell>(twin, where);
   } else {
     throw InputError("--cell " + options.address, "remote cells are not available yet");
+  }
+  if (!options.record_dir.empty()) {
+    cell = std::make_unique<RecordingCell>(std::move(cell), options.record_dir,
+                                           options.record_info);
   }
   return cell;
 }

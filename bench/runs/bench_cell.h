@@ -7,6 +7,7 @@
 #include <memory>
 #include <string>
 
+#include "bench/report/recording_file.h"
 #include "calib/cell/cell.h"
 #include "sim/cell/twin_cell.h"
 
@@ -17,6 +18,9 @@ class BenchCell : public Cell {
   /// The twin's truth now, for scoring after the procedure (bench only; never calib/).
   /// Throws InputError on a cell that has none to give (a real cell, `serve-cell --no-truth`).
   virtual TwinTruth Truth() = 0;
+  /// The run has made its last call (the scoring included): a recording notes that it is
+  /// complete, a replay checks that every recorded exchange was used (InputError if not).
+  virtual void Finish() {}
 };
 
 /// A BenchCell that passes every call on to `inner` (subclasses override what they watch).
@@ -40,6 +44,7 @@ class ForwardingBenchCell : public BenchCell {
   double ReadTemperatureC(int robot) override { return inner_.ReadTemperatureC(robot); }
   TrackerReading MeasureTracker(int robot) override { return inner_.MeasureTracker(robot); }
   TwinTruth Truth() override { return inner_.Truth(); }
+  void Finish() override { inner_.Finish(); }
 
  protected:
   std::unique_ptr<BenchCell> owned_;  ///< null when the inner cell is someone else's
@@ -82,10 +87,16 @@ struct CellOptions {
   std::string token_file;
   /// A folder to record every exchange into (empty: none); it must not exist yet.
   std::string record_dir;
+  /// What recording.json says of the run (the scenario, trial, options); set by the run.
+  RecordingManifest record_info;
+  /// A recording to play back (`twinbench replay`; bench/runs/replay_cell.h) instead of a
+  /// cell: every call must match the next recorded exchange.
+  std::string replay_dir;
 };
 
-/// The cell a run drives: the scenario's twin here, or the cell at options.address; recorded
-/// into options.record_dir when one is given. Throws InputError naming `where` for a bad
+/// The cell a run drives: the scenario's twin here, the cell at options.address, or the
+/// recording options.replay_dir played back; recorded into options.record_dir when one is
+/// given. Throws InputError naming `where` for a bad
 /// address, an unreachable cell or a record folder that exists.
 std::unique_ptr<BenchCell> OpenBenchCell(const TwinSpec& twin, const std::string& where,
                                          const CellOptions& options);

@@ -631,6 +631,7 @@ AcceptanceVerdict RunAndPublishReport(BenchCell& cell, const OpticalAxisRun& run
     *stage = RunCalibrationStage(cell, run.sc, run.config, run.staging, run.options.quiet,
                                  run.t_start);
     ScorePhysicalTruth(cell, run.sc, run.config, stage);
+    cell.Finish();  // the last call: a recording is complete, a replay used up
     const JudgedReport report =
         CalibrationReport(run.sc, *stage, run.acceptance, run.options.images);
     verdict = report.verdict;
@@ -755,12 +756,48 @@ void ApplyRunOptions(const RunOptions& o, CalibrationConfig* config) {
   if (!o.images) config->options.kept_images = 0;
 }
 
+Scenario LoadRunScenario(const RunOptions& o, std::string* text) {
+  if (o.scenario_text.empty()) {
+    Scenario sc = LoadScenario(o.scenario);
+    if (text) *text = ReadTextFile(o.scenario);
+    ApplyTrial(o.trial, &sc);
+    return sc;
+  }
+  // A replay's scenario: the recorded text, named as the recorded run named it.
+  Scenario sc = ParseScenario(o.scenario_text, o.scenario, o.scenario_dir);
+  PrintWarnings(sc.warnings);
+  if (text) *text = o.scenario_text;
+  ApplyTrial(o.trial, &sc);
+  return sc;
+}
+
+CellOptions RunCellOptions(const RunOptions& o, const Scenario& sc, const std::string& text) {
+  CellOptions cell = o.cell;
+  if (cell.record_dir.empty()) return cell;
+  RecordingManifest& m = cell.record_info;
+  m.scenario_path = o.scenario;
+  m.scenario_dir = fs::absolute(fs::path(sc.path).parent_path()).lexically_normal().string();
+  m.scenario_text = text;
+  m.trial = o.trial;
+  m.diagnosis = o.diagnosis;
+  m.images = o.images;
+  m.plan_cache = o.plan_cache;
+  m.cell = o.cell.address;
+  return cell;
+}
+
 int RunCalibrationScenario(const RunOptions& o) {
   const auto t_start = Clock::now();
-  Scenario sc = LoadScenario(o.scenario);
-  ApplyTrial(o.trial, &sc);
+  std::string text;
+  Scenario sc = LoadRunScenario(o, &text);
   // Other procedures run elsewhere: the laser tracker, the handclasp, the dual-arm workflow.
   if (IsPresent(sc.tracker_calibration)) return RunTrackerScenario(o);
+  if (IsPresent(sc.handclasp) &&
+      (!o.cell.record_dir.empty() || !o.cell.replay_dir.empty() || !o.cell.address.empty())) {
+    throw InputError(o.cell.record_dir.empty() ? "--cell" : "--record",
+                     sc.path + ": a handclasp or dual-arm workflow run drives the twin in this "
+                               "process only (no recording, replay or served cell yet)");
+  }
   if (IsPresent(sc.handclasp) && !IsPresent(sc.calibration)) {
     // base-frame calibration alone
     return RunHandclaspScenario(o.scenario, o.out_dir, std::cerr, o.trial, o.junit);
@@ -774,7 +811,8 @@ int RunCalibrationScenario(const RunOptions& o) {
   ValidateOutputFolder(o.out_dir, "--out");
   if (!o.junit.empty()) ValidateJunitFile(o.junit, o.out_dir);
   InstallMujocoErrorHandlers();
-  const std::unique_ptr<BenchCell> cell = OpenBenchCell(sc.twin, sc.path, o.cell);
+  const std::unique_ptr<BenchCell> cell =
+      OpenBenchCell(sc.twin, sc.path, RunCellOptions(o, sc, text));
   const fs::path out(o.out_dir);
   const fs::path staging = CreateStagingDirectory(o.out_dir);
   // The calibration, scored and judged, written and published as out_dir.

@@ -33,7 +33,21 @@ struct RunOptions {
   std::string junit;     ///< JUnit XML of the acceptance criteria to write (empty: none)
   bool diagnosis = true; ///< model discovery after the calibration (--no-diagnosis)
   CellOptions cell;      ///< the cell to drive (--cell) and the recording (--record)
+  /// Non-empty: the scenario's content (`twinbench replay`: the recorded scenario), read in
+  /// place of the file `scenario` (which still names it), model paths relative to
+  /// scenario_dir.
+  std::string scenario_text;
+  std::string scenario_dir;
 };
+
+/// The run's scenario (the file, or options.scenario_text), as trial options.trial; its text
+/// into *text when given.
+Scenario LoadRunScenario(const RunOptions& options, std::string* text = nullptr);
+
+/// The run's cell options; with --record, what recording.json says of the run (the scenario
+/// `sc` read from `text`, the trial, the options).
+CellOptions RunCellOptions(const RunOptions& options, const Scenario& sc,
+                           const std::string& text);
 
 /// Runs the scenario and writes out_dir/report.json, measurements.csv, servo_*.png and
 /// report.html; prints progress and a summary. Returns the exit code: 0, or 3 when the

@@ -128,21 +128,22 @@ void WriteFile(const fs::path& path, const std::string& text) { WriteTextFile(pa
 /// The scenario of a run (as the trial), its tracker section and acceptance criteria, checked.
 struct TrackerRunSetup {
   Scenario sc;
+  std::string text;  ///< the scenario's text (a recording keeps it)
   TrackerRunConfig config;
   Acceptance acceptance;
 };
 
 // Loads and checks the scenario and its tracker section, and checks the output paths.
 TrackerRunSetup LoadTrackerRun(const RunOptions& o) {
-  Scenario sc = LoadScenario(o.scenario);
-  ApplyTrial(o.trial, &sc);
+  std::string text;
+  Scenario sc = LoadRunScenario(o, &text);
   ValidateTrackerScenario(sc);
   TrackerRunConfig config = ParseTrackerRunConfig(sc);
   Acceptance acceptance = ParseAcceptance(sc);
   ValidateOutputFolder(o.out_dir, "--out");
   if (!o.junit.empty()) ValidateJunitFile(o.junit, o.out_dir);
   // Built in place, never assigned: assigning a YAML::Node (the sections) is no plain copy.
-  return {std::move(sc), std::move(config), std::move(acceptance)};
+  return {std::move(sc), std::move(text), std::move(config), std::move(acceptance)};
 }
 
 // Told: the nominal model with the drawn reflector and the weighed payload. Never the truth.
@@ -462,7 +463,8 @@ int RunTrackerScenario(const RunOptions& o) {
   // The scenario (as the trial) and its tracker section, checked with the output paths.
   const TrackerRunSetup setup = LoadTrackerRun(o);
   InstallMujocoErrorHandlers();
-  const std::unique_ptr<BenchCell> owned_cell = OpenBenchCell(setup.sc.twin, setup.sc.path, o.cell);
+  const std::unique_ptr<BenchCell> owned_cell =
+      OpenBenchCell(setup.sc.twin, setup.sc.path, RunCellOptions(o, setup.sc, setup.text));
   BenchCell& cell = *owned_cell;
   // Told: the nominal model with the drawn reflector and payload. Never the truth.
   const KinematicModel nominal = ToldModel(setup);
@@ -474,6 +476,7 @@ int RunTrackerScenario(const RunOptions& o) {
   const PhysicalTruth physical = MeasurePhysicalTruth(setup, nominal, procedure, diagnosis, &cell);
   // Scoring against the truth (bench only): the true geometry with the true reflector.
   const TwinTruth truth = cell.Truth();
+  cell.Finish();  // the last call: a recording is complete, a replay used up
   TrackerRunResult result =
       MakeTrackerResult(o, setup, procedure, diagnosis, physical, truth,
                         ScoreAgainstTruth(truth, setup.config.robot, nominal, procedure.result));
