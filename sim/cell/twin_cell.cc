@@ -625,6 +625,7 @@ void TwinCell::SetRealtime(bool realtime) { impl_->realtime = realtime; }
 MoveResult TwinCell::RemountTools(const std::function<void()>& change, const std::string& what,
                                   const std::string& refused) {
   Impl& s = *impl_;
+  s.stop_requested.store(false);  // a stop request ends only a motion in progress
   std::array<JointVector, kMaxRobots> link;
   for (int k = 0; k < s.Robots(); ++k) link[k] = s.LinkAngles(k);
   const double time = s.d->time;
@@ -718,6 +719,7 @@ double TwinCell::last_contact_gap_m() const { return impl_->last_gap; }
 MoveResult TwinCell::JogTipToContact(int j) {
   Impl& s = *impl_;
   MoveResult result;
+  s.stop_requested.store(false);  // a stop request ends only a motion in progress
   if (const std::string bad = s.BadRobot(j); !bad.empty()) {
     result.status = MoveStatus::kInvalidInput;
     result.reason = bad;
