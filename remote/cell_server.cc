@@ -4,6 +4,7 @@
 
 #include <arpa/inet.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <deque>
 #include <fstream>
 #include <future>
+#include <iomanip>
 #include <map>
 #include <mutex>
 #include <random>
@@ -73,8 +75,8 @@ bool ConstantTimeEqual(const std::string& a, const std::string& b) {
 std::string NewSessionId() {
   std::random_device rd;
   std::ostringstream os;
-  os << std::hex;
-  for (int i = 0; i < 4; ++i) os << rd();
+  os << std::hex << std::setfill('0');
+  for (int i = 0; i < 4; ++i) os << std::setw(8) << (rd() & 0xffffffffu);
   return os.str();
 }
 
@@ -377,8 +379,9 @@ class CellService final : public pb::Cell::Service {
     if (Status st = s_.Authorize(ctx); !st.ok()) return st;
     std::lock_guard<std::mutex> lock(s_.session_mutex);
     if (!s_.live_id.empty()) {
+      // The id is the holder's capability: only its first 8 of 32 digits are named.
       return Status(StatusCode::FAILED_PRECONDITION,
-                    "the cell is held by session " + s_.live_id + " (client '" +
+                    "the cell is held by session " + s_.live_id.substr(0, 8) + "... (client '" +
                         s_.live_client + "'); it ends with CloseSession or after " +
                         std::to_string(s_.opt.heartbeat_timeout_s) + " s of silence");
     }
