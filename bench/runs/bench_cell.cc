@@ -1,6 +1,7 @@
 #include "bench/runs/bench_cell.h"
 
 #include <fstream>
+#include <utility>
 
 #include "calib/common/errors.h"
 #include "remote/grpc_cell.h"
@@ -81,6 +82,17 @@ std::unique_ptr<BenchCell> OpenBenchCell(const TwinSpec& twin, const std::string
                                          const CellOptions& options) {
   std::unique_ptr<BenchCell> cell;
   if (options.address.empty()) {
+    for (const auto& [value, flag] :
+         {std::pair{&options.tls_ca_file, "--cell-ca"},
+          std::pair{&options.tls_cert_file, "--cell-cert"},
+          std::pair{&options.tls_key_file, "--cell-key"},
+          std::pair{&options.token_file, "--cell-token-file"}}) {
+      if (!value->empty()) {
+        throw InputError(flag, "a credential of a served cell; give the cell with --cell "
+                               "grpc://HOST:PORT (without --cell the run drives the scenario's "
+                               "twin in this process)");
+      }
+    }
     cell = std::make_unique<OwnedLocalTwinCell>(twin, where);
   } else {
     const std::string host_port = GrpcHostPort(options.address);

@@ -17,8 +17,8 @@ remote::CellDescription DescribeTwin(const Scenario& sc) {
   d.cell_name = sc.name;
   const TwinSpec& spec = sc.twin;
   for (int k = 0; k < spec.num_robots; ++k) {
-    d.robot_names.push_back(k < static_cast<int>(sc.robot_names.size()) ? sc.robot_names[k]
-                                                                       : "r" + std::to_string(k + 1));
+    const bool named = k < static_cast<int>(sc.robot_names.size());
+    d.robot_names.push_back(named ? sc.robot_names[k] : "r" + std::to_string(k + 1));
     const KinematicModel& model = spec.robots[k].model;
     std::vector<JointLimits> limits;
     for (int i = 0; i < model.num_joints(); ++i) limits.push_back(model.links[i].limits);

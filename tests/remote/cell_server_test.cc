@@ -92,7 +92,7 @@ TEST(CellServer, BeyondLoopbackNeedsTlsAndClientAuthentication) {
 }
 
 TEST(CellServer, OneSessionAtATimeAndSilentSessionsEnd) {
-  ServerOptions o = Loopback(0.3);
+  ServerOptions o = Loopback(0.5);
   int stops = 0;
   o.stop_motion = [&] { ++stops; };
   CellServer server(*Demo().twin, Demo().desc, o);
@@ -110,7 +110,8 @@ TEST(CellServer, OneSessionAtATimeAndSilentSessionsEnd) {
   EXPECT_NE(refused.error_message().find(first.substr(0, 8)), std::string::npos)
       << refused.error_message();
   EXPECT_EQ(refused.error_message().find(first), std::string::npos) << refused.error_message();
-  // Heartbeats keep it (1 s of them, 3 heartbeat timeouts), silence ends it.
+  // Heartbeats every 0.1 s keep it (1 s of them, 2 heartbeat timeouts); 1.2 s of silence ends
+  // it (the watchdog looks every 0.05 s).
   for (int i = 0; i < 10; ++i) {
     pb::HeartbeatRequest hb;
     hb.set_session_id(first);
@@ -119,7 +120,7 @@ TEST(CellServer, OneSessionAtATimeAndSilentSessionsEnd) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
   }
   EXPECT_EQ(stops, 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(600));
+  std::this_thread::sleep_for(std::chrono::milliseconds(1200));
   pb::ReadEncodersRequest enc;
   enc.set_session_id(first);
   pb::ReadEncodersResponse q;

@@ -47,6 +47,7 @@ std::string FirstDifference(const nlohmann::json& a, const nlohmann::json& b) {
 // The in-process run and the remote run of `scenario` (TLS, client certificate) give the same
 // report.json but for timing_s.
 void ExpectRemoteReportEqualsLocal(const std::string& scenario, double timeout_s) {
+  if (!HaveOpenssl()) GTEST_SKIP() << "no openssl CLI to make certificates";
   TempDir dir;
   ASSERT_TRUE(MakeCertificates(dir.path())) << "openssl failed";
   const std::string path = std::string(TWIN_SOURCE_DIR) + "/" + scenario;
@@ -84,6 +85,7 @@ TEST(RemoteRun, PaperReportEqualsInProcessOverTls) {
 
 // `run --cell` against a TLS server without --cell-ca: refused, exit 2, naming --cell.
 TEST(RemoteRun, WithoutCredentialsExitsTwoNamingCell) {
+  if (!HaveOpenssl()) GTEST_SKIP() << "no openssl CLI to make certificates";
   TempDir dir;
   ASSERT_TRUE(MakeCertificates(dir.path())) << "openssl failed";
   const std::string path = std::string(TWIN_SOURCE_DIR) + "/scenarios/tracker_single_reinovo.yaml";
@@ -108,6 +110,10 @@ TEST(RemoteRun, WithoutCredentialsExitsTwoNamingCell) {
   r = TwinbenchArgs({"run", path, "--out", dir / "d", "--quiet", "--cell", cell, "--cell-ca",
                      dir / "missing.pem"},
                     60);
+  EXPECT_TRUE(r.exited && r.code == 2) << r.output;
+  EXPECT_NE(r.output.find("error: --cell-ca"), std::string::npos) << r.output;
+  // A credential without --cell is refused rather than ignored.
+  r = TwinbenchArgs({"run", path, "--out", dir / "e", "--quiet", "--cell-ca", dir / "ca.pem"}, 60);
   EXPECT_TRUE(r.exited && r.code == 2) << r.output;
   EXPECT_NE(r.output.find("error: --cell-ca"), std::string::npos) << r.output;
   // Nothing came of the refused runs.

@@ -22,12 +22,14 @@ grpc::StatusCode DescribeCode(pb::Cell::Stub& stub, const std::string& token = "
 }
 
 TEST(ServeCellCli, BeyondLoopbackWithoutTlsAndAuthenticationExitsTwo) {
+  if (!HaveOpenssl()) GTEST_SKIP() << "no openssl CLI to make certificates";
   TempDir dir;
   ASSERT_TRUE(MakeCertificates(dir.path()));
   for (const std::vector<std::string>& extra :
        {std::vector<std::string>{},
         // TLS alone authenticates no client.
-        std::vector<std::string>{"--tls-cert", dir / "server.pem", "--tls-key", dir / "server.key"}}) {
+        std::vector<std::string>{"--tls-cert", dir / "server.pem", "--tls-key",
+                                 dir / "server.key"}}) {
     std::vector<std::string> args = {"serve-cell", kTracker, "--listen", "0.0.0.0:0"};
     args.insert(args.end(), extra.begin(), extra.end());
     const ProcessRun r = TwinbenchArgs(args, 60);
@@ -37,6 +39,7 @@ TEST(ServeCellCli, BeyondLoopbackWithoutTlsAndAuthenticationExitsTwo) {
 }
 
 TEST(ServeCellCli, ClientWithoutCertificateIsRefused) {
+  if (!HaveOpenssl()) GTEST_SKIP() << "no openssl CLI to make certificates";
   TempDir dir;
   ASSERT_TRUE(MakeCertificates(dir.path()));
   ServeCellProcess server({kTracker, "--listen", "127.0.0.1:0", "--tls-cert", dir / "server.pem",
@@ -55,6 +58,7 @@ TEST(ServeCellCli, ClientWithoutCertificateIsRefused) {
 }
 
 TEST(ServeCellCli, MissingOrWrongTokenIsUnauthenticated) {
+  if (!HaveOpenssl()) GTEST_SKIP() << "no openssl CLI to make certificates";
   TempDir dir;
   ASSERT_TRUE(MakeCertificates(dir.path()));
   std::ofstream(dir / "token") << "s3cret-token-40\n";

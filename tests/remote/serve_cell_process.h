@@ -46,13 +46,20 @@ class TempDir {
   std::string path_;
 };
 
+/// True when the openssl CLI is on PATH (the certificate tests skip without it).
+inline bool HaveOpenssl() {
+  return std::system("command -v openssl >/dev/null 2>&1") == 0;
+}
+
 /// ca.pem, server.pem/.key (CN and subjectAltName IP:127.0.0.1), client.pem/.key (signed by
 /// the CA) and other_ca.pem/other_client.pem/.key (a second, unrelated CA and its client) in
 /// `dir`, made with the openssl CLI. False when openssl failed.
 inline bool MakeCertificates(const std::string& dir) {
   const std::string q = "cd '" + dir + "' && ";
   const std::string quiet = " >/dev/null 2>&1";
-  const auto sh = [&](const std::string& cmd) { return std::system((q + cmd + quiet).c_str()) == 0; };
+  const auto sh = [&](const std::string& cmd) {
+    return std::system((q + cmd + quiet).c_str()) == 0;
+  };
   const auto ca = [&](const std::string& name) {
     return sh("openssl req -x509 -newkey rsa:2048 -nodes -keyout " + name + ".key -out " + name +
               ".pem -days 2 -subj /CN=" + name);
