@@ -126,6 +126,8 @@ struct CellServer::Impl {
   std::mutex watchdog_mutex;
   std::condition_variable watchdog_cv;
 
+  std::atomic<std::uint64_t> stops{0};  // stop requests made so far (Stop, watchdog, cancel)
+
   std::unique_ptr<grpc::Service> cell_service, truth_service;
   std::unique_ptr<grpc::Server> server;
   int port = 0;
@@ -185,7 +187,21 @@ struct CellServer::Impl {
       live_id.clear();
       live_client.clear();
     }
-    if (stop && opt.stop_motion) opt.stop_motion();
+    if (stop) StopMotion();
+  }
+
+  void StopMotion() {
+    ++stops;
+    if (opt.stop_motion) opt.stop_motion();
+  }
+
+  // `result` of a motion call as the protocol has it: a move that did not settle because a stop
+  // was requested while it ran (Stop, the end of its session) is MOVE_STATUS_STOPPED.
+  void MotionResult(const MoveResult& result, std::uint64_t stops_before, pb::MoveResult* out) {
+    ToProto(result, out);
+    if (result.status == MoveStatus::kNotSettled && stops.load() != stops_before) {
+      out->set_status(pb::MOVE_STATUS_STOPPED);
+    }
   }
 
   void WatchdogLoop() {
@@ -214,7 +230,7 @@ struct CellServer::Impl {
         std::lock_guard<std::mutex> q(queue_mutex);
         running = running_session;
       }
-      if (!running.empty() && !IsLive(running) && opt.stop_motion) opt.stop_motion();
+      if (!running.empty() && !IsLive(running)) StopMotion();
     }
   }
   bool stopping_watchdog = false;
@@ -319,7 +335,7 @@ struct CellServer::Impl {
 
   void Shutdown() {
     std::call_once(shutdown_once, [&] {
-      if (opt.stop_motion) opt.stop_motion();
+      StopMotion();
       {
         std::lock_guard<std::mutex> lock(session_mutex);
         if (!live_id.empty()) ended[live_id] = "the server shut down";
@@ -410,7 +426,7 @@ class CellService final : public pb::Cell::Service {
   Status Stop(ServerContext* ctx, const pb::StopRequest* req, pb::StopResponse*) override {
     if (Status st = s_.Authorize(ctx); !st.ok()) return st;
     if (Status st = s_.Touch(req->session_id()); !st.ok()) return st;
-    if (s_.opt.stop_motion) s_.opt.stop_motion();
+    s_.StopMotion();
     return Status::OK;
   }
 
@@ -421,7 +437,8 @@ class CellService final : public pb::Cell::Service {
         return Invalid(bad);
       }
       const JointVector q = JointsFromProto(req->q_target_rad());
-      ToProto(s_.cell.MoveTo(static_cast<int>(req->robot()), q), out);
+      const std::uint64_t stops = s_.stops.load();
+      s_.MotionResult(s_.cell.MoveTo(static_cast<int>(req->robot()), q), stops, out);
       return Status::OK;
     });
   }
@@ -468,7 +485,8 @@ class CellService final : public pb::Cell::Service {
   Status ExchangeTools(ServerContext* ctx, const pb::ExchangeToolsRequest* req,
                        pb::MoveResult* out) override {
     return s_.Serve(ctx, req->session_id(), true, [&]() -> Status {
-      ToProto(s_.cell.ExchangeTools(), out);
+      const std::uint64_t stops = s_.stops.load();
+      s_.MotionResult(s_.cell.ExchangeTools(), stops, out);
       return Status::OK;
     });
   }
@@ -488,7 +506,8 @@ class CellService final : public pb::Cell::Service {
                          pb::MoveResult* out) override {
     return s_.Serve(ctx, req->session_id(), true, [&]() -> Status {
       if (std::string bad = s_.BadRobot(req->jogged_robot()); !bad.empty()) return Invalid(bad);
-      ToProto(s_.cell.JogTipToContact(static_cast<int>(req->jogged_robot())), out);
+      const std::uint64_t stops = s_.stops.load();
+      s_.MotionResult(s_.cell.JogTipToContact(static_cast<int>(req->jogged_robot())), stops, out);
       return Status::OK;
     });
   }
@@ -502,7 +521,8 @@ class CellService final : public pb::Cell::Service {
       } catch (const std::exception& e) {
         return Invalid(e.what());
       }
-      ToProto(s_.cell.MountTarget(target), out);
+      const std::uint64_t stops = s_.stops.load();
+      s_.MotionResult(s_.cell.MountTarget(target), stops, out);
       return Status::OK;
     });
   }

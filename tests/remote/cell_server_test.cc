@@ -138,6 +138,45 @@ TEST(CellServer, OneSessionAtATimeAndSilentSessionsEnd) {
   EXPECT_EQ(q.q_rad_size(), 6);
 }
 
+// Stop during a move (the twin paced to wall time): the move answers MOVE_STATUS_STOPPED short
+// of its target, and the session stays open.
+TEST(CellServer, StopEndsTheMoveInProgress) {
+  DemoTwin& demo = Demo();
+  demo.twin->SetRealtime(true);
+  CellServer server(*demo.twin, demo.desc, Loopback());
+  auto stub = RawStub("127.0.0.1:" + std::to_string(server.BoundPort()), "");
+  const std::string session = OpenSession(*stub);
+  pb::ReadEncodersRequest enc;
+  enc.set_session_id(session);
+  pb::ReadEncodersResponse start;
+  ASSERT_TRUE(stub->ReadEncoders(Context().get(), enc, &start).ok());
+  pb::MoveToRequest move;
+  move.set_session_id(session);
+  for (double q : start.q_rad()) move.add_q_target_rad(q);
+  move.set_q_target_rad(0, start.q_rad(0) + 1.0);  // 1 s at 1 rad/s
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    pb::StopRequest stop;
+    stop.set_session_id(session);
+    pb::StopResponse r;
+    EXPECT_TRUE(stub->Stop(Context().get(), stop, &r).ok());
+  });
+  pb::MoveResult result;
+  const grpc::Status status = stub->MoveTo(Context(30).get(), move, &result);
+  stopper.join();
+  demo.twin->SetRealtime(false);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(result.status(), pb::MOVE_STATUS_STOPPED) << result.reason();
+  pb::ReadEncodersResponse after;
+  ASSERT_TRUE(stub->ReadEncoders(Context().get(), enc, &after).ok());  // still the session
+  EXPECT_GT(after.q_rad(0) - start.q_rad(0), 0.05);
+  EXPECT_LT(after.q_rad(0) - start.q_rad(0), 0.9);
+  // Back where it started, for the other tests of this process.
+  move.set_q_target_rad(0, start.q_rad(0));
+  ASSERT_TRUE(stub->MoveTo(Context(30).get(), move, &result).ok());
+  EXPECT_EQ(result.status(), pb::MOVE_STATUS_SETTLED) << result.reason();
+}
+
 // The client of remote/grpc_cell.h against the in-process server: the same answers as the twin.
 TEST(CellServer, GrpcCellSeesWhatTheTwinAnswers) {
   CellServer server(*Demo().twin, Demo().desc, Loopback());
