@@ -24,6 +24,7 @@
 #include "bench/runs/kinematics_benchmark.h"
 #include "bench/runs/planning_benchmark.h"
 #include "bench/runs/replay_cell.h"
+#include "bench/runs/serve_cell.h"
 #include "bench/runs/study_merge.h"
 #include "bench/runs/study_run.h"
 #include "bench/runs/synthetic_measurements.h"
@@ -243,6 +244,7 @@ struct CliValues {
   remote::CellCheckOptions cell_check;
   std::string replay_dir, replay_out;
   bool replay_quiet = false, replay_no_images = false;
+  ServeCellOptions serve_options;
 };
 
 // The verbs (subcommands) of the command line, owned by the CLI::App.
@@ -266,6 +268,7 @@ struct Verbs {
   CLI::App* new_scenario = nullptr;
   CLI::App* cell_check = nullptr;
   CLI::App* replay = nullptr;
+  CLI::App* serve = nullptr;
 };
 
 // The chain of a URDF model: one pair for every verb that takes a model file.
@@ -314,6 +317,33 @@ void AddCellCheckVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
   sub->add_option("--stop-move-rad", o.stop_move_rad,
                   "joint 1's move in the stop-on-disconnect check (default 1.0 rad)")
       ->check(CLI::Range(0.05, 3.0));
+}
+
+// serve-cell: a scenario's twin served over the cell protocol (bench/runs/serve_cell.h).
+void AddServeVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
+  ServeCellOptions& o = v->serve_options;
+  auto* serve = app->add_subcommand(
+      "serve-cell", "serve a scenario's twin over the cell protocol (gRPC) until SIGINT/SIGTERM");
+  verbs->serve = serve;
+  serve->add_option("scenario", o.scenario, "scenario file")->required();
+  serve->add_option("--listen", o.listen,
+                    "HOST:PORT to listen on (port 0: a free one); beyond loopback needs TLS and "
+                    "--client-ca or --token-file")
+      ->required();
+  serve->add_option("--trial", o.trial,
+                    "study trial t: the scenario's truth seed + t, as `run --trial` (default 0)")
+      ->check(CLI::Range(0, 1000000000));
+  serve->add_option("--tls-cert", o.tls_cert_file, "TLS: server certificate (PEM)");
+  serve->add_option("--tls-key", o.tls_key_file, "TLS: the server certificate's key (PEM)");
+  serve->add_option("--client-ca", o.client_ca_file,
+                    "TLS: require client certificates signed by this CA (PEM)");
+  serve->add_option("--token-file", o.token_file,
+                    "require the bearer token on this file's first line");
+  serve->add_option("--heartbeat-timeout", o.heartbeat_timeout_s,
+                    "seconds of silence after which a session ends and motion stops (default 2)")
+      ->check(CLI::Range(0.01, 3600.0));
+  serve->add_flag("--no-truth", "do not offer the twin's truth (TwinBench.Truth)");
+  serve->add_flag("--realtime", o.realtime, "pace the simulation to wall-clock time");
 }
 
 // info, fk, ik, export-urdf and demo: a robot model's kinematics.
@@ -571,7 +601,7 @@ void CheckOutputsBeforeRun(const CLI::App& app, const Verbs& verbs, const CliVal
         &v.planning_options.scenario, &study_options.scenario, &v.check_scenario,
         &v.identify_options.model, &v.identify_options.measurements,
         &v.tracker_options.validate, &v.synth_options.model, &v.kb_options.model,
-        &v.new_scenario.robot, &v.new_scenario.second}) {
+        &v.new_scenario.robot, &v.new_scenario.second, &v.serve_options.scenario}) {
     NoteInput(*input);
   }
   for (const std::string& dir : v.merge_options.dirs) NoteInput(dir, true);
@@ -649,6 +679,10 @@ int RunVerb(const Verbs& verbs, CliValues* v) {
   }
   if (*verbs.render) return RunRender(v->render_options);
   if (*verbs.bench) return RunTwinBenchmark(v->bench_options);
+  if (*verbs.serve) {
+    v->serve_options.truth = verbs.serve->count("--no-truth") == 0;
+    return RunServeCell(v->serve_options);
+  }
   if (*verbs.run) {
     v->run_options.images = !v->no_images;
     v->run_options.diagnosis = verbs.run->count("--no-diagnosis") == 0;
@@ -713,6 +747,7 @@ int main(int argc, char** argv) {
   AddIdentifyVerb(&app, &values, &verbs);
   AddModelBenchmarkVerbs(&app, &values, &verbs);
   AddCellCheckVerb(&app, &values, &verbs);
+  AddServeVerb(&app, &values, &verbs);
   std::string completion_shell;
   CLI::App* completion = AddCompletionVerb(&app, &completion_shell);
 

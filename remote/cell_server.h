@@ -56,8 +56,9 @@ class CellServer {
   void Wait();                     ///< blocks until Shutdown()
   void Shutdown();
 
+  struct Impl;  ///< public only so that the .cc's service classes can name it
+
  private:
-  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 

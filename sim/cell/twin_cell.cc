@@ -1,12 +1,15 @@
 #include "sim/cell/twin_cell.h"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 #include <utility>
 
 #include <mujoco/mujoco.h>
@@ -116,6 +119,8 @@ struct TwinCell::Impl {
   Intrinsics canvas;
   std::unique_ptr<OffscreenRenderer> hand_renderer, overview_renderer;
   int last_steps = 0;
+  std::atomic<bool> stop_requested{false};  // RequestStop(): the move in progress ends
+  bool realtime = false;                    // SetRealtime(): steps paced to wall time
   // Drifting link lengths (thermal drift): the model entries that move with a robot's length
   // scale, each with its value at scale 1 and its slope per unit of scale.
   struct DriftEntry {
@@ -357,7 +362,14 @@ struct TwinCell::Impl {
     const int warnings = WarningCount(d.get());
     MoveResult result;
     int steps = 0, calm = 0;
+    const auto wall0 = std::chrono::steady_clock::now();
     for (;;) {
+      if (stop_requested.load(std::memory_order_relaxed)) {
+        result.status = MoveStatus::kNotSettled;
+        result.reason = "stopped";
+        if (robot >= 0) Halt(robot);
+        break;
+      }
       if (steps >= ph.max_steps) {
         std::ostringstream os;
         os.precision(3);
@@ -384,6 +396,11 @@ struct TwinCell::Impl {
       WriteControls();
       mj_step2(m.get(), d.get());
       ++steps;
+      if (realtime) {
+        std::this_thread::sleep_until(wall0 + std::chrono::duration_cast<
+                                                  std::chrono::steady_clock::duration>(
+                                                  std::chrono::duration<double>(steps * dt)));
+      }
       if (WarningCount(d.get()) > warnings) {  // MuJoCo reset the state after a divergence
         result.status = MoveStatus::kNotSettled;
         result.reason = "the simulation diverged (MuJoCo warning); lower physics.stiffness or "
@@ -593,8 +610,13 @@ MoveResult TwinCell::MoveTo(int robot, const JointVector& q_target) {
       return result;
     }
   }
+  s.stop_requested.store(false);
   return s.Run(robot, q_target);
 }
+
+void TwinCell::RequestStop() { impl_->stop_requested.store(true); }
+
+void TwinCell::SetRealtime(bool realtime) { impl_->realtime = realtime; }
 
 // Re-mounts tools while the robots hold still: `change` edits the spec, the world is rebuilt
 // with the robots where they stand (link angles, clock and drift carry over), and when the
@@ -603,6 +625,7 @@ MoveResult TwinCell::MoveTo(int robot, const JointVector& q_target) {
 MoveResult TwinCell::RemountTools(const std::function<void()>& change, const std::string& what,
                                   const std::string& refused) {
   Impl& s = *impl_;
+  s.stop_requested.store(false);  // a stop request ends only a motion in progress
   std::array<JointVector, kMaxRobots> link;
   for (int k = 0; k < s.Robots(); ++k) link[k] = s.LinkAngles(k);
   const double time = s.d->time;
@@ -696,6 +719,7 @@ double TwinCell::last_contact_gap_m() const { return impl_->last_gap; }
 MoveResult TwinCell::JogTipToContact(int j) {
   Impl& s = *impl_;
   MoveResult result;
+  s.stop_requested.store(false);  // a stop request ends only a motion in progress
   if (const std::string bad = s.BadRobot(j); !bad.empty()) {
     result.status = MoveStatus::kInvalidInput;
     result.reason = bad;

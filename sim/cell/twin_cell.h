@@ -107,6 +107,17 @@ class TwinCell : public Cell {
   /// The benchmark baseline: bare mjr_render + mjr_readPixels of the hand camera.
   void RenderBare();
 
+  /// Stops a MoveTo in progress, from any thread (a served cell's watchdog): the move ends at
+  /// its next physics step with kNotSettled, reason "stopped", the robot holding where it
+  /// stands (a handclasp or a tool exchange likewise ends its settling). The request clears
+  /// when the next MoveTo, JogTipToContact, ExchangeTools or MountTarget starts (a request while
+  /// no motion runs stops nothing).
+  void RequestStop();
+  /// Paces the simulation to wall-clock time (a served twin behaving like hardware): each
+  /// physics step of a move waits until its simulated time has passed in wall time. Off by
+  /// default (the simulation runs as fast as it can; results are the same either way).
+  void SetRealtime(bool realtime);
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
