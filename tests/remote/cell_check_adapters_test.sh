@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
-# Issue 40: `twinbench cell-check` on the Python fake adapter (adapters/python/fake_hardware.py)
-# passes every check, motion included; on each of its three deliberately broken variants it
+# Issue 40: `twinbench cell-check` on the twin served by `twinbench serve-cell --realtime`
+# (scenarios/twin_demo.yaml: two robots and the camera) and on the Python fake adapter
+# (adapters/python/fake_hardware.py) passes every check, motion included; the Python client
+# (adapters/python/twinbench_cell/client.py) scripts the served twin (a move read back within
+# 1 mrad, a frame of the camera's size); on each of the fake's three deliberately broken variants it
 # exits 1 and names the check the variant breaks:
 #   --break units    readings and limits in degrees  -> "units: limits in rad", "units: a move"
 #   --break no-stop  a move runs on after its client went away -> "stop on disconnect"
@@ -41,6 +44,49 @@ start_fake() {
 }
 
 fail=0
+# The served twin: every check passes, none skipped; then the Python client scripts it.
+twin_log=$work/twin.log
+"$bin" serve-cell "$src/scenarios/twin_demo.yaml" --listen 127.0.0.1:0 --realtime \
+  --heartbeat-timeout 0.5 >"$twin_log" 2>&1 &
+pids+=($!)
+twin_addr=""
+for _ in $(seq 1 300); do
+  twin_addr=$(grep -o "127.0.0.1:[0-9]*" "$twin_log" | head -1 || true)
+  [ -n "$twin_addr" ] && break
+  sleep 0.1
+done
+if [ -z "$twin_addr" ]; then
+  echo "FAILED: serve-cell did not start: $(cat "$twin_log")"; exit 1
+fi
+if ! "$bin" cell-check "grpc://$twin_addr" --allow-motion >"$work/twin.txt" 2>&1; then
+  echo "FAILED: cell-check on the served twin exited non-zero:"; cat "$work/twin.txt"; fail=1
+fi
+if grep -qE "^(FAIL|SKIP) " "$work/twin.txt"; then
+  echo "FAILED: a check failed or was skipped on the served twin:"; cat "$work/twin.txt"; fail=1
+fi
+if ! PYTHONPATH="$src/adapters/python" "$py" - "$twin_addr" >"$work/py_client.txt" 2>&1 <<'PY'
+import sys
+from twinbench_cell.client import RemoteCell
+with RemoteCell(sys.argv[1]) as cell:
+    d = cell.describe()
+    assert len(d.robots) == 2, d
+    q = cell.read_encoders(0)
+    target = list(q)
+    target[5] += 0.05
+    result = cell.move_to(0, target)
+    assert result.status == "SETTLED", result
+    after = cell.read_encoders(0)
+    assert max(abs(a - b) for a, b in zip(after, target)) < 1e-3, (after, target)
+    width, height, rgb = cell.grab_image()
+    assert (width, height) == (d.image_width_px, d.image_height_px), (width, height)
+    assert len(rgb) == 3 * width * height
+print("python client: moved, read back, grabbed", width, "x", height)
+PY
+then
+  echo "FAILED: the Python client could not script the served twin:"; cat "$work/py_client.txt"
+  fail=1
+fi
+
 # The good fake: every check passes, none skipped.
 addr=$(start_fake)
 if ! "$bin" cell-check "grpc://$addr" --allow-motion >"$work/good.txt" 2>&1; then
@@ -78,4 +124,4 @@ check_broken no-stop "stop on disconnect"
 check_broken clock "monotonic clock"
 
 if [ "$fail" -ne 0 ]; then exit 1; fi
-echo "cell-check: the fake adapter passes; the three broken ones fail at their checks"
+echo "cell-check: the served twin and the fake adapter pass; the three broken ones fail at their checks"
