@@ -1,6 +1,7 @@
 // `twinbench run --cell grpc://...` (remote/grpc_cell.h, bench/runs/bench_cell.cc) against a
 // `twinbench serve-cell` subprocess over TLS with client certificates: the report equals the
-// in-process run's, key for key and bit for bit, except the wall-clock timings (timing_s).
+// in-process run's, key for key and bit for bit, except the wall-clock timings (timing_s), and
+// the replay of the remote run's recording equals it too.
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
@@ -44,8 +45,9 @@ std::string FirstDifference(const nlohmann::json& a, const nlohmann::json& b) {
   return patch.empty() ? "" : patch.front().dump();
 }
 
-// The in-process run and the remote run of `scenario` (TLS, client certificate) give the same
-// report.json but for timing_s.
+// The in-process run and the remote run of `scenario` (TLS, client certificate, recorded with
+// --record) give the same report.json but for timing_s; so does the replay of the recording
+// (issue 40: the report equals the in-process run's, and the replay equals the live run's).
 void ExpectRemoteReportEqualsLocal(const std::string& scenario, double timeout_s) {
   if (!HaveOpenssl()) GTEST_SKIP() << "no openssl CLI to make certificates";
   TempDir dir;
@@ -61,14 +63,21 @@ void ExpectRemoteReportEqualsLocal(const std::string& scenario, double timeout_s
   const ProcessRun remote = TwinbenchArgs(
       {"run", path, "--out", dir / "remote", "--quiet", "--cell",
        "grpc://127.0.0.1:" + std::to_string(server.port()), "--cell-ca", dir / "ca.pem",
-       "--cell-cert", dir / "client.pem", "--cell-key", dir / "client.key"},
+       "--cell-cert", dir / "client.pem", "--cell-key", dir / "client.key", "--record",
+       dir / "recording"},
       timeout_s);
   ASSERT_TRUE(remote.exited && remote.code == 0) << remote.output << server.output();
   EXPECT_EQ(server.Stop(SIGTERM), 0) << server.output();
+  const ProcessRun replay = TwinbenchArgs(
+      {"replay", dir / "recording", "--out", dir / "replayed", "--quiet"}, timeout_s);
+  ASSERT_TRUE(replay.exited && replay.code == 0) << replay.output;
 
   const nlohmann::json a = ReportWithoutTimes(dir / "local/report.json");
   const nlohmann::json b = ReportWithoutTimes(dir / "remote/report.json");
   EXPECT_EQ(a, b) << "first difference: " << FirstDifference(a, b);
+  const nlohmann::json c = ReportWithoutTimes(dir / "replayed/report.json");
+  EXPECT_EQ(b, c) << "replay against the live remote run, first difference: "
+                  << FirstDifference(b, c);
   // The comparison compares something: the report has its results.
   EXPECT_TRUE(a.contains("scenario") && a.contains("acceptance")) << a.dump().substr(0, 500);
   EXPECT_GT(a.dump().size(), 10000u);
