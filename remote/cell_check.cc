@@ -5,7 +5,6 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <limits>
 #include <mutex>
@@ -16,6 +15,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "calib/common/errors.h"
+#include "remote/cell_channel.h"
 #include "twinbench/cell/v1/cell.grpc.pb.h"
 
 namespace twin::remote {
@@ -37,33 +37,7 @@ constexpr double kStepRad = 0.05;
 // A joint limit beyond this is not in radians (two turns each way) [rad].
 constexpr double kMaxLimitRad = 4 * 3.14159265358979323846;
 
-std::string ReadFirstLine(const std::string& path, const std::string& flag) {
-  std::ifstream in(path);
-  std::string line;
-  if (!in || !std::getline(in, line)) throw InputError(flag + " " + path, "cannot read it");
-  while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
-  return line;
-}
-
-std::string ReadAll(const std::string& path, const std::string& flag) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(flag + " " + path, "cannot read it");
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string Status(const grpc::Status& s) {
-  static const char* const kNames[] = {
-      "OK",        "CANCELLED",          "UNKNOWN",           "INVALID_ARGUMENT",
-      "DEADLINE_EXCEEDED", "NOT_FOUND",  "ALREADY_EXISTS",    "PERMISSION_DENIED",
-      "RESOURCE_EXHAUSTED", "FAILED_PRECONDITION", "ABORTED", "OUT_OF_RANGE",
-      "UNIMPLEMENTED", "INTERNAL",      "UNAVAILABLE",       "DATA_LOSS",
-      "UNAUTHENTICATED"};
-  const int code = static_cast<int>(s.error_code());
-  std::string name = code >= 0 && code <= 16 ? kNames[code] : std::to_string(code);
-  return s.error_message().empty() ? name : name + " (" + s.error_message() + ")";
-}
+std::string Status(const grpc::Status& s) { return StatusText(s); }
 
 std::string Joints(const google::protobuf::RepeatedField<double>& q) {
   std::ostringstream s;
@@ -92,13 +66,8 @@ class Battery {
       throw InputError(o.address, "a cell address is grpc://HOST:PORT");
     }
     target_ = o.address.substr(prefix.size());
-    if (!o.token_file.empty()) token_ = ReadFirstLine(o.token_file, "--cell-token-file");
-    if (o.tls_ca_file.empty() && !(o.tls_cert_file.empty() && o.tls_key_file.empty())) {
-      throw InputError("--cell-cert", "a client certificate needs TLS: give --cell-ca too");
-    }
-    if (o.tls_cert_file.empty() != o.tls_key_file.empty()) {
-      throw InputError("--cell-cert/--cell-key", "give both or neither");
-    }
+    credentials_ = GrpcCellCredentials{o.tls_ca_file, o.tls_cert_file, o.tls_key_file,
+                                       o.token_file};
     stub_ = NewStub();
   }
 
@@ -138,31 +107,18 @@ class Battery {
   }
 
  private:
+  // A stub on a connection of its own: the stop check's call must not share the battery's.
   std::unique_ptr<pb::Cell::Stub> NewStub() {
-    std::shared_ptr<grpc::ChannelCredentials> creds;
-    if (o_.tls_ca_file.empty()) {
-      creds = grpc::InsecureChannelCredentials();
-    } else {
-      grpc::SslCredentialsOptions ssl;
-      ssl.pem_root_certs = ReadAll(o_.tls_ca_file, "--cell-ca");
-      if (!o_.tls_cert_file.empty()) {
-        ssl.pem_cert_chain = ReadAll(o_.tls_cert_file, "--cell-cert");
-        ssl.pem_private_key = ReadAll(o_.tls_key_file, "--cell-key");
-      }
-      creds = grpc::SslCredentials(ssl);
-    }
-    grpc::ChannelArguments args;
-    args.SetMaxReceiveMessageSize(64 << 20);
-    // A fresh connection per stub: the stop check's call must not share the battery's.
-    args.SetInt("grpc.use_local_subchannel_pool", 1);
-    return pb::Cell::NewStub(grpc::CreateCustomChannel(target_, creds, args));
+    CellChannel channel = OpenCellChannel(target_, credentials_, o_.address, true);
+    authorization_ = channel.authorization;
+    return pb::Cell::NewStub(channel.channel);
   }
 
   std::unique_ptr<grpc::ClientContext> Context(double seconds) const {
     auto ctx = std::make_unique<grpc::ClientContext>();
     ctx->set_deadline(std::chrono::system_clock::now() +
                       std::chrono::milliseconds(static_cast<int64_t>(seconds * 1000)));
-    if (!token_.empty()) ctx->AddMetadata("authorization", "Bearer " + token_);
+    if (!authorization_.empty()) ctx->AddMetadata("authorization", authorization_);
     return ctx;
   }
 
@@ -655,7 +611,8 @@ class Battery {
 
   const CellCheckOptions& o_;
   std::ostream& out_;
-  std::string target_, token_;
+  std::string target_, authorization_;
+  GrpcCellCredentials credentials_;
   std::unique_ptr<pb::Cell::Stub> stub_;
   pb::DescribeResponse describe_;
   double heartbeat_timeout_s_ = 2.0;

@@ -459,7 +459,7 @@ class CellService final : public pb::Cell::Service {
         return Status(StatusCode::UNIMPLEMENTED, "this cell has no hand camera");
       }
       if (!req->has_region()) {
-        EncodeImage(s_.cell.GrabImage(), 0, 0, out);
+        EncodeImage(s_.cell.GrabImage(), 0, 0, out, req->encoding());
         return Status::OK;
       }
       const pb::PixelRegion& r = req->region();
@@ -477,7 +477,7 @@ class CellService final : public pb::Cell::Service {
                                               s_.desc.image_height_px);
       const cv::Mat image = s_.cell.GrabImageRegion(roi);
       EncodeImage(image, clipped.empty() ? roi.x : clipped.x, clipped.empty() ? roi.y : clipped.y,
-                  out);
+                  out, req->encoding());
       return Status::OK;
     });
   }

@@ -1,6 +1,8 @@
 // The cell protocol's client (remote/grpc_cell.h).
 #include "remote/grpc_cell.h"
 
+#include "remote/cell_server.h"  // IsLoopbackAddress
+
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
@@ -22,49 +24,8 @@ namespace twin::remote {
 
 namespace {
 
-std::string ReadFile(const std::string& path, const std::string& where, const std::string& what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(where, "cannot read the " + what + " '" + path + "'");
-  std::ostringstream os;
-  os << in.rdbuf();
-  return os.str();
-}
-
-std::string FirstLineTrimmed(const std::string& text) {
-  std::string line = text.substr(0, text.find('\n'));
-  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
-  while (!line.empty() && blank(line.back())) line.pop_back();
-  std::size_t start = 0;
-  while (start < line.size() && blank(line[start])) ++start;
-  return line.substr(start);
-}
-
-const char* CodeName(grpc::StatusCode code) {
-  switch (code) {
-    case grpc::OK: return "OK";
-    case grpc::CANCELLED: return "CANCELLED";
-    case grpc::UNKNOWN: return "UNKNOWN";
-    case grpc::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
-    case grpc::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
-    case grpc::NOT_FOUND: return "NOT_FOUND";
-    case grpc::ALREADY_EXISTS: return "ALREADY_EXISTS";
-    case grpc::PERMISSION_DENIED: return "PERMISSION_DENIED";
-    case grpc::UNAUTHENTICATED: return "UNAUTHENTICATED";
-    case grpc::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
-    case grpc::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
-    case grpc::ABORTED: return "ABORTED";
-    case grpc::OUT_OF_RANGE: return "OUT_OF_RANGE";
-    case grpc::UNIMPLEMENTED: return "UNIMPLEMENTED";
-    case grpc::INTERNAL: return "INTERNAL";
-    case grpc::UNAVAILABLE: return "UNAVAILABLE";
-    case grpc::DATA_LOSS: return "DATA_LOSS";
-    default: return "status";
-  }
-}
-
 std::string Describe(const char* method, const grpc::Status& status) {
-  return std::string(method) + ": " + CodeName(status.error_code()) + ": " +
-         status.error_message();
+  return std::string(method) + ": " + StatusText(status);
 }
 
 }  // namespace
@@ -73,6 +34,8 @@ struct GrpcCell::Impl {
   std::string where;
   GrpcCellDeadlines deadlines;
   std::string authorization;  // "Bearer <token>" or empty
+  // Images: raw RGB on loopback (no PNG to encode and decode: the link is memory), PNG beyond.
+  std::string image_encoding = "png";
   std::shared_ptr<grpc::Channel> channel;
   std::unique_ptr<pb::Cell::Stub> stub;
   std::unique_ptr<bpb::TwinBench::Stub> truth_stub;
@@ -126,34 +89,10 @@ GrpcCell::GrpcCell(const std::string& address, const GrpcCellCredentials& creden
   Impl& s = *impl_;
   s.where = where;
   s.deadlines = deadlines;
-  std::shared_ptr<grpc::ChannelCredentials> channel_credentials;
-  if (!credentials.ca_file.empty() || !credentials.cert_file.empty() ||
-      !credentials.key_file.empty()) {
-    if (credentials.cert_file.empty() != credentials.key_file.empty()) {
-      throw InputError(where, "a client certificate needs both --cell-cert and --cell-key");
-    }
-    grpc::SslCredentialsOptions ssl;
-    if (!credentials.ca_file.empty()) {
-      ssl.pem_root_certs = ReadFile(credentials.ca_file, where, "CA certificate (--cell-ca)");
-    }
-    if (!credentials.cert_file.empty()) {
-      ssl.pem_cert_chain =
-          ReadFile(credentials.cert_file, where, "client certificate (--cell-cert)");
-      ssl.pem_private_key = ReadFile(credentials.key_file, where, "client key (--cell-key)");
-    }
-    channel_credentials = grpc::SslCredentials(ssl);
-  } else {
-    channel_credentials = grpc::InsecureChannelCredentials();
-  }
-  if (!credentials.token_file.empty()) {
-    const std::string token = FirstLineTrimmed(
-        ReadFile(credentials.token_file, where, "token file (--cell-token-file)"));
-    if (token.empty()) throw InputError(where, "the token file holds no token on its first line");
-    s.authorization = "Bearer " + token;
-  }
-  grpc::ChannelArguments args;
-  args.SetMaxReceiveMessageSize(256 << 20);
-  s.channel = grpc::CreateCustomChannel(address, channel_credentials, args);
+  CellChannel channel = OpenCellChannel(address, credentials, where);
+  if (IsLoopbackAddress(address)) s.image_encoding = "rgb8";
+  s.channel = std::move(channel.channel);
+  s.authorization = std::move(channel.authorization);
   s.stub = pb::Cell::NewStub(s.channel);
   s.truth_stub = bpb::TwinBench::NewStub(s.channel);
 
@@ -219,6 +158,7 @@ cv::Mat GrpcCell::GrabImage() {
   Impl& s = *impl_;
   pb::GrabImageRequest req;
   req.set_session_id(s.session);
+  req.set_encoding(s.image_encoding);
   pb::GrabImageResponse resp;
   s.Call("GrabImage", &pb::Cell::Stub::GrabImage, req, &resp, s.deadlines.image_s);
   return DecodeImage(resp);
@@ -229,6 +169,7 @@ cv::Mat GrpcCell::GrabImageRegion(const cv::Rect& roi) {
   if (roi.width <= 0 || roi.height <= 0) return cv::Mat();  // misses every frame
   pb::GrabImageRequest req;
   req.set_session_id(s.session);
+  req.set_encoding(s.image_encoding);
   pb::PixelRegion* region = req.mutable_region();
   region->set_x_px(roi.x);
   region->set_y_px(roi.y);

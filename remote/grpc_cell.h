@@ -7,17 +7,10 @@
 #include <string>
 
 #include "calib/cell/cell.h"
+#include "remote/cell_channel.h"
 #include "sim/cell/twin_cell.h"
 
 namespace twin::remote {
-
-/// How to reach and authenticate to a served cell (file names; empty: not used).
-struct GrpcCellCredentials {
-  std::string ca_file;    ///< TLS: CA of the server's certificate; empty: plaintext
-  std::string cert_file;  ///< TLS: client certificate (PEM)
-  std::string key_file;   ///< TLS: its key (PEM)
-  std::string token_file; ///< first line: the bearer token
-};
 
 /// Deadlines of the calls [s].
 struct GrpcCellDeadlines {

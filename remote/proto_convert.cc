@@ -3,6 +3,7 @@
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace twin::remote {
 
@@ -299,8 +300,10 @@ void JointsToProto(const JointVector& q, google::protobuf::RepeatedField<double>
   for (int i = 0; i < q.size(); ++i) out->Add(q(i));
 }
 
-void EncodeImage(const cv::Mat& image, int x, int y, pb::GrabImageResponse* out) {
-  out->set_encoding("png");
+void EncodeImage(const cv::Mat& image, int x, int y, pb::GrabImageResponse* out,
+                 const std::string& encoding) {
+  const bool raw = encoding == "rgb8";
+  out->set_encoding(raw ? "rgb8" : "png");
   out->set_x_px(x);
   out->set_y_px(y);
   out->set_width_px(static_cast<uint32_t>(image.cols));
@@ -308,6 +311,12 @@ void EncodeImage(const cv::Mat& image, int x, int y, pb::GrabImageResponse* out)
   out->clear_data();
   if (image.empty()) return;
   if (image.type() != CV_8UC3) Bad("an image to send must be 8-bit BGR");
+  if (raw) {
+    cv::Mat rgb;
+    cv::cvtColor(image, rgb, cv::COLOR_BGR2RGB);  // continuous rows, no padding
+    out->set_data(rgb.data, rgb.total() * rgb.elemSize());
+    return;
+  }
   // Level 1: PNG is lossless at every level; the lowest costs the least time per frame.
   std::vector<uchar> png;
   cv::imencode(".png", image, png, {cv::IMWRITE_PNG_COMPRESSION, 1});
@@ -316,8 +325,20 @@ void EncodeImage(const cv::Mat& image, int x, int y, pb::GrabImageResponse* out)
 
 cv::Mat DecodeImage(const pb::GrabImageResponse& response) {
   if (response.data().empty()) return cv::Mat();
+  if (response.encoding() == "rgb8") {
+    const uint64_t w = response.width_px(), h = response.height_px();
+    if (w == 0 || h == 0 || response.data().size() != 3 * w * h) {
+      Bad("an rgb8 image of " + std::to_string(response.data().size()) + " bytes whose response "
+          "says " + std::to_string(w) + "x" + std::to_string(h) + " px");
+    }
+    const cv::Mat rgb(static_cast<int>(h), static_cast<int>(w), CV_8UC3,
+                      const_cast<char*>(response.data().data()));
+    cv::Mat bgr;
+    cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+    return bgr;
+  }
   if (response.encoding() != "png") {
-    Bad("an image encoded as '" + response.encoding() + "'; protocol v1 sends png");
+    Bad("an image encoded as '" + response.encoding() + "'; protocol v1 sends png or rgb8");
   }
   const std::vector<uchar> bytes(response.data().begin(), response.data().end());
   cv::Mat image = cv::imdecode(bytes, cv::IMREAD_COLOR);

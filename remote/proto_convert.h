@@ -49,9 +49,10 @@ BracketTarget FromProto(pb::BracketTarget target);
 JointVector JointsFromProto(const google::protobuf::RepeatedField<double>& q);
 void JointsToProto(const JointVector& q, google::protobuf::RepeatedField<double>* out);
 
-/// `image` (8-bit BGR, OpenCV row order; empty: a region that missed the frame) as PNG in
-/// `out`, its pixel (0, 0) at frame column x, row y.
-void EncodeImage(const cv::Mat& image, int x, int y, pb::GrabImageResponse* out);
+/// `image` (8-bit BGR, OpenCV row order; empty: a region that missed the frame) in `out`, its
+/// pixel (0, 0) at frame column x, row y: as PNG, or with `encoding` "rgb8" as raw RGB rows.
+void EncodeImage(const cv::Mat& image, int x, int y, pb::GrabImageResponse* out,
+                 const std::string& encoding = "png");
 /// The BGR image of a response (empty for empty data); throws ProtocolError when the data
 /// does not decode as the encoding and size the response states.
 cv::Mat DecodeImage(const pb::GrabImageResponse& response);
