@@ -264,6 +264,19 @@ TwinTruth GrpcCell::Truth() {
   return FromProto(resp);
 }
 
+bool GrpcCell::HasTruth() {
+  Impl& s = *impl_;
+  bpb::TruthRequest req;
+  req.set_session_id(s.session);
+  bpb::TwinTruth resp;
+  grpc::ClientContext ctx;
+  s.Prepare(&ctx, s.deadlines.call_s);
+  const grpc::Status status = s.truth_stub->Truth(&ctx, req, &resp);
+  if (status.error_code() == grpc::UNIMPLEMENTED) return false;
+  if (!status.ok()) throw std::runtime_error(s.where + ": " + Describe("Truth", status));
+  return true;
+}
+
 const std::string& GrpcCell::session_id() const { return impl_->session; }
 
 const std::string& GrpcCell::cell_name() const { return impl_->description.cell_name(); }

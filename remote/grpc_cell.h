@@ -49,6 +49,8 @@ class GrpcCell : public Cell {
   /// The twin's truth over the bench's truth channel; InputError naming `where` when the cell
   /// offers none (a real cell, `serve-cell --no-truth`).
   TwinTruth Truth();
+  /// Whether the cell offers the truth channel (asks it; false: UNIMPLEMENTED).
+  bool HasTruth();
   /// The session id (tests).
   const std::string& session_id() const;
   /// The cell's name as Describe gave it.

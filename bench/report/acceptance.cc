@@ -184,6 +184,21 @@ Acceptance ParseAcceptance(const Scenario& sc) {
   return a;
 }
 
+Acceptance WithoutTruthCriteria(const Acceptance& acceptance, bool quiet) {
+  Acceptance kept;
+  for (const AcceptanceCriterion& c : acceptance.criteria) {
+    if (c.figure.rfind("truth", 0) == 0) {
+      if (!quiet) {
+        std::printf("acceptance: %s not judged: the cell has no truth (%s)\n", c.figure.c_str(),
+                    c.where.c_str());
+      }
+      continue;
+    }
+    kept.criteria.push_back(c);
+  }
+  return kept;
+}
+
 AcceptanceVerdict EvaluateAcceptance(const Acceptance& acceptance, nlohmann::json* report) {
   AcceptanceVerdict verdict;
   nlohmann::json results = nlohmann::json::array();

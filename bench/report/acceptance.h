@@ -66,6 +66,11 @@ struct AcceptanceVerdict {
   bool passed() const;
 };
 
+/// The criteria without those on figures against the truth (whose key path starts with
+/// "truth"), for a run on a cell that has none; unless `quiet`, a line on stdout names each one
+/// left out.
+Acceptance WithoutTruthCriteria(const Acceptance& acceptance, bool quiet);
+
 /// Evaluates the criteria on the finished report and adds report["acceptance"] (the results).
 /// Throws InputError (naming the criterion's file:line) for a figure that is not in the report
 /// or not a number.

@@ -24,7 +24,8 @@ json RawAndRigid(const GaugeErrors& e) {
 json TrackerJson(const TrackerRunResult& r) {
   const TrackerProcedureResult& result = *r.procedure;
   json t = {{"poses", result.points.size()}, {"attempts", result.attempts},
-            {"sigma_mm", 1e3 * r.tracker_sigma_m}};
+            {"sigma_mm", std::isfinite(r.tracker_sigma_m) ? json(1e3 * r.tracker_sigma_m)
+                                                          : json(nullptr)}};
   // The robot's temperature sensor (the points carry their change from this first reading).
   t["temperature_reference_C"] = std::isfinite(result.temperature_reference_C)
                                      ? json(result.temperature_reference_C)
@@ -49,6 +50,12 @@ json ReportHead(const TrackerRunResult& r) {
                             {"before", PointErrorsJson(s.before)},
                             {"after", PointErrorsJson(s.after)}, {"worse", s.worse}};
   }
+  if (!r.truth_available) {
+    j["truth"] = {{"available", false},
+                  {"reason", "the cell offers no truth (a real cell, or serve-cell --no-truth): "
+                             "nothing is scored against it"}};
+    return j;
+  }
   const GaugeErrors& before = r.truth.before;
   const GaugeErrors& after = r.truth.after;
   j["truth_position_error_mm"] = {
@@ -71,7 +78,9 @@ void AddParameters(const TrackerRunResult& r, json* report) {
     j["parameters"].push_back({{"name", p.name},
                                {"unit", ReportUnit(p.unit)},
                                {"estimated", ReportValue(p.estimated - phi0(i), p.unit)},
-                               {"true", ReportValue(phi_true(i) - phi0(i), p.unit)},
+                               {"true", phi_true.size() == phi0.size()
+                                            ? json(ReportValue(phi_true(i) - phi0(i), p.unit))
+                                            : json(nullptr)},
                                {"sigma", ReportValue(p.sigma, p.unit)}});
   }
   j["declared_term_parameters"] = json::array();
@@ -93,8 +102,10 @@ void AddIdentification(const TrackerRunResult& r, json* report) {
     items.push_back({{"index", c.index}, {"estimated", c.estimated}, {"true", c.true_value},
                      {"sigma", c.sigma}, {"within_3_sigma", c.within_3_sigma}});
   }
-  j["identifiable_combinations"] = {{"count", id.z.size()}, {"within_3_sigma", r.truth.within3},
-                                    {"items", items}};
+  j["identifiable_combinations"] = {
+      {"count", id.z.size()},
+      {"within_3_sigma", r.truth_available ? json(r.truth.within3) : json(nullptr)},
+      {"items", items}};
   j["unidentifiable"] = id.observability.unidentifiable;
   j["condition_number"] = id.condition_number();
   j["sigma0"] = id.sigma0;
@@ -147,6 +158,10 @@ std::string Html(const json& j) {
   os << "<h2>Truth position error (200 random configurations) [mm]</h2><table><tr><th>gauge"
         "</th><th>before RMS</th><th>after RMS</th><th>after max</th></tr>";
   for (const char* g : {"raw", "rigid"}) {
+    if (!j.contains("truth_position_error_mm")) {
+      os << "<tr><td colspan=\"4\">" << j["truth"]["reason"].get<std::string>() << "</td></tr>";
+      break;
+    }
     const json& t = j["truth_position_error_mm"][g];
     os << "<tr><td>" << g << "</td><td>" << t["before"]["rms"] << "</td><td>" << t["after"]["rms"]
        << "</td><td>" << t["after"]["max"] << "</td></tr>";

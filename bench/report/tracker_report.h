@@ -66,6 +66,8 @@ struct TrackerRunResult {
   std::vector<std::string> declared_terms;          ///< the starting model's terms (labels)
   std::vector<std::string> notes;                   ///< DeclaredModel's notes (warnings)
   double tracker_sigma_m = 0.0;                     ///< the twin tracker's noise per axis
+  bool truth_available = true;                      ///< false: a cell without truth (`truth`,
+                                                    ///< `physical` and tracker_sigma_m unset)
   TrackerTruthScores truth;
   TrackerPhysicalTruthScores physical;
   const DiscoveryResult* diagnosis = nullptr;       ///< model discovery; null when skipped

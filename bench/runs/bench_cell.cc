@@ -46,6 +46,7 @@ class RemoteBenchCell : public BenchCell {
   double ReadTemperatureC(int robot) override { return cell_.ReadTemperatureC(robot); }
   TrackerReading MeasureTracker(int robot) override { return cell_.MeasureTracker(robot); }
   TwinTruth Truth() override { return cell_.Truth(); }
+  bool HasTruth() override { return cell_.HasTruth(); }
 
  private:
   remote::GrpcCell cell_;

@@ -21,6 +21,9 @@ class BenchCell : public Cell {
   /// The run has made its last call (the scoring included): a recording notes that it is
   /// complete, a replay checks that every recorded exchange was used (InputError if not).
   virtual void Finish() {}
+  /// Whether Truth() can answer: false on a cell without truth (a real cell, `serve-cell
+  /// --no-truth`), where a run scores nothing against truth. Asked after the procedure.
+  virtual bool HasTruth() { return true; }
 };
 
 /// A BenchCell that passes every call on to `inner` (subclasses override what they watch).
@@ -44,6 +47,7 @@ class ForwardingBenchCell : public BenchCell {
   double ReadTemperatureC(int robot) override { return inner_.ReadTemperatureC(robot); }
   TrackerReading MeasureTracker(int robot) override { return inner_.MeasureTracker(robot); }
   TwinTruth Truth() override { return inner_.Truth(); }
+  bool HasTruth() override { return inner_.HasTruth(); }
   void Finish() override { inner_.Finish(); }
 
  protected:

@@ -813,6 +813,14 @@ int RunCalibrationScenario(const RunOptions& o) {
   InstallMujocoErrorHandlers();
   const std::unique_ptr<BenchCell> cell =
       OpenBenchCell(sc.twin, sc.path, RunCellOptions(o, sc, text));
+  // The optical-axis report is made against the twin's truth; a cell without it is refused
+  // before anything moves (the tracker run reports without truth).
+  if (!cell->HasTruth()) {
+    throw InputError("--cell " + o.cell.address,
+                     "the cell offers no truth, and the optical-axis run has no report without it "
+                     "yet (serve the twin without --no-truth; the tracker procedure runs on a "
+                     "cell without truth)");
+  }
   const fs::path out(o.out_dir);
   const fs::path staging = CreateStagingDirectory(o.out_dir);
   // The calibration, scored and judged, written and published as out_dir.

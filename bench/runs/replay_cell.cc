@@ -240,6 +240,13 @@ TrackerReading ReplayCell::MeasureTracker(int robot) {
   return remote::FromProto(response);
 }
 
+bool ReplayCell::HasTruth() {
+  for (const RecordedExchange& e : exchanges_) {
+    if (e.method == "Truth") return true;
+  }
+  return false;
+}
+
 TwinTruth ReplayCell::Truth() {
   bpb::TwinTruth response;
   Next("Truth", bpb::TruthRequest(), &response);

@@ -34,6 +34,8 @@ class ReplayCell : public BenchCell {
   double ReadTemperatureC(int robot) override;
   TrackerReading MeasureTracker(int robot) override;
   TwinTruth Truth() override;
+  /// The live run had the truth: the recording holds a Truth exchange.
+  bool HasTruth() override;
   /// Throws InputError ("the replay ended at seq N of M") unless every exchange was used.
   void Finish() override;
 

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <utility>
@@ -137,7 +139,7 @@ struct TrackerRunSetup {
 TrackerRunSetup LoadTrackerRun(const RunOptions& o) {
   std::string text;
   Scenario sc = LoadRunScenario(o, &text);
-  ValidateTrackerScenario(sc);
+  ValidateTrackerScenario(sc, !o.cell.address.empty());
   TrackerRunConfig config = ParseTrackerRunConfig(sc);
   Acceptance acceptance = ParseAcceptance(sc);
   ValidateOutputFolder(o.out_dir, "--out");
@@ -346,14 +348,15 @@ TrackerPhysicalTruthScores ScorePhysicalTruth(const PhysicalTruth& physical, boo
 TrackerRunResult MakeTrackerResult(const RunOptions& o, const TrackerRunSetup& setup,
                                    const ProcedureOutcome& procedure,
                                    const TrackerDiagnosis& diagnosis, const PhysicalTruth& physical,
-                                   const TwinTruth& truth, TrackerTruthScores scores) {
+                                   const TwinTruth* truth, TrackerTruthScores scores) {
   TrackerRunResult r;
   r.scenario = &setup.sc;
   r.robot = setup.sc.robot_names[setup.config.robot];
   r.procedure = &procedure.result;
   for (const auto& t : procedure.start.terms) r.declared_terms.push_back(TermLabel(t->spec()));
   r.notes = procedure.notes;
-  r.tracker_sigma_m = truth.tracker.sigma_m;
+  r.truth_available = truth != nullptr;
+  r.tracker_sigma_m = truth ? truth->tracker.sigma_m : std::numeric_limits<double>::quiet_NaN();
   r.truth = std::move(scores);
   r.physical = ScorePhysicalTruth(physical, diagnosis.ran);
   if (diagnosis.ran) {
@@ -414,13 +417,20 @@ void PrintTrackerSummary(const TrackerRunRecord& r) {
   const GaugeErrors& before = r.result.truth.before;
   const GaugeErrors& after = r.result.truth.after;
   const fs::path out(r.options.out_dir);
-  std::printf("%s: %zu poses measured (%zu skipped), %d identifiable combinations, %d within 3 "
-              "sigma of the truth\n",
-              name.c_str(), result.points.size(), result.skipped.size(),
-              static_cast<int>(id.z.size()), r.result.truth.within3);
-  std::printf("truth RMS (200 configurations): raw %.4f -> %.4f mm, rigid %.4f -> %.4f mm\n",
-              1e3 * before.raw.rms, 1e3 * after.raw.rms, 1e3 * before.rigid.rms,
-              1e3 * after.rigid.rms);
+  if (r.result.truth_available) {
+    std::printf("%s: %zu poses measured (%zu skipped), %d identifiable combinations, %d within 3 "
+                "sigma of the truth\n",
+                name.c_str(), result.points.size(), result.skipped.size(),
+                static_cast<int>(id.z.size()), r.result.truth.within3);
+    std::printf("truth RMS (200 configurations): raw %.4f -> %.4f mm, rigid %.4f -> %.4f mm\n",
+                1e3 * before.raw.rms, 1e3 * after.raw.rms, 1e3 * before.rigid.rms,
+                1e3 * after.rigid.rms);
+  } else {
+    std::printf("%s: %zu poses measured (%zu skipped), %d identifiable combinations; the cell "
+                "has no truth: nothing scored against it\n",
+                name.c_str(), result.points.size(), result.skipped.size(),
+                static_cast<int>(id.z.size()));
+  }
   for (const HeldOutSplit& s : result.calibration.splits) {
     std::printf("held-out %-6s %3d poses: %.4f -> %.4f mm%s\n", s.name.c_str(), s.after.poses,
                 1e3 * s.before.rms, 1e3 * s.after.rms, s.worse ? "  WORSE" : "");
@@ -439,9 +449,9 @@ void PrintTrackerSummary(const TrackerRunRecord& r) {
 
 }  // namespace
 
-void ValidateTrackerScenario(const Scenario& sc) {
+void ValidateTrackerScenario(const Scenario& sc, bool served_cell) {
   const TrackerRunConfig config = ParseTrackerRunConfig(sc);
-  if (!sc.twin.tracker.present) {
+  if (!sc.twin.tracker.present && !served_cell) {
     throw InputError(sc.path + " scenario.tracker_calibration",
                      "the cell has no tracker: add a `tracker:` section (bench/io/scenario.h)");
   }
@@ -450,7 +460,7 @@ void ValidateTrackerScenario(const Scenario& sc) {
                      "a tracker scenario has no calibration or handclasp section (one "
                      "procedure a scenario)");
   }
-  if (config.robot != sc.twin.tracker.robot) {
+  if (sc.twin.tracker.present && config.robot != sc.twin.tracker.robot) {
     throw InputError(sc.path + " scenario.tracker_calibration.robot",
                      "the tracker's reflector is on robot '" +
                          sc.robot_names[sc.twin.tracker.robot] + "', not on '" +
@@ -472,19 +482,31 @@ int RunTrackerScenario(const RunOptions& o) {
   const ProcedureOutcome procedure = RunProcedure(o, setup, nominal, &cell);
   // Model discovery (estimator side: the points and the starting model only).
   const TrackerDiagnosis diagnosis = DiscoverModel(o, setup, procedure);
+  // A cell without truth (a real one): the estimates and the procedure's own figures only.
+  const bool scored = cell.HasTruth();
   // Physical truth (bench only): the reflector where the twin's physics puts it.
-  const PhysicalTruth physical = MeasurePhysicalTruth(setup, nominal, procedure, diagnosis, &cell);
+  const PhysicalTruth physical =
+      scored ? MeasurePhysicalTruth(setup, nominal, procedure, diagnosis, &cell) : PhysicalTruth{};
   // Scoring against the truth (bench only): the true geometry with the true reflector.
-  const TwinTruth truth = cell.Truth();
+  std::optional<TwinTruth> truth;
+  TrackerTruthScores scores;
+  if (scored) {
+    truth = cell.Truth();
+    scores = ScoreAgainstTruth(*truth, setup.config.robot, nominal, procedure.result);
+  } else {
+    scores.phi0 = GetParameters(nominal);  // the parameters are reported against the nominal
+  }
   cell.Finish();  // the last call: a recording is complete, a replay used up
-  TrackerRunResult result =
-      MakeTrackerResult(o, setup, procedure, diagnosis, physical, truth,
-                        ScoreAgainstTruth(truth, setup.config.robot, nominal, procedure.result));
+  TrackerRunResult result = MakeTrackerResult(o, setup, procedure, diagnosis, physical,
+                                              truth ? &*truth : nullptr, std::move(scores));
+  // Criteria on figures against the truth cannot be judged without it: left out, and said so.
+  const Acceptance acceptance =
+      scored ? setup.acceptance : WithoutTruthCriteria(setup.acceptance, o.quiet);
   result.total_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   const TrackerRunRecord record{o, setup, procedure, result};
   // The report and its acceptance verdict.
-  const TrackerReport report = MakeTrackerReport(result, setup.acceptance);
+  const TrackerReport report = MakeTrackerReport(result, acceptance);
   const AcceptanceVerdict& verdict = report.verdict;
   // measurements.csv: the tracker file format, which `twinbench identify` reads back.
   const std::string csv = MeasurementsCsv(nominal, procedure.result, setup.config.told_sigma_m);

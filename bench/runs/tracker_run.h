@@ -34,7 +34,9 @@ namespace twin {
 
 /// The checks `run` makes before it runs (the section, a tracker in the cell, one procedure
 /// a scenario); throws InputError naming the scenario and key.
-void ValidateTrackerScenario(const Scenario& scenario);
+/// `served_cell`: the run drives a served cell (--cell), whose tracker is the cell's own: the
+/// scenario's `tracker:` section (the twin's truth) may then be absent.
+void ValidateTrackerScenario(const Scenario& scenario, bool served_cell = false);
 
 /// Runs it and writes report.json, report.html, measurements.csv (the tracker file format of
 /// bench/io/tracker_file.h) and identified_<robot>.yaml. Returns 0, or 3 when acceptance

@@ -4,6 +4,9 @@
 // the replay of the remote run's recording equals it too.
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <sstream>
+
 #include <nlohmann/json.hpp>
 
 #include "../bench/cli_run.h"
@@ -134,19 +137,95 @@ TEST(RemoteRun, WithoutCredentialsExitsTwoNamingCell) {
   EXPECT_EQ(d.cell_name(), "tracker_single_reinovo");
 }
 
-// A served cell without truth: the run cannot be scored, exit 2 with the reason.
-TEST(RemoteRun, CellWithoutTruthExitsTwo) {
+// tracker_single_reinovo.yaml as a real cell's user writes it: only what the estimator is told
+// (the nominal model, the told reflector, the procedure's settings), without the twin's truth
+// (its `effects:` and `tracker:` sections), the model path made absolute.
+std::string ToldOnlyTrackerScenario(const std::string& full) {
+  std::string told;
+  std::istringstream in(ReadText(full));
+  bool skipping = false;
+  for (std::string line; std::getline(in, line);) {
+    if (line == "  effects:" || line == "  tracker:") {
+      skipping = true;
+      continue;
+    }
+    if (skipping && line.rfind("    ", 0) == 0) continue;  // the section's body
+    skipping = false;
+    const std::string rel = "../models/";
+    const size_t at = line.find(rel);
+    if (at != std::string::npos) {
+      line.replace(at, rel.size(), std::string(TWIN_SOURCE_DIR) + "/models/");
+    }
+    told += line + "\n";
+  }
+  return told;
+}
+
+// A served cell without truth (a real cell's case): the tracker run measures, identifies and
+// diagnoses, reports no figure against the truth, and leaves the criterion on the truth
+// unjudged. Its estimates are those of the in-process run on the same twin (the same points).
+TEST(RemoteRun, TrackerRunOnACellWithoutTruthReportsTheEstimatesOnly) {
   const std::string path = std::string(TWIN_SOURCE_DIR) + "/scenarios/tracker_single_reinovo.yaml";
+  TempDir dir;
+  const std::string told = dir / "told_only.yaml";
+  {
+    std::ofstream out(told);
+    out << ToldOnlyTrackerScenario(path);
+  }
+  const std::string told_text = ReadText(told);
+  ASSERT_EQ(told_text.find("tracker:\n"), std::string::npos) << told_text;
+  ASSERT_EQ(told_text.find("geometry_errors"), std::string::npos) << told_text;
+  ASSERT_NE(told_text.find("tracker_calibration:"), std::string::npos) << told_text;
+
+  const ProcessRun local = TwinbenchArgs({"run", path, "--out", dir / "local", "--quiet"}, 300);
+  ASSERT_TRUE(local.exited && local.code == 0) << local.output;
+  ServeCellProcess server({path, "--listen", "127.0.0.1:0", "--no-truth"});
+  ASSERT_GT(server.port(), 0) << server.output();
+  const ProcessRun r = TwinbenchArgs(
+      {"run", told, "--out", dir / "out", "--cell",
+       "grpc://127.0.0.1:" + std::to_string(server.port())},
+      300);
+  ASSERT_TRUE(r.exited && r.code == 0) << r.output;
+  EXPECT_NE(r.output.find("truth_position_error_mm.rigid.after.rms not judged: the cell has no "
+                          "truth"),
+            std::string::npos)
+      << r.output;
+  const nlohmann::json a = nlohmann::json::parse(ReadText(dir / "local/report.json"));
+  const nlohmann::json b = nlohmann::json::parse(ReadText(dir / "out/report.json"));
+  EXPECT_EQ(b["truth"]["available"], false) << b.dump().substr(0, 400);
+  EXPECT_FALSE(b.contains("truth_position_error_mm"));
+  EXPECT_FALSE(b.contains("truth_position_error_mm_physical"));
+  EXPECT_TRUE(b["identifiable_combinations"]["within_3_sigma"].is_null());
+  // No criterion left to judge: the report has no acceptance results.
+  EXPECT_TRUE(!b.contains("acceptance") || b.at("acceptance").empty()) << b.dump().substr(0, 400);
+  // The same measurements, so the same estimates, to the bit.
+  ASSERT_EQ(a["parameters"].size(), b["parameters"].size());
+  ASSERT_GT(a["parameters"].size(), 0u);
+  for (size_t i = 0; i < a["parameters"].size(); ++i) {
+    EXPECT_EQ(a["parameters"][i]["estimated"], b["parameters"][i]["estimated"]) << i;
+    EXPECT_FALSE(a["parameters"][i]["true"].is_null());
+    EXPECT_TRUE(b["parameters"][i]["true"].is_null());
+  }
+  EXPECT_EQ(a["heldout"], b["heldout"]);
+  EXPECT_EQ(a["diagnosis"]["verdict"], b["diagnosis"]["verdict"]);
+  EXPECT_EQ(ReadText(dir / "local/measurements.csv"), ReadText(dir / "out/measurements.csv"));
+}
+
+// The optical-axis run scores against the twin's truth and has no report without it yet: on a
+// cell without truth it refuses at the start (exit 2 naming --cell), before anything moves.
+TEST(RemoteRun, OpticalAxisRunOnACellWithoutTruthIsRefusedAtTheStart) {
+  const std::string path = std::string(TWIN_SOURCE_DIR) + "/scenarios/study_small.yaml";
   TempDir dir;
   ServeCellProcess server({path, "--listen", "127.0.0.1:0", "--no-truth"});
   ASSERT_GT(server.port(), 0) << server.output();
   const ProcessRun r = TwinbenchArgs(
       {"run", path, "--out", dir / "out", "--quiet", "--cell",
        "grpc://127.0.0.1:" + std::to_string(server.port())},
-      300);
+      120);
   EXPECT_TRUE(r.exited && r.code == 2) << r.output;
-  EXPECT_NE(r.output.find("the cell offers no truth to score against"), std::string::npos)
-      << r.output;
+  EXPECT_NE(r.output.find("error: --cell"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("no truth"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "out"));
 }
 
 }  // namespace
