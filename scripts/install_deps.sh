@@ -22,6 +22,7 @@ PACKAGES=(
   # and the Python adapter (adapters/python/)
   python3-grpcio python3-protobuf protobuf-compiler protobuf-compiler-grpc
   libgrpc++-dev libprotobuf-dev
+  openssl          # the remote tests make throwaway TLS certificates (skipped without)
 )
 
 missing=()
