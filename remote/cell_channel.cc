@@ -6,6 +6,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "calib/common/errors.h"
+#include "remote/cell_server.h"  // IsLoopbackAddress
 
 namespace twin::remote {
 
@@ -57,8 +58,10 @@ CellChannel OpenCellChannel(const std::string& host_port, const GrpcCellCredenti
                             const std::string& where, bool own_connection) {
   CellChannel out;
   std::shared_ptr<grpc::ChannelCredentials> channel_credentials;
-  if (!credentials.ca_file.empty() || !credentials.cert_file.empty() ||
-      !credentials.key_file.empty()) {
+  const bool channel_credentials_tls = !credentials.ca_file.empty() ||
+                                       !credentials.cert_file.empty() ||
+                                       !credentials.key_file.empty();
+  if (channel_credentials_tls) {
     if (credentials.cert_file.empty() != credentials.key_file.empty()) {
       throw InputError(where, "a client certificate needs both --cell-cert and --cell-key");
     }
@@ -76,6 +79,10 @@ CellChannel OpenCellChannel(const std::string& host_port, const GrpcCellCredenti
     channel_credentials = grpc::InsecureChannelCredentials();
   }
   if (!credentials.token_file.empty()) {
+    // A bearer token in clear text is for this machine only.
+    if (!channel_credentials_tls && !IsLoopbackAddress(host_port)) {
+      throw InputError(where, "a token is sent only over TLS beyond loopback: give --cell-ca");
+    }
     const std::string token = FirstLineTrimmed(
         ReadFile(credentials.token_file, where, "token file (--cell-token-file)"));
     if (token.empty()) throw InputError(where, "the token file holds no token on its first line");

@@ -68,6 +68,8 @@ class Battery {
     target_ = o.address.substr(prefix.size());
     credentials_ = GrpcCellCredentials{o.tls_ca_file, o.tls_cert_file, o.tls_key_file,
                                        o.token_file};
+    // The token's metadata, once (the heartbeat thread reads it from then on).
+    authorization_ = OpenCellChannel(target_, credentials_, o.address).authorization;
     stub_ = NewStub();
   }
 
@@ -109,9 +111,7 @@ class Battery {
  private:
   // A stub on a connection of its own: the stop check's call must not share the battery's.
   std::unique_ptr<pb::Cell::Stub> NewStub() {
-    CellChannel channel = OpenCellChannel(target_, credentials_, o_.address, true);
-    authorization_ = channel.authorization;
-    return pb::Cell::NewStub(channel.channel);
+    return pb::Cell::NewStub(OpenCellChannel(target_, credentials_, o_.address, true).channel);
   }
 
   std::unique_ptr<grpc::ClientContext> Context(double seconds) const {
@@ -565,7 +565,13 @@ class Battery {
     mover.join();
     const auto t_gone = Clock::now();
     if (settled_early) {
-      Open(*stub_, &session_);
+      // The move's client is still here: it closes its session and the battery's takes over.
+      pb::CloseSessionRequest done;
+      done.set_session_id(doomed_session);
+      auto ctx1 = Context(kCallSeconds);
+      doomed->CloseSession(ctx1.get(), done, &closed);
+      const grpc::Status reopened = Open(*stub_, &session_);
+      if (!reopened.ok()) return Fail(name, "no session after the move: " + Status(reopened));
       StartHeartbeat();
       pb::MoveResult back;
       Move(session_, o_.robot, from, &back);

@@ -127,6 +127,7 @@ struct CellServer::Impl {
   std::condition_variable watchdog_cv;
 
   std::atomic<std::uint64_t> stops{0};  // stop requests made so far (Stop, watchdog, cancel)
+  std::atomic<std::uint64_t> stop_calls{0};  // Stop calls of the protocol so far
 
   std::unique_ptr<grpc::Service> cell_service, truth_service;
   std::unique_ptr<grpc::Server> server;
@@ -157,7 +158,7 @@ struct CellServer::Impl {
   // OK and the session's clock restarted when `id` is the live session.
   Status Touch(const std::string& id) {
     std::lock_guard<std::mutex> lock(session_mutex);
-    if (!live_id.empty() && id == live_id) {
+    if (!live_id.empty() && ConstantTimeEqual(id, live_id)) {  // the id is a capability
       last_seen = Clock::now();
       return Status::OK;
     }
@@ -175,7 +176,7 @@ struct CellServer::Impl {
 
   bool IsLive(const std::string& id) {
     std::lock_guard<std::mutex> lock(session_mutex);
-    return !live_id.empty() && id == live_id;
+    return !live_id.empty() && ConstantTimeEqual(id, live_id);
   }
 
   // Ends session `id` (if it is the live one) for `why`, and stops motion.
@@ -204,6 +205,16 @@ struct CellServer::Impl {
     }
   }
 
+  // A motion call that arrived when `stop_calls` was `asked` and meets a Stop made since, before
+  // its motion starts (it waited for its turn): STOPPED without moving, as the protocol says
+  // ("every move started before it, running or waiting, answers STOPPED").
+  bool StoppedBeforeStart(std::uint64_t asked, pb::MoveResult* out) {
+    if (stop_calls.load() == asked) return false;
+    out->set_status(pb::MOVE_STATUS_STOPPED);
+    out->set_reason("stopped before the motion started");
+    return true;
+  }
+
   void WatchdogLoop() {
     const auto period = std::chrono::duration<double>(
         std::clamp(opt.heartbeat_timeout_s / 10.0, 0.005, 0.05));
@@ -225,12 +236,12 @@ struct CellServer::Impl {
       }
       // A task of an ended session still running (it may have started its move just after
       // the stop request): stop it again until it returns.
-      std::string running;
+      // The queue's lock is held across the check and the stop, so that the worker cannot
+      // finish that task and start the next session's meanwhile (the stop would land there).
       {
         std::lock_guard<std::mutex> q(queue_mutex);
-        running = running_session;
+        if (!running_session.empty() && !IsLive(running_session)) StopMotion();
       }
-      if (!running.empty() && !IsLive(running)) StopMotion();
     }
   }
   bool stopping_watchdog = false;
@@ -426,17 +437,20 @@ class CellService final : public pb::Cell::Service {
   Status Stop(ServerContext* ctx, const pb::StopRequest* req, pb::StopResponse*) override {
     if (Status st = s_.Authorize(ctx); !st.ok()) return st;
     if (Status st = s_.Touch(req->session_id()); !st.ok()) return st;
+    ++s_.stop_calls;
     s_.StopMotion();
     return Status::OK;
   }
 
   Status MoveTo(ServerContext* ctx, const pb::MoveToRequest* req, pb::MoveResult* out) override {
+    const std::uint64_t asked = s_.stop_calls.load();
     return s_.Serve(ctx, req->session_id(), true, [&]() -> Status {
       if (std::string bad = s_.BadRobot(req->robot()); !bad.empty()) return Invalid(bad);
       if (std::string bad = s_.BadJoints(req->robot(), req->q_target_rad()); !bad.empty()) {
         return Invalid(bad);
       }
       const JointVector q = JointsFromProto(req->q_target_rad());
+      if (s_.StoppedBeforeStart(asked, out)) return Status::OK;
       const std::uint64_t stops = s_.stops.load();
       s_.MotionResult(s_.cell.MoveTo(static_cast<int>(req->robot()), q), stops, out);
       return Status::OK;
@@ -467,7 +481,8 @@ class CellService final : public pb::Cell::Service {
         return Invalid("an image region needs a positive width and height, got " +
                        std::to_string(r.width_px()) + " x " + std::to_string(r.height_px()));
       }
-      if (std::abs(r.x_px()) > kMaxRegionCoordinate || std::abs(r.y_px()) > kMaxRegionCoordinate ||
+      if (r.x_px() < -kMaxRegionCoordinate || r.x_px() > kMaxRegionCoordinate ||
+          r.y_px() < -kMaxRegionCoordinate || r.y_px() > kMaxRegionCoordinate ||
           r.width_px() > kMaxRegionCoordinate || r.height_px() > kMaxRegionCoordinate) {
         return Invalid("image region numbers beyond " + std::to_string(kMaxRegionCoordinate) +
                        " px");
@@ -484,7 +499,12 @@ class CellService final : public pb::Cell::Service {
 
   Status ExchangeTools(ServerContext* ctx, const pb::ExchangeToolsRequest* req,
                        pb::MoveResult* out) override {
+    const std::uint64_t asked = s_.stop_calls.load();
     return s_.Serve(ctx, req->session_id(), true, [&]() -> Status {
+      if (!s_.desc.has_camera) {
+        return Status(StatusCode::UNIMPLEMENTED, "this cell has no hand camera");
+      }
+      if (s_.StoppedBeforeStart(asked, out)) return Status::OK;
       const std::uint64_t stops = s_.stops.load();
       s_.MotionResult(s_.cell.ExchangeTools(), stops, out);
       return Status::OK;
@@ -504,8 +524,10 @@ class CellService final : public pb::Cell::Service {
 
   Status JogTipToContact(ServerContext* ctx, const pb::JogTipToContactRequest* req,
                          pb::MoveResult* out) override {
+    const std::uint64_t asked = s_.stop_calls.load();
     return s_.Serve(ctx, req->session_id(), true, [&]() -> Status {
       if (std::string bad = s_.BadRobot(req->jogged_robot()); !bad.empty()) return Invalid(bad);
+      if (s_.StoppedBeforeStart(asked, out)) return Status::OK;
       const std::uint64_t stops = s_.stops.load();
       s_.MotionResult(s_.cell.JogTipToContact(static_cast<int>(req->jogged_robot())), stops, out);
       return Status::OK;
@@ -514,6 +536,7 @@ class CellService final : public pb::Cell::Service {
 
   Status MountTarget(ServerContext* ctx, const pb::MountTargetRequest* req,
                      pb::MoveResult* out) override {
+    const std::uint64_t asked = s_.stop_calls.load();
     return s_.Serve(ctx, req->session_id(), true, [&]() -> Status {
       BracketTarget target;
       try {
@@ -521,6 +544,7 @@ class CellService final : public pb::Cell::Service {
       } catch (const std::exception& e) {
         return Invalid(e.what());
       }
+      if (s_.StoppedBeforeStart(asked, out)) return Status::OK;
       const std::uint64_t stops = s_.stops.load();
       s_.MotionResult(s_.cell.MountTarget(target), stops, out);
       return Status::OK;

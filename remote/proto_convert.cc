@@ -327,7 +327,8 @@ cv::Mat DecodeImage(const pb::GrabImageResponse& response) {
   if (response.data().empty()) return cv::Mat();
   if (response.encoding() == "rgb8") {
     const uint64_t w = response.width_px(), h = response.height_px();
-    if (w == 0 || h == 0 || response.data().size() != 3 * w * h) {
+    constexpr uint64_t kMaxSide = 1 << 20;  // no camera has a side of a million pixels
+    if (w == 0 || h == 0 || w > kMaxSide || h > kMaxSide || response.data().size() != 3 * w * h) {
       Bad("an rgb8 image of " + std::to_string(response.data().size()) + " bytes whose response "
           "says " + std::to_string(w) + "x" + std::to_string(h) + " px");
     }

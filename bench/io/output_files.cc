@@ -53,12 +53,14 @@ void WaitForInterrupts(sigset_t set) {
   for (;;) {
     int sig = 0;
     if (sigwait(&set, &sig) != 0) return;
-    std::function<void(int)> handler;
-    {
-      std::lock_guard<std::recursive_mutex> lock(CleanupMutex());
-      handler = InterruptHandler();
+    // The handler runs under the lock, so SetInterruptHandler({}) waits for one in progress:
+    // what it refers to may end right after.
+    std::unique_lock<std::recursive_mutex> lock(CleanupMutex());
+    const std::function<void(int)> handler = InterruptHandler();
+    if (!handler) {
+      lock.unlock();
+      EndBySignal(sig);
     }
-    if (!handler) EndBySignal(sig);
     handler(sig);
   }
 }

@@ -66,8 +66,8 @@ struct AcceptanceVerdict {
   bool passed() const;
 };
 
-/// The criteria without those on figures against the truth (whose key path starts with
-/// "truth"), for a run on a cell that has none; unless `quiet`, a line on stdout names each one
+/// The criteria without those on figures against the truth (key paths starting with "truth",
+/// holding ".true" or "within_3_sigma", and tracker.sigma_mm), for a run on a cell that has none; unless `quiet`, a line on stdout names each one
 /// left out.
 Acceptance WithoutTruthCriteria(const Acceptance& acceptance, bool quiet);
 

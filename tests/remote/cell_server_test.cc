@@ -3,6 +3,7 @@
 // requests, each refused, after which the server still answers.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -93,7 +94,7 @@ TEST(CellServer, BeyondLoopbackNeedsTlsAndClientAuthentication) {
 
 TEST(CellServer, OneSessionAtATimeAndSilentSessionsEnd) {
   ServerOptions o = Loopback(0.5);
-  int stops = 0;
+  std::atomic<int> stops{0};  // counted on the server's watchdog thread
   o.stop_motion = [&] { ++stops; };
   CellServer server(*Demo().twin, Demo().desc, o);
   auto stub = RawStub("127.0.0.1:" + std::to_string(server.BoundPort()), "");
@@ -169,8 +170,16 @@ TEST(CellServer, StopEndsTheMoveInProgress) {
   EXPECT_EQ(result.status(), pb::MOVE_STATUS_STOPPED) << result.reason();
   pb::ReadEncodersResponse after;
   ASSERT_TRUE(stub->ReadEncoders(Context().get(), enc, &after).ok());  // still the session
-  EXPECT_GT(after.q_rad(0) - start.q_rad(0), 0.05);
-  EXPECT_LT(after.q_rad(0) - start.q_rad(0), 0.9);
+  if (result.reason() == "stopped before the motion started") {
+    // On a loaded machine the Stop can overtake the move while it waits for its turn: then
+    // nothing moved (the protocol's rule for a move waiting when Stop comes).
+    EXPECT_EQ(after.q_rad(0), start.q_rad(0));
+  } else {
+    // Stopped at about 0.3 s of a 1 s move: it moved, and not to the end (wide bounds for a
+    // loaded machine).
+    EXPECT_GT(after.q_rad(0) - start.q_rad(0), 0.05);
+    EXPECT_LT(after.q_rad(0) - start.q_rad(0), 0.9);
+  }
   // Back where it started, for the other tests of this process.
   move.set_q_target_rad(0, start.q_rad(0));
   ASSERT_TRUE(stub->MoveTo(Context(30).get(), move, &result).ok());
