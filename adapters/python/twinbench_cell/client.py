@@ -43,20 +43,26 @@ def _read(path):
 
 class RemoteCell:
     """One client of a cell. Paths or PEM bytes for the TLS files; token: the bearer token
-    (sent as metadata `authorization: Bearer <token>` on every call). timeout_s: the deadline
-    of every call but MoveTo and the operator steps (which wait for the motion)."""
+    (sent as metadata `authorization: Bearer <token>` on every call; over TLS only, but for
+    loopback). timeout_s: the deadline of every call but MoveTo and the operator steps, whose
+    deadline is motion_timeout_s (they wait for the motion)."""
 
     def __init__(self, target, ca_cert=None, client_cert=None, client_key=None, token=None,
                  server_name=None, client_name="twinbench_cell.client", timeout_s=10.0,
-                 open_session=True):
+                 open_session=True, motion_timeout_s=300.0):
         as_bytes = lambda v: _read(v) if isinstance(v, str) else v  # noqa: E731
         self.pb, pb_grpc = stubs.load()
         self.channel = open_channel(target, as_bytes(ca_cert), as_bytes(client_cert),
                                     as_bytes(client_key), server_name)
         self.stub = pb_grpc.CellStub(self.channel)
+        host = target.rsplit(":", 1)[0].strip("[]")
+        if token and ca_cert is None and host not in ("127.0.0.1", "::1", "localhost") \
+                and not host.startswith("127."):
+            raise ValueError("a bearer token is sent only over TLS beyond loopback: give ca_cert")
         self.metadata = [("authorization", "Bearer " + token)] if token else []
         self.client_name = client_name
         self.timeout_s = timeout_s
+        self.motion_timeout_s = motion_timeout_s
         self.session_id = None
         self.session_lost = None  # the error that ended the heartbeats, if one did
         self._open_session = open_session
@@ -67,7 +73,7 @@ class RemoteCell:
 
     def _call(self, name, request, timeout=True):
         return getattr(self.stub, name)(request, metadata=self.metadata,
-                                        timeout=self.timeout_s if timeout else None)
+                                        timeout=self.timeout_s if timeout else self.motion_timeout_s)
 
     def _sid(self):
         if self.session_id is None:

@@ -122,10 +122,10 @@ class CellServer:
             raise ConfigError("a cell has one or two robots, the driver describes %d"
                               % len(self.robots))
         for r in self.robots:
-            if not r.limits_rad:
-                raise ConfigError("robot %s has no joints" % r.name)
+            if not 1 <= len(r.limits_rad) <= 12:
+                raise ConfigError("robot %s has %d joints (1 to 12)" % (r.name, len(r.limits_rad)))
             for lo, hi in r.limits_rad:
-                if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi):
+                if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
                     raise ConfigError("robot %s: bad joint limits (%r, %r)" % (r.name, lo, hi))
 
     # --- sessions and the watchdog -------------------------------------------------------------
