@@ -31,6 +31,9 @@ std::string Describe(const char* method, const grpc::Status& status) {
 }  // namespace
 
 struct GrpcCell::Impl {
+  // The truth channel's answer into `resp`: OK, or UNIMPLEMENTED (a cell without truth); any
+  // other status is thrown naming the cell.
+  grpc::Status AskTruth(bpb::TwinTruth* resp);
   std::string where;
   GrpcCellDeadlines deadlines;
   std::string authorization;  // "Bearer <token>" or empty
@@ -170,11 +173,7 @@ cv::Mat GrpcCell::GrabImageRegion(const cv::Rect& roi) {
   pb::GrabImageRequest req;
   req.set_session_id(s.session);
   req.set_encoding(s.image_encoding);
-  pb::PixelRegion* region = req.mutable_region();
-  region->set_x_px(roi.x);
-  region->set_y_px(roi.y);
-  region->set_width_px(roi.width);
-  region->set_height_px(roi.height);
+  RegionToProto(roi, req.mutable_region());
   pb::GrabImageResponse resp;
   s.Call("GrabImage", &pb::Cell::Stub::GrabImage, req, &resp, s.deadlines.image_s);
   return DecodeImage(resp);
@@ -248,33 +247,33 @@ TrackerReading GrpcCell::MeasureTracker(int robot) {
   return FromProto(resp);
 }
 
-TwinTruth GrpcCell::Truth() {
-  Impl& s = *impl_;
+grpc::Status GrpcCell::Impl::AskTruth(bpb::TwinTruth* resp) {
+  Impl& s = *this;
   bpb::TruthRequest req;
   req.set_session_id(s.session);
-  bpb::TwinTruth resp;
   grpc::ClientContext ctx;
   s.Prepare(&ctx, s.deadlines.call_s);
-  const grpc::Status status = s.truth_stub->Truth(&ctx, req, &resp);
+  const grpc::Status status = s.truth_stub->Truth(&ctx, req, resp);
+  if (!status.ok() && status.error_code() != grpc::UNIMPLEMENTED) {
+    throw std::runtime_error(s.where + ": " + Describe("Truth", status));
+  }
+  return status;
+}
+
+TwinTruth GrpcCell::Truth() {
+  Impl& s = *impl_;
+  bpb::TwinTruth resp;
+  const grpc::Status status = s.AskTruth(&resp);
   if (status.error_code() == grpc::UNIMPLEMENTED) {
     throw InputError(s.where, "the cell offers no truth to score against (" +
                                   status.error_message() + ")");
   }
-  if (!status.ok()) throw std::runtime_error(s.where + ": " + Describe("Truth", status));
   return FromProto(resp);
 }
 
 bool GrpcCell::HasTruth() {
-  Impl& s = *impl_;
-  bpb::TruthRequest req;
-  req.set_session_id(s.session);
   bpb::TwinTruth resp;
-  grpc::ClientContext ctx;
-  s.Prepare(&ctx, s.deadlines.call_s);
-  const grpc::Status status = s.truth_stub->Truth(&ctx, req, &resp);
-  if (status.error_code() == grpc::UNIMPLEMENTED) return false;
-  if (!status.ok()) throw std::runtime_error(s.where + ": " + Describe("Truth", status));
-  return true;
+  return impl_->AskTruth(&resp).ok();
 }
 
 const std::string& GrpcCell::session_id() const { return impl_->session; }

@@ -300,6 +300,13 @@ void JointsToProto(const JointVector& q, google::protobuf::RepeatedField<double>
   for (int i = 0; i < q.size(); ++i) out->Add(q(i));
 }
 
+void RegionToProto(const cv::Rect& roi, pb::PixelRegion* out) {
+  out->set_x_px(roi.x);
+  out->set_y_px(roi.y);
+  out->set_width_px(roi.width);
+  out->set_height_px(roi.height);
+}
+
 void EncodeImage(const cv::Mat& image, int x, int y, pb::GrabImageResponse* out,
                  const std::string& encoding) {
   const bool raw = encoding == "rgb8";

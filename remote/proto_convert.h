@@ -49,6 +49,9 @@ BracketTarget FromProto(pb::BracketTarget target);
 JointVector JointsFromProto(const google::protobuf::RepeatedField<double>& q);
 void JointsToProto(const JointVector& q, google::protobuf::RepeatedField<double>* out);
 
+/// A region of the frame as a request states it.
+void RegionToProto(const cv::Rect& roi, pb::PixelRegion* out);
+
 /// `image` (8-bit BGR, OpenCV row order; empty: a region that missed the frame) in `out`, its
 /// pixel (0, 0) at frame column x, row y: as PNG, or with `encoding` "rgb8" as raw RGB rows.
 void EncodeImage(const cv::Mat& image, int x, int y, pb::GrabImageResponse* out,

@@ -153,13 +153,7 @@ JointVector RecordingCell::ReadEncoders(int robot) {
 cv::Mat RecordingCell::RecordImage(const cv::Mat& image, int x, int y, Clock::time_point t,
                                    const cv::Rect* roi) {
   pb::GrabImageRequest request;
-  if (roi) {
-    pb::PixelRegion* r = request.mutable_region();
-    r->set_x_px(roi->x);
-    r->set_y_px(roi->y);
-    r->set_width_px(roi->width);
-    r->set_height_px(roi->height);
-  }
+  if (roi) remote::RegionToProto(*roi, request.mutable_region());
   pb::GrabImageResponse response;
   remote::EncodeImage(image, x, y, &response);
   const std::string png = response.data();

@@ -170,13 +170,7 @@ JointVector ReplayCell::ReadEncoders(int robot) {
 
 cv::Mat ReplayCell::NextImage(const cv::Rect* roi) {
   pb::GrabImageRequest request;
-  if (roi) {
-    pb::PixelRegion* r = request.mutable_region();
-    r->set_x_px(roi->x);
-    r->set_y_px(roi->y);
-    r->set_width_px(roi->width);
-    r->set_height_px(roi->height);
-  }
+  if (roi) remote::RegionToProto(*roi, request.mutable_region());
   pb::GrabImageResponse response;
   Next("GrabImage", request, &response);
   try {
