@@ -137,6 +137,14 @@ class Battery {
   void Fail(const std::string& name, const std::string& detail) {
     Add(name, CheckOutcome::kFail, detail);
   }
+  /// Passes with `detail` when `problems` is empty, else fails with them joined by "; ".
+  void PassUnless(const std::string& name, const std::vector<std::string>& problems,
+                  const std::string& detail) {
+    if (problems.empty()) return Pass(name, detail);
+    std::string all;
+    for (const std::string& w : problems) all += (all.empty() ? "" : "; ") + w;
+    Fail(name, all);
+  }
 
   // --- heartbeat of the battery's session -------------------------------------------------
   void StartHeartbeat() {
@@ -240,16 +248,10 @@ class Battery {
       throw InputError("--robot", "the cell has " + std::to_string(describe_.robots_size()) +
                                       " robots; --robot " + std::to_string(o_.robot));
     }
-    if (wrong.empty()) {
-      Pass("describe", "protocol 1, " + std::to_string(describe_.robots_size()) +
-                           " robot(s), heartbeat timeout " +
-                           std::to_string(heartbeat_timeout_s_) + " s, server '" +
-                           describe_.server() + "'");
-    } else {
-      std::string all;
-      for (const std::string& w : wrong) all += (all.empty() ? "" : "; ") + w;
-      Fail("describe", all);
-    }
+    PassUnless("describe", wrong,
+               "protocol 1, " + std::to_string(describe_.robots_size()) +
+                   " robot(s), heartbeat timeout " + std::to_string(heartbeat_timeout_s_) +
+                   " s, server '" + describe_.server() + "'");
     if (largest <= kMaxLimitRad) {
       Pass("units: limits in rad", "largest |limit| " + std::to_string(largest) + " rad");
     } else {
@@ -285,13 +287,7 @@ class Battery {
       bad.push_back("a call naming no session: " + Status(no_id) +
                     ", expected FAILED_PRECONDITION");
     }
-    if (bad.empty()) {
-      Pass("sessions", "one client at a time; calls outside the session refused");
-    } else {
-      std::string all;
-      for (const std::string& w : bad) all += (all.empty() ? "" : "; ") + w;
-      Fail("sessions", all);
-    }
+    PassUnless("sessions", bad, "one client at a time; calls outside the session refused");
   }
 
   void Encoders() {
@@ -328,16 +324,18 @@ class Battery {
     pb::ReadEncodersResponse enc;
     expect("ReadEncoders of a robot the cell lacks",
            Read(session_, describe_.robots_size(), &enc));
-    pb::MoveResult moved;
-    google::protobuf::RepeatedField<double> q = start_;
-    q.Add(0.0);
-    expect("MoveTo with one joint too many", Move(session_, o_.robot, q, &moved));
-    q = start_;
-    if (q.size() > 0) q.Set(0, std::numeric_limits<double>::quiet_NaN());
-    expect("MoveTo with NaN", Move(session_, o_.robot, q, &moved));
-    if (q.size() > 0) q.Set(0, std::numeric_limits<double>::infinity());
-    expect("MoveTo with infinity", Move(session_, o_.robot, q, &moved));
-    {
+    // Malformed motion calls: a server that does not check them might move the robot, so
+    // they are sent only with --allow-motion.
+    if (o_.allow_motion) {
+      pb::MoveResult moved;
+      google::protobuf::RepeatedField<double> q = start_;
+      q.Add(0.0);
+      expect("MoveTo with one joint too many", Move(session_, o_.robot, q, &moved));
+      q = start_;
+      if (q.size() > 0) q.Set(0, std::numeric_limits<double>::quiet_NaN());
+      expect("MoveTo with NaN", Move(session_, o_.robot, q, &moved));
+      if (q.size() > 0) q.Set(0, std::numeric_limits<double>::infinity());
+      expect("MoveTo with infinity", Move(session_, o_.robot, q, &moved));
       pb::MountTargetRequest req;
       req.set_session_id(session_);
       req.set_target(static_cast<pb::BracketTarget>(99));
@@ -358,13 +356,10 @@ class Battery {
     if (s.ok() && MaxDifference(enc.q_rad(), start_) > kAtRestRad) {
       bad.push_back("the robot moved: " + Joints(start_) + " -> " + Joints(enc.q_rad()));
     }
-    if (bad.empty()) {
-      Pass("malformed requests", "refused with INVALID_ARGUMENT, nothing moved");
-    } else {
-      std::string all;
-      for (const std::string& w : bad) all += (all.empty() ? "" : "; ") + w;
-      Fail("malformed requests", all);
-    }
+    PassUnless("malformed requests", bad,
+               o_.allow_motion ? "refused with INVALID_ARGUMENT, nothing moved"
+                               : "refused with INVALID_ARGUMENT, nothing moved (the malformed "
+                                 "MoveTo and MountTarget calls need --allow-motion)");
   }
 
   // The last joint by kStepRad and back: the readings must follow in radians.

@@ -38,6 +38,9 @@ using Clock = std::chrono::steady_clock;
 // Bounds of a pixel region's numbers (a sanity bound far beyond any camera; it keeps the
 // arithmetic of clipping free of overflow).
 constexpr int kMaxRegionCoordinate = 1 << 20;
+// The simulated operator's largest alignment error [m]: the handclasp section's own limit (a
+// 10 mm miss is no contact; bench/runs/handclasp_run.cc).
+constexpr double kMaxOperatorSigmaM = 0.01;
 
 std::string ReadFileOrThrow(const std::string& path, const std::string& option) {
   std::ifstream in(path, std::ios::binary);
@@ -114,7 +117,20 @@ struct CellServer::Impl {
   std::mutex session_mutex;
   std::string live_id, live_client;
   Clock::time_point last_seen;
-  std::map<std::string, std::string> ended;  // id -> why it ended
+  std::map<std::string, std::string> ended;  // id -> why it ended, the last kEndedKept
+  std::deque<std::string> ended_order;       // their ids, oldest first
+  // Ended sessions remembered, to tell their client why (an older one is just unknown): a
+  // server up for months must not grow with every session it served.
+  static constexpr std::size_t kEndedKept = 64;
+
+  // Remembers why session `id` ended; the caller holds session_mutex.
+  void NoteEnded(const std::string& id, const std::string& why) {
+    if (ended.emplace(id, why).second) ended_order.push_back(id);
+    if (ended_order.size() > kEndedKept) {
+      ended.erase(ended_order.front());
+      ended_order.pop_front();
+    }
+  }
 
   // The worker: every call on the cell, one at a time.
   std::mutex queue_mutex;
@@ -184,7 +200,7 @@ struct CellServer::Impl {
     {
       std::lock_guard<std::mutex> lock(session_mutex);
       if (live_id.empty() || id != live_id) return;
-      ended[live_id] = why;
+      NoteEnded(live_id, why);
       live_id.clear();
       live_client.clear();
     }
@@ -349,7 +365,7 @@ struct CellServer::Impl {
       StopMotion();
       {
         std::lock_guard<std::mutex> lock(session_mutex);
-        if (!live_id.empty()) ended[live_id] = "the server shut down";
+        if (!live_id.empty()) NoteEnded(live_id, "the server shut down");
         live_id.clear();
       }
       if (server) server->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
@@ -596,6 +612,24 @@ class TruthService final : public bpb::TwinBench::Service {
     }
     return s_.Serve(ctx, req->session_id(), false, [&]() -> Status {
       ToProto(s_.opt.truth(), out);
+      return Status::OK;
+    });
+  }
+
+  Status SetOperatorError(ServerContext* ctx, const bpb::OperatorErrorRequest* req,
+                          bpb::OperatorErrorResponse*) override {
+    if (!s_.opt.set_operator_error) {
+      if (Status st = s_.Authorize(ctx); !st.ok()) return st;
+      return Status(StatusCode::UNIMPLEMENTED, "this cell has no simulated operator (serve-cell "
+                                               "--no-truth or a real cell)");
+    }
+    return s_.Serve(ctx, req->session_id(), false, [&]() -> Status {
+      const double sigma = req->alignment_sigma_m();
+      if (!(sigma >= 0.0 && sigma <= kMaxOperatorSigmaM)) {
+        return Invalid("alignment_sigma_m must be within 0 to " +
+                       std::to_string(kMaxOperatorSigmaM) + " m, got " + std::to_string(sigma));
+      }
+      s_.opt.set_operator_error(sigma);
       return Status::OK;
     });
   }

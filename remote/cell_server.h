@@ -38,6 +38,10 @@ struct ServerOptions {
   std::function<void()> stop_motion;
   /// The twin's truth for the bench's truth channel; null: not offered (UNIMPLEMENTED).
   std::function<TwinTruth()> truth;
+  /// The twin's simulated operator for the bench channel's SetOperatorError: the alignment
+  /// error's standard deviation [m] (TwinCell::SetOperatorAlignmentError); null: not offered
+  /// (UNIMPLEMENTED; a real cell's operator is a person).
+  std::function<void(double)> set_operator_error;
 };
 
 /// Serves `cell` until Shutdown() or destruction. Every call on `cell` runs on one thread of

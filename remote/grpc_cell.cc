@@ -276,6 +276,20 @@ bool GrpcCell::HasTruth() {
   return impl_->AskTruth(&resp).ok();
 }
 
+bool GrpcCell::SetOperatorAlignmentError(double sigma_m) {
+  Impl& s = *impl_;
+  bpb::OperatorErrorRequest req;
+  req.set_session_id(s.session);
+  req.set_alignment_sigma_m(sigma_m);
+  bpb::OperatorErrorResponse resp;
+  grpc::ClientContext ctx;
+  s.Prepare(&ctx, s.deadlines.call_s);
+  const grpc::Status status = s.truth_stub->SetOperatorError(&ctx, req, &resp);
+  if (status.error_code() == grpc::UNIMPLEMENTED) return false;
+  if (!status.ok()) throw std::runtime_error(s.where + ": " + Describe("SetOperatorError", status));
+  return true;
+}
+
 const std::string& GrpcCell::session_id() const { return impl_->session; }
 
 const std::string& GrpcCell::cell_name() const { return impl_->description.cell_name(); }

@@ -51,6 +51,10 @@ class GrpcCell : public Cell {
   TwinTruth Truth();
   /// Whether the cell offers the truth channel (asks it; false: UNIMPLEMENTED).
   bool HasTruth();
+  /// Sets the served twin's simulated operator (the bench channel's SetOperatorError): the
+  /// alignment error's standard deviation [m]. False when the cell has none (UNIMPLEMENTED: a
+  /// real cell, `serve-cell --no-truth`); std::runtime_error when it refuses the value.
+  bool SetOperatorAlignmentError(double sigma_m);
   /// The session id (tests).
   const std::string& session_id() const;
   /// The cell's name as Describe gave it.

@@ -371,6 +371,7 @@ void ToProto(const TwinTruth& truth, bpb::TwinTruth* out) {
     JointsToProto(truth.q_motor[r], out->add_q_motor()->mutable_q_rad());
     ToProto(truth.p_WTip[r], out->add_tip_in_world_m());
     ToProto(truth.X_WF[r], out->add_world_to_flange());
+    ToProto(truth.X_FTip[r], out->add_flange_to_tip());
   }
   out->set_time_s(truth.time_s);
   ToProto(truth.X_WC, out->mutable_world_to_camera());
@@ -391,6 +392,7 @@ TwinTruth FromProto(const bpb::TwinTruth& truth) {
   CheckRobots(truth.q_motor_size(), "q_motor");
   CheckRobots(truth.tip_in_world_m_size(), "tip_in_world_m");
   CheckRobots(truth.world_to_flange_size(), "world_to_flange");
+  CheckRobots(truth.flange_to_tip_size(), "flange_to_tip");
   for (int r = 0; r < kMaxRobots; ++r) {
     out.models[r] = FromProto(truth.models(r));
     out.length_scale[r] = truth.length_scale(r);
@@ -399,6 +401,7 @@ TwinTruth FromProto(const bpb::TwinTruth& truth) {
     out.q_motor[r] = JointsFromProto(truth.q_motor(r).q_rad());
     out.p_WTip[r] = FromProto(truth.tip_in_world_m(r));
     out.X_WF[r] = FromProto(truth.world_to_flange(r), "truth: world_to_flange");
+    out.X_FTip[r] = FromProto(truth.flange_to_tip(r), "truth: flange_to_tip");
   }
   out.time_s = truth.time_s();
   out.X_WC = FromProto(truth.world_to_camera(), "truth: world_to_camera");

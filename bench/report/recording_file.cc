@@ -1,5 +1,6 @@
 #include "bench/report/recording_file.h"
 
+#include <algorithm>
 #include <cctype>
 #include <utility>
 #include <vector>
@@ -200,7 +201,18 @@ RecordedExchange ParseRecordedExchangeLine(const std::string& line, const std::s
     throw InputError(where, "expected \"request\" and \"response\" objects");
   }
   const Json& response = j["response"];
-  if (response.contains("image_file")) e.image_file = Get<std::string>(response, "image_file", where);
+  if (response.contains("image_file")) {
+    e.image_file = Get<std::string>(response, "image_file", where);
+    // A file of the recording's images/ folder, never a path out of it.
+    const std::string folder = std::string(kRecordingImagesFolder) + "/";
+    const std::string name = e.image_file.substr(std::min(folder.size(), e.image_file.size()));
+    if (e.image_file.compare(0, folder.size(), folder) != 0 || name.empty() ||
+        name.find('/') != std::string::npos || name.find('\\') != std::string::npos ||
+        name == "." || name == "..") {
+      throw InputError(where, "image_file '" + e.image_file + "' is not a file of the "
+                              "recording's " + folder + " folder");
+    }
+  }
   for (const auto& [key, value] : RawMembers(line)) {
     if (key == "request") e.request_json = value;
     if (key == "response") e.response_json = ObjectText(RawMembers(value), "image_file");

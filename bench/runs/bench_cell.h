@@ -24,6 +24,11 @@ class BenchCell : public Cell {
   /// Whether Truth() can answer: false on a cell without truth (a real cell, `serve-cell
   /// --no-truth`), where a run scores nothing against truth. Asked after the procedure.
   virtual bool HasTruth() { return true; }
+  /// Sets the twin's simulated operator: the standard deviation of the error with which the
+  /// operator aligns the tips at each JogTipToContact [m] (TwinCell::SetOperatorAlignmentError;
+  /// a handclasp stage's operator_error). Returns false on a cell whose operator is a person
+  /// (a real cell, `serve-cell --no-truth`), where nothing is set.
+  virtual bool SetOperatorAlignmentError(double /*sigma_m*/) { return false; }
 };
 
 /// A BenchCell that passes every call on to `inner` (subclasses override what they watch).
@@ -48,6 +53,9 @@ class ForwardingBenchCell : public BenchCell {
   TrackerReading MeasureTracker(int robot) override { return inner_.MeasureTracker(robot); }
   TwinTruth Truth() override { return inner_.Truth(); }
   bool HasTruth() override { return inner_.HasTruth(); }
+  bool SetOperatorAlignmentError(double sigma_m) override {
+    return inner_.SetOperatorAlignmentError(sigma_m);
+  }
   void Finish() override { inner_.Finish(); }
 
  protected:
@@ -73,6 +81,10 @@ class LocalTwinCell : public BenchCell {
   double ReadTemperatureC(int robot) override { return twin_.ReadTemperatureC(robot); }
   TrackerReading MeasureTracker(int robot) override { return twin_.MeasureTracker(robot); }
   TwinTruth Truth() override { return twin_.Truth(); }
+  bool SetOperatorAlignmentError(double sigma_m) override {
+    twin_.SetOperatorAlignmentError(sigma_m);
+    return true;
+  }
 
  private:
   TwinCell& twin_;
@@ -96,12 +108,17 @@ struct CellOptions {
   /// A recording to play back (`twinbench replay`; bench/runs/replay_cell.h) instead of a
   /// cell: every call must match the next recorded exchange.
   std::string replay_dir;
+  /// Non-empty: the run has no report without the twin's truth; a cell that offers none (a
+  /// real cell, `serve-cell --no-truth`) is refused with this reason (InputError naming
+  /// --cell), before anything moves and before a recording is begun.
+  std::string needs_truth;
 };
 
 /// The cell a run drives: the scenario's twin here, the cell at options.address, or the
 /// recording options.replay_dir played back; recorded into options.record_dir when one is
 /// given. Throws InputError naming `where` for a bad
-/// address, an unreachable cell or a record folder that exists.
+/// address, an unreachable cell, a record folder that exists, or a cell without truth when
+/// options.needs_truth says why the run needs it.
 std::unique_ptr<BenchCell> OpenBenchCell(const TwinSpec& twin, const std::string& where,
                                          const CellOptions& options);
 

@@ -792,16 +792,8 @@ int RunCalibrationScenario(const RunOptions& o) {
   Scenario sc = LoadRunScenario(o, &text);
   // Other procedures run elsewhere: the laser tracker, the handclasp, the dual-arm workflow.
   if (IsPresent(sc.tracker_calibration)) return RunTrackerScenario(o);
-  if (IsPresent(sc.handclasp) &&
-      (!o.cell.record_dir.empty() || !o.cell.replay_dir.empty() || !o.cell.address.empty())) {
-    throw InputError(o.cell.record_dir.empty() ? "--cell" : "--record",
-                     sc.path + ": a handclasp or dual-arm workflow run drives the twin in this "
-                               "process only (no recording, replay or served cell yet)");
-  }
-  if (IsPresent(sc.handclasp) && !IsPresent(sc.calibration)) {
-    // base-frame calibration alone
-    return RunHandclaspScenario(o.scenario, o.out_dir, std::cerr, o.trial, o.junit);
-  }
+  // base-frame calibration alone
+  if (IsPresent(sc.handclasp) && !IsPresent(sc.calibration)) return RunHandclaspScenario(o);
   if (IsPresent(sc.handclasp) && IsPresent(sc.calibration)) return RunWorkflowScenario(o);
   // Everything is validated before anything is written: the sections, the output paths and
   // the cell itself (its initial pose must settle without collisions).
@@ -811,16 +803,11 @@ int RunCalibrationScenario(const RunOptions& o) {
   ValidateOutputFolder(o.out_dir, "--out");
   if (!o.junit.empty()) ValidateJunitFile(o.junit, o.out_dir);
   InstallMujocoErrorHandlers();
-  const std::unique_ptr<BenchCell> cell =
-      OpenBenchCell(sc.twin, sc.path, RunCellOptions(o, sc, text));
   // The optical-axis report is made against the twin's truth; a cell without it is refused
-  // before anything moves (the tracker run reports without truth).
-  if (!cell->HasTruth()) {
-    throw InputError("--cell " + o.cell.address,
-                     "the cell offers no truth, and the optical-axis run has no report without it "
-                     "yet (serve the twin without --no-truth; the tracker procedure runs on a "
-                     "cell without truth)");
-  }
+  // before anything moves or is recorded (the tracker run reports without truth).
+  CellOptions cell_options = RunCellOptions(o, sc, text);
+  cell_options.needs_truth = "the optical-axis run has no report without it yet";
+  const std::unique_ptr<BenchCell> cell = OpenBenchCell(sc.twin, sc.path, cell_options);
   const fs::path out(o.out_dir);
   const fs::path staging = CreateStagingDirectory(o.out_dir);
   // The calibration, scored and judged, written and published as out_dir.

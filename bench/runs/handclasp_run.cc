@@ -13,11 +13,13 @@
 #include "bench/io/scenario_keys.h"
 #include "bench/report/acceptance.h"
 #include "bench/report/handclasp_report.h"
+#include "bench/runs/calibration_run.h"
 #include "bench/scoring/calibration_scoring.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/procedures/handclasp_procedure.h"
 #include "calib/kinematics/inverse_kinematics.h"
+#include "sim/world/mujoco_handles.h"
 
 namespace twin {
 namespace {
@@ -56,7 +58,7 @@ Transform TrueX_B1B2(const TwinTruth& truth) { return truth.X_WB[0].inverse() * 
 // The coupled-motion check (issue item 6, after the paper's cooperative motion): robot 1's tip
 // follows a short path by its pendant IK; robot 2 is commanded through the estimated X_B1B2 to
 // face it, by its pendant IK; the true tip-to-tip distance is measured after each pair of moves.
-CoupledMotionResult CoupledMotion(TwinCell& cell,
+CoupledMotionResult CoupledMotion(BenchCell& cell,
                                   const std::array<KinematicModel, 2>& tip_models,
                                   const HandclaspContact& start,
                                   const Transform& X_B1B2_estimate) {
@@ -334,14 +336,16 @@ struct StageInputs {
 
 // Parses the section, applies the stage's operator error to the cell and builds the pendants'
 // tip models.
-StageInputs PrepareStage(TwinCell& cell, const Scenario& scenario,
+StageInputs PrepareStage(BenchCell& cell, const Scenario& scenario,
                          const std::array<KinematicModel, 2>& pendant_models_flange,
-                         const HandclaspStageOptions& stage_options) {
+                         const HandclaspStageOptions& stage_options, std::ostream& progress) {
   StageInputs in{scenario, pendant_models_flange, stage_options, ParseHandclaspConfig(scenario),
                  {}};
   HandclaspConfig& config = in.config;
   if (stage_options.operator_error_m) config.operator_error_m = *stage_options.operator_error_m;
-  cell.SetOperatorAlignmentError(config.operator_error_m);
+  if (!cell.SetOperatorAlignmentError(config.operator_error_m)) {
+    progress << "handclasp: the cell's operator is a person: operator_error is not simulated\n";
+  }
   // The pendants' tips are the told ones (by drawing), never the twin's true tips.
   for (int k = 0; k < 2; ++k) {
     in.tip_models[k] = WithTipTool(pendant_models_flange[k], config.told_X_FTip[k]);
@@ -356,7 +360,7 @@ struct Teaching {
 };
 
 // Plans or teaches the contact points from the current encoders.
-Teaching TeachContactPoints(TwinCell& cell, const StageInputs& in) {
+Teaching TeachContactPoints(BenchCell& cell, const StageInputs& in) {
   const std::array<JointVector, 2> seeds = {cell.ReadEncoders(0), cell.ReadEncoders(1)};
   Teaching t;
   t.teach = HandclaspTeachOptions(in.scenario, in.options.identify_tips);
@@ -376,7 +380,7 @@ HandclaspTeaching TeachingRecord(const HandclaspConfig& config, const Teaching& 
 }
 
 // Runs calib's procedure on the taught joint angles with the section's constraint.
-HandclaspResult RunProcedure(TwinCell& cell, const StageInputs& in, const TaughtPoints& taught,
+HandclaspResult RunProcedure(BenchCell& cell, const StageInputs& in, const TaughtPoints& taught,
                              std::ostream& progress) {
   HandclaspOptions options;
   options.constraint = in.config.constraint;
@@ -407,7 +411,7 @@ ScoringFrames ComputeScoringFrames(const TwinTruth& twin_truth, const StageInput
   s.dt = {s.tips_ok ? result.tips.dt1_F1 : Vector3::Zero(),
           s.tips_ok ? result.tips.dt2_F2 : Vector3::Zero()};
   for (int k = 0; k < 2; ++k) {
-    s.true_tips[k] = WithTipTool(s.twin_truth.models[k], in.scenario.twin.tips[k].X_FTip);
+    s.true_tips[k] = WithTipTool(s.twin_truth.models[k], s.twin_truth.X_FTip[k]);
     s.X_BBp[k] = in.options.best_fit_frames
                      ? BestFitBaseOffset(s.true_tips[k], in.tip_models[k], s.dt[k])
                      : KinematicBaseOffset(s.twin_truth.models[k], in.pendant_models_flange[k]);
@@ -464,7 +468,7 @@ void ScoreIdentifiedTips(const TipRefinementResult& tips, const ScoringFrames& s
 }
 
 // The coupled-motion check with the delivered estimate, into out.
-void RunCoupledMotionCheck(TwinCell& cell, const StageInputs& in, const HandclaspResult& result,
+void RunCoupledMotionCheck(BenchCell& cell, const StageInputs& in, const HandclaspResult& result,
                            const ScoringFrames& s, HandclaspStageResult* out) {
   // With identified tips the controllers use them (the TCP a pendant would store).
   std::array<KinematicModel, 2> used = in.tip_models;
@@ -504,12 +508,13 @@ void PrintStageSummary(BaseConstraint constraint, const HandclaspStageResult& ou
 
 }  // namespace
 
-HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
+HandclaspStageResult RunHandclaspStage(BenchCell& cell, const Scenario& scenario,
                                        const std::array<KinematicModel, 2>& pendant_models_flange,
                                        std::ostream& progress,
                                        const HandclaspStageOptions& stage_options) {
   // The section, the operator's error on the cell and the pendants' told tip models.
-  const StageInputs in = PrepareStage(cell, scenario, pendant_models_flange, stage_options);
+  const StageInputs in =
+      PrepareStage(cell, scenario, pendant_models_flange, stage_options, progress);
   // The operator's taught points, planned from the told layout.
   const Teaching teaching = TeachContactPoints(cell, in);
   HandclaspStageResult out;
@@ -537,6 +542,14 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
   return out;
 }
 
+HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
+                                       const std::array<KinematicModel, 2>& pendant_models_flange,
+                                       std::ostream& progress,
+                                       const HandclaspStageOptions& stage_options) {
+  LocalTwinCell bench_cell(cell);
+  return RunHandclaspStage(bench_cell, scenario, pendant_models_flange, progress, stage_options);
+}
+
 namespace {
 
 // A loaded scenario with its trial applied and its sections parsed.
@@ -546,23 +559,33 @@ struct HandclaspRunInputs {
   Acceptance acceptance;
 };
 
+// Whether the run's cell is other than the scenario's twin in this process.
+bool DrivesAnotherCell(const CellOptions& cell) {
+  return !cell.address.empty() || !cell.record_dir.empty() || !cell.replay_dir.empty();
+}
+
 // Everything is validated before anything runs or is written
 // (docs/reference/exit-codes-and-safety.md).
-HandclaspRunInputs LoadAndValidate(const std::string& scenario_path, const std::string& out_dir,
-                                   int trial, const std::string& junit) {
-  Scenario scenario = LoadScenario(scenario_path);
-  ApplyTrial(trial, &scenario);
+HandclaspRunInputs LoadAndValidate(const RunOptions& o, std::string* text) {
+  Scenario scenario = LoadRunScenario(o, text);
   HandclaspConfig config = ParseHandclaspConfig(scenario);
+  if (DrivesAnotherCell(o.cell) && config.trials != 1) {
+    throw InputError(scenario.path + " scenario.handclasp.trials",
+                     "a run on a served, recorded or replayed cell runs one trial on that one "
+                     "cell; trials must be 1, got " + std::to_string(config.trials) +
+                         " (serve each trial with `serve-cell --trial N`)");
+  }
   Acceptance acceptance = ParseAcceptance(scenario);
-  ValidateOutputFolder(out_dir, "--out");
-  if (!junit.empty()) ValidateJunitFile(junit, out_dir);
+  ValidateOutputFolder(o.out_dir, "--out");
+  if (!o.junit.empty()) ValidateJunitFile(o.junit, o.out_dir);
   return {std::move(scenario), std::move(config), std::move(acceptance)};
 }
 
 // Runs every trial of the batch on a fresh twin with seed twin.seed + t and the nominal
-// models; throws InputError when a trial's procedure refused.
+// models, or its one trial on the cell `cell_options` names; throws InputError when a
+// trial's procedure refused.
 HandclaspBatchResult RunTrials(const Scenario& scenario, const HandclaspConfig& config,
-                               std::ostream& progress) {
+                               const CellOptions& cell_options, std::ostream& progress) {
   const std::array<KinematicModel, 2> nominal = {scenario.twin.robots[0].model,
                                                  scenario.twin.robots[1].model};
   HandclaspBatchResult b;
@@ -572,8 +595,9 @@ HandclaspBatchResult RunTrials(const Scenario& scenario, const HandclaspConfig& 
     spec.seed = scenario.twin.seed + static_cast<std::uint64_t>(t);
     progress << "handclasp: trial " << t + 1 << "/" << config.trials << " (seed " << spec.seed
              << ")\n";
-    TwinCell cell(spec, scenario.path);
-    HandclaspStageResult stage = RunHandclaspStage(cell, scenario, nominal, progress);
+    const std::unique_ptr<BenchCell> cell = OpenBenchCell(spec, scenario.path, cell_options);
+    HandclaspStageResult stage = RunHandclaspStage(*cell, scenario, nominal, progress);
+    cell->Finish();  // the last call: a recording is complete, a replay used up
     stage.seed = spec.seed;
     if (!stage.ok()) {
       // A refused procedure is exit 2 with its reason (docs/reference/exit-codes-and-safety.md);
@@ -607,13 +631,22 @@ void PublishReport(const std::string& report_text, const std::string& out_dir) {
 
 }  // namespace
 
-int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir,
-                         std::ostream& progress, int trial, const std::string& junit) {
+namespace {
+
+int RunHandclasp(const RunOptions& o, std::ostream& progress) {
+  const std::string& out_dir = o.out_dir;
+  const std::string& junit = o.junit;
   const auto t_start = std::chrono::steady_clock::now();
   // The scenario, its handclasp and acceptance sections and the output paths, all checked.
-  const HandclaspRunInputs in = LoadAndValidate(scenario_path, out_dir, trial, junit);
-  // Each trial's handclasp stage on its own twin.
-  const HandclaspBatchResult batch = RunTrials(in.scenario, in.config, progress);
+  std::string text;
+  const HandclaspRunInputs in = LoadAndValidate(o, &text);
+  // The report scores every estimate against the twin's truth: a cell without it is refused
+  // before anything moves or is recorded.
+  CellOptions cell_options = RunCellOptions(o, in.scenario, text);
+  cell_options.needs_truth = "the handclasp run has no report without it yet";
+  InstallMujocoErrorHandlers();
+  // Each trial's handclasp stage on its own twin (or the one trial on the cell named).
+  const HandclaspBatchResult batch = RunTrials(in.scenario, in.config, cell_options, progress);
   // report.json with the acceptance criteria judged on it.
   AcceptanceVerdict verdict;
   const std::string report = HandclaspReportText(in.scenario, batch, in.acceptance, &verdict);
@@ -623,6 +656,20 @@ int RunHandclaspScenario(const std::string& scenario_path, const std::string& ou
   if (!junit.empty()) WriteJunit(junit, in.scenario.name, verdict, seconds);
   PrintVerdict(verdict, progress);
   return VerdictExitCode(verdict);
+}
+
+}  // namespace
+
+int RunHandclaspScenario(const RunOptions& options) { return RunHandclasp(options, std::cerr); }
+
+int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir,
+                         std::ostream& progress, int trial, const std::string& junit) {
+  RunOptions o;
+  o.scenario = scenario_path;
+  o.out_dir = out_dir;
+  o.trial = trial;
+  o.junit = junit;
+  return RunHandclasp(o, progress);
 }
 
 int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir) {

@@ -40,6 +40,7 @@
 #include <vector>
 
 #include "bench/io/scenario.h"
+#include "bench/runs/bench_cell.h"
 #include "bench/scoring/handclasp_results.h"
 #include "calib/identification/base_calibration.h"
 #include "calib/kinematics/kinematic_model.h"
@@ -139,6 +140,11 @@ TaughtPoints TeachHandclaspPoints(const HandclaspConfig& config,
 /// added as tools), then scores it against cell.Truth() (bench/scoring/handclasp_results.h;
 /// bench/report/handclasp_report.h writes it). Progress lines go to `progress`. Throws
 /// InputError for a bad section; procedure failures are reported (ok() false, status, reason).
+HandclaspStageResult RunHandclaspStage(BenchCell& cell, const Scenario& scenario,
+                                       const std::array<KinematicModel, 2>& pendant_models_flange,
+                                       std::ostream& progress,
+                                       const HandclaspStageOptions& stage_options = {});
+/// As above, on the twin in this process.
 HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
                                        const std::array<KinematicModel, 2>& pendant_models_flange,
                                        std::ostream& progress,
@@ -153,6 +159,11 @@ HandclaspStageResult RunHandclaspStage(TwinCell& cell, const Scenario& scenario,
 /// (ApplyTrial).
 int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir,
                          std::ostream& progress, int trial = 0, const std::string& junit = "");
+struct RunOptions;  // bench/runs/calibration_run.h
+/// As above with the run's options: on the cell options.cell names (a served cell, a
+/// recording, a replay: one trial, on a cell that offers the truth; InputError otherwise, before
+/// anything moves), progress on std::cerr.
+int RunHandclaspScenario(const RunOptions& options);
 /// As above, with progress on std::cerr.
 int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir);
 

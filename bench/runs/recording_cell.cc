@@ -256,6 +256,15 @@ TwinTruth RecordingCell::Truth() {
   return truth;
 }
 
+bool RecordingCell::SetOperatorAlignmentError(double sigma_m) {
+  const Clock::time_point t = Clock::now();
+  if (!inner_.SetOperatorAlignmentError(sigma_m)) return false;
+  bpb::OperatorErrorRequest request;
+  request.set_alignment_sigma_m(sigma_m);
+  Append("SetOperatorError", t, request, bpb::OperatorErrorResponse());
+  return true;
+}
+
 void RecordingCell::Finish() {
   ForwardingBenchCell::Finish();
   const std::lock_guard<std::mutex> lock(mutex_);

@@ -40,6 +40,8 @@ class RecordingCell : public ForwardingBenchCell {
   double ReadTemperatureC(int robot) override;
   TrackerReading MeasureTracker(int robot) override;
   TwinTruth Truth() override;
+  /// Recorded only when the cell set it (a cell without a simulated operator: no line).
+  bool SetOperatorAlignmentError(double sigma_m) override;
   /// Rewrites recording.json as complete, with the number of exchanges and the end time.
   void Finish() override;
 

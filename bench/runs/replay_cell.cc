@@ -251,6 +251,15 @@ TwinTruth ReplayCell::Truth() {
   }
 }
 
+bool ReplayCell::SetOperatorAlignmentError(double sigma_m) {
+  if (next_ >= exchanges_.size() || exchanges_[next_].method != "SetOperatorError") return false;
+  bpb::OperatorErrorRequest request;
+  request.set_alignment_sigma_m(sigma_m);
+  bpb::OperatorErrorResponse response;
+  Next("SetOperatorError", request, &response);
+  return true;
+}
+
 void ReplayCell::Finish() {
   if (next_ == exchanges_.size()) return;
   throw InputError(file_, "the replay ended at seq " + std::to_string(next_) + " of " +

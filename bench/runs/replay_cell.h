@@ -36,6 +36,9 @@ class ReplayCell : public BenchCell {
   TwinTruth Truth() override;
   /// The live run had the truth: the recording holds a Truth exchange.
   bool HasTruth() override;
+  /// True when the next exchange is a recorded SetOperatorError (which must match); false
+  /// when the live run's cell had no simulated operator (nothing was recorded).
+  bool SetOperatorAlignmentError(double sigma_m) override;
   /// Throws InputError ("the replay ended at seq N of M") unless every exchange was used.
   void Finish() override;
 

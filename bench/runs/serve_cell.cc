@@ -4,6 +4,7 @@
 
 #include "bench/io/output_files.h"
 #include "bench/io/scenario.h"
+#include "bench/runs/handclasp_run.h"
 #include "remote/cell_server.h"
 #include "sim/cell/twin_cell.h"
 
@@ -46,8 +47,13 @@ std::string HostOf(const std::string& listen) {
 int RunServeCell(const ServeCellOptions& o) {
   Scenario sc = LoadScenario(o.scenario);
   ApplyTrial(o.trial, &sc);
+  // The scenario's simulated operator (its handclasp section's operator_error), also with
+  // --no-truth, where no client can set it; parsed before the twin is built (bad input: exit 2).
+  const double operator_sigma_m =
+      IsPresent(sc.handclasp) ? ParseHandclaspConfig(sc).operator_error_m : 0.0;
   TwinCell twin(sc.twin, sc.path);
   twin.SetRealtime(o.realtime);
+  twin.SetOperatorAlignmentError(operator_sigma_m);
   remote::ServerOptions server_options;
   server_options.listen = o.listen;
   server_options.tls_cert_file = o.tls_cert_file;
@@ -56,7 +62,12 @@ int RunServeCell(const ServeCellOptions& o) {
   server_options.token_file = o.token_file;
   server_options.heartbeat_timeout_s = o.heartbeat_timeout_s;
   server_options.stop_motion = [&twin] { twin.RequestStop(); };
-  if (o.truth) server_options.truth = [&twin] { return twin.Truth(); };
+  if (o.truth) {  // the bench channel: the truth, and the twin's simulated operator
+    server_options.truth = [&twin] { return twin.Truth(); };
+    server_options.set_operator_error = [&twin](double sigma_m) {
+      twin.SetOperatorAlignmentError(sigma_m);
+    };
+  }
   remote::CellServer server(twin, DescribeTwin(sc), server_options);
   // SIGINT / SIGTERM / SIGHUP (waited for by bench/io/output_files' thread): shut down and
   // return 0 instead of ending by the signal.

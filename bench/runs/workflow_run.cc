@@ -26,7 +26,7 @@ namespace {
 // needs the board in view; a handclasp leaves the tips together anywhere). Robot 2 first, then
 // robot 1; if a move is blocked (the tips or arms in each other's way), the other order.
 // Returns "" or why it failed.
-std::string ReturnToStart(TwinCell& cell, const Scenario& sc) {
+std::string ReturnToStart(BenchCell& cell, const Scenario& sc) {
   std::string why;
   for (const std::array<int, 2> order : {std::array<int, 2>{1, 0}, std::array<int, 2>{0, 1}}) {
     why.clear();
@@ -45,6 +45,7 @@ std::string ReturnToStart(TwinCell& cell, const Scenario& sc) {
 // The workflow's parsed input: the scenario (trial applied) and its sections.
 struct WorkflowInputs {
   Scenario sc;
+  std::string text;  // the scenario's text (a recording keeps it)
   HandclaspConfig handclasp;
   CalibrationConfig config;  // the calibration section with the run options applied
   Acceptance acceptance;
@@ -52,7 +53,7 @@ struct WorkflowInputs {
 
 // What the workflow's stages share: the cell, the scenario, where they write, how they report.
 struct WorkflowContext {
-  TwinCell& cell;
+  BenchCell& cell;
   const Scenario& sc;
   const HandclaspConfig& handclasp;
   const fs::path& staging;     // the staging folder of the outputs
@@ -66,8 +67,7 @@ struct WorkflowContext {
 WorkflowInputs LoadWorkflowInputs(const RunOptions& o) {
   WorkflowInputs in;
   Scenario& sc = in.sc;
-  sc = LoadScenario(o.scenario);
-  ApplyTrial(o.trial, &sc);
+  sc = LoadRunScenario(o, &in.text);
   if (!IsPresent(sc.calibration)) {
     throw InputError(sc.path, "the dual-arm workflow needs a calibration: section");
   }
@@ -113,9 +113,8 @@ std::array<KinematicModel, 2> RunOpticalAxisCalibration(
     ctx.progress << "[" << SecondsSince(ctx.t_start)
                  << " s] (b) optical-axis calibration of both robots\n";
     std::fflush(stdout);
-    LocalTwinCell bench_cell(ctx.cell);
     state->calibration =
-        RunCalibrationStage(bench_cell, ctx.sc, *config, ctx.staging, ctx.quiet, ctx.t_start);
+        RunCalibrationStage(ctx.cell, ctx.sc, *config, ctx.staging, ctx.quiet, ctx.t_start);
     std::array<bool, 2> done = {false, false};
     for (const RobotCalibration& rc_robot : state->calibration->procedure.robots) {
       // The identified model's link 7 is the board mount; WithTipTool (in the stage) puts
@@ -230,6 +229,7 @@ AcceptanceVerdict RunWorkflow(const WorkflowContext& ctx, CalibrationConfig* con
       RunOpticalAxisCalibration(ctx, nominal, config, &state);
   // (c) Handclasp again with the calibrated kinematics.
   RunCalibratedHandclasp(ctx, calibrated, initial_camera_robot, &state);
+  ctx.cell.Finish();  // the last call: a recording is complete, a replay used up
   state.total_s = SecondsSince(ctx.t_start);
   // A refused stage ends the run here.
   ThrowIfRefused(ctx.sc, state);
@@ -251,7 +251,13 @@ int RunWorkflowScenario(const RunOptions& o) {
   WorkflowInputs in = LoadWorkflowInputs(o);
   const Scenario& sc = in.sc;
   InstallMujocoErrorHandlers();
-  TwinCell cell(sc.twin, sc.path);  // a cell that does not settle at its start is bad input
+  // The report scores every stage against the twin's truth: a cell without it is refused before
+  // anything moves or is recorded. The twin here: one that does not settle at its start is bad
+  // input.
+  CellOptions cell_options = RunCellOptions(o, sc, in.text);
+  cell_options.needs_truth = "the dual-arm workflow has no report without it yet";
+  const std::unique_ptr<BenchCell> owned_cell = OpenBenchCell(sc.twin, sc.path, cell_options);
+  BenchCell& cell = *owned_cell;
 
   const fs::path out(o.out_dir);
   const fs::path staging = CreateStagingDirectory(o.out_dir);

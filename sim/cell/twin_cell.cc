@@ -982,6 +982,7 @@ TwinTruth TwinCell::Truth() const {
     t.p_WTip[k] = Vector3(s.d->site_xpos + 3 * s.site_tip[k]);
     const int flange = s.site_L[k][s.Joints(k)];
     t.X_WF[k] = FromMj(s.d->site_xpos + 3 * flange, s.d->site_xmat + 9 * flange);
+    t.X_FTip[k] = s.spec.tips[k].X_FTip;
   }
   if (!s.spec.HasCameraAndBoard()) return t;
   // MuJoCo's camera looks along -z with y up; the optical frame C is it turned by pi about x.

@@ -36,6 +36,8 @@ struct TwinTruth {
   std::array<Vector3, kMaxRobots> p_WTip;          ///< measuring tip points in the world now
   std::array<Transform, kMaxRobots> X_WF;          ///< flange frames in the world now (physics:
                                                    ///< every effect included)
+  std::array<Transform, kMaxRobots> X_FTip;        ///< the measuring tips in their flange
+                                                   ///< frames, as made (TwinSpec::tips)
   CameraSpec camera;                               ///< true intrinsics, distortion, hand-eye
   BoardSpec board;                                 ///< true board geometry and mount (both
                                                    ///< unused without camera and board)

@@ -96,6 +96,18 @@ if grep -qE "^(FAIL|SKIP) " "$work/good.txt"; then
   echo "FAILED: a check failed or was skipped on the fake adapter:"; cat "$work/good.txt"; fail=1
 fi
 
+# Without --allow-motion nothing is sent that could move a robot: the motion checks are
+# skipped, and so are the malformed MoveTo and MountTarget probes (a server that does not check
+# them might move); the rest pass.
+if ! "$bin" cell-check "grpc://$addr" >"$work/still.txt" 2>&1; then
+  echo "FAILED: cell-check without --allow-motion exited non-zero:"; cat "$work/still.txt"; fail=1
+fi
+if ! grep -qE "^PASS +malformed requests.*need --allow-motion" "$work/still.txt" ||
+   ! grep -qE "^SKIP " "$work/still.txt" || grep -qE "^FAIL " "$work/still.txt"; then
+  echo "FAILED: without --allow-motion, expected motion probes skipped:"; cat "$work/still.txt"
+  fail=1
+fi
+
 # Each broken fake: exit 1, exactly the expected checks fail.
 check_broken() {
   local variant=$1

@@ -139,6 +139,37 @@ TEST(CellServer, OneSessionAtATimeAndSilentSessionsEnd) {
   EXPECT_EQ(q.q_rad_size(), 6);
 }
 
+// A server remembers why its last 64 sessions ended, no more: a long-running server does not
+// grow with every session. An older id is refused all the same, as unknown.
+TEST(CellServer, RemembersOnlyTheLastSessionsItEnded) {
+  CellServer server(*Demo().twin, Demo().desc, Loopback());
+  auto stub = RawStub("127.0.0.1:" + std::to_string(server.BoundPort()), "");
+  std::vector<std::string> ids;
+  for (int i = 0; i < 70; ++i) {
+    grpc::StatusCode code;
+    ids.push_back(OpenSession(*stub, &code));
+    ASSERT_EQ(code, grpc::OK) << i;
+    pb::CloseSessionRequest close;
+    close.set_session_id(ids.back());
+    pb::CloseSessionResponse closed;
+    ASSERT_TRUE(stub->CloseSession(Context().get(), close, &closed).ok()) << i;
+  }
+  const auto refusal = [&](const std::string& id) {
+    pb::ReadEncodersRequest enc;
+    enc.set_session_id(id);
+    pb::ReadEncodersResponse q;
+    const grpc::Status s = stub->ReadEncoders(Context().get(), enc, &q);
+    EXPECT_EQ(s.error_code(), grpc::FAILED_PRECONDITION) << id;
+    return s.error_message();
+  };
+  EXPECT_NE(refusal(ids.back()).find("has ended"), std::string::npos);
+  EXPECT_NE(refusal(ids[70 - 64]).find("has ended"), std::string::npos);
+  EXPECT_NE(refusal(ids[70 - 65]).find("is not the session that holds the cell"),
+            std::string::npos);
+  EXPECT_NE(refusal(ids.front()).find("is not the session that holds the cell"),
+            std::string::npos);
+}
+
 // Stop during a move (the twin paced to wall time): the move answers MOVE_STATUS_STOPPED short
 // of its target, and the session stays open.
 TEST(CellServer, StopEndsTheMoveInProgress) {
@@ -210,8 +241,33 @@ TEST(CellServer, GrpcCellSeesWhatTheTwinAnswers) {
     EXPECT_NE(std::string(e.what()).find("--cell grpc://"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("FAILED_PRECONDITION"), std::string::npos) << e.what();
   }
-  // No truth offered by this server.
+  // No truth offered by this server, nor a simulated operator.
   EXPECT_THROW(cell.Truth(), InputError);
+  EXPECT_FALSE(cell.SetOperatorAlignmentError(0.0005));
+}
+
+// The bench channel's SetOperatorError reaches the served twin's operator with the value sent,
+// bit for bit; a value outside 0 to 10 mm, or not finite, is refused with a status and sets
+// nothing.
+TEST(CellServer, SimulatedOperatorIsSetOverTheBenchChannel) {
+  ServerOptions o = Loopback();
+  std::vector<double> set;
+  o.set_operator_error = [&set](double sigma_m) { set.push_back(sigma_m); };
+  CellServer server(*Demo().twin, Demo().desc, o);
+  const std::string address = "127.0.0.1:" + std::to_string(server.BoundPort());
+  remote::GrpcCell cell(address, {}, "--cell grpc://" + address);
+  EXPECT_TRUE(cell.SetOperatorAlignmentError(0.0005));
+  EXPECT_TRUE(cell.SetOperatorAlignmentError(0.0));
+  for (const double bad : {0.02, -1e-6, std::numeric_limits<double>::quiet_NaN(),
+                           std::numeric_limits<double>::infinity()}) {
+    try {
+      cell.SetOperatorAlignmentError(bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("INVALID_ARGUMENT"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(set, (std::vector<double>{0.0005, 0.0}));
 }
 
 // 1,000 requests drawn from a seeded generator, every one malformed or out of range: each is

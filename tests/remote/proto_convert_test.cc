@@ -118,6 +118,7 @@ TEST(ProtoConvert, TheTruthComesBackBitForBit) {
     t.length_scale[r] = 1 + u(rng) * 1e-6;
     t.X_WB[r] = random_transform();
     t.X_WF[r] = random_transform();
+    t.X_FTip[r] = random_transform();
     t.q_link[r] = JointVector::Random(m.num_joints());
     t.q_motor[r] = JointVector::Random(m.num_joints());
     t.p_WTip[r] = Vector3(u(rng), u(rng), u(rng));
@@ -165,6 +166,7 @@ TEST(ProtoConvert, TheTruthComesBackBitForBit) {
     }
     EXPECT_EQ(t.length_scale[r], b.length_scale[r]);
     EXPECT_TRUE(same(t.X_WB[r], b.X_WB[r]) && same(t.X_WF[r], b.X_WF[r]));
+    EXPECT_TRUE(same(t.X_FTip[r], b.X_FTip[r]));
     EXPECT_EQ(t.q_link[r], b.q_link[r]);
     EXPECT_EQ(t.q_motor[r], b.q_motor[r]);
     EXPECT_EQ(t.p_WTip[r], b.p_WTip[r]);

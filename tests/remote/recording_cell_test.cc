@@ -282,3 +282,75 @@ TEST(RecordingCell, RefusesAFolderThatExists) {
 
 }  // namespace
 }  // namespace twin
+
+namespace twin {
+namespace {
+
+// An exchange's image_file names a file of the recording's images/ folder: a path out of it (a
+// tampered or hostile recording) is refused naming the line, and never read.
+TEST(RecordingFile, ImageFileOutsideTheImagesFolderIsRefused) {
+  const auto line = [](const std::string& image_file) {
+    return R"({"seq":1,"method":"GrabImage","request":{},"response":{"width_px":2,"image_file":")" +
+           image_file + R"("}})";
+  };
+  EXPECT_EQ(ParseRecordedExchangeLine(line("images/000001.png"), "x:1").image_file,
+            "images/000001.png");
+  for (const char* bad : {"../secret.png", "/etc/passwd", "images/../../x.png", "images/",
+                          "images/..", "images/a/b.png", "other/000001.png", "images\\\\..\\\\x"}) {
+    try {
+      ParseRecordedExchangeLine(line(bad), "x:1");
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("images/ folder"), std::string::npos) << e.what();
+      EXPECT_EQ(e.where(), "x:1");
+    }
+  }
+}
+
+// The simulated operator's setting is recorded when the cell has one, and replayed bit for bit;
+// a cell without one (a real cell's operator is a person) records nothing, and the replay
+// answers false as the live cell did.
+// A FakeCell with a simulated operator: it keeps the values set.
+class FakeOperatorCell : public FakeCell {
+ public:
+  bool SetOperatorAlignmentError(double sigma_m) override {
+    set.push_back(sigma_m);
+    return true;
+  }
+  std::vector<double> set;
+};
+
+TEST(RecordingCell, OperatorErrorIsRecordedOnlyWhereTheCellSimulatesOne) {
+  const fs::path base = TempDir("operator");
+  {
+    auto inner = std::make_unique<FakeOperatorCell>();
+    FakeOperatorCell& fake = *inner;
+    RecordingCell rec(std::move(inner), (base / "S").string(), RecordingManifest());
+    EXPECT_TRUE(rec.SetOperatorAlignmentError(1.0 / 3.0 * 1e-3));
+    EXPECT_EQ(fake.set, std::vector<double>{1.0 / 3.0 * 1e-3});
+    rec.Finish();
+  }
+  {
+    ReplayCell replay((base / "S").string());
+    EXPECT_TRUE(replay.SetOperatorAlignmentError(1.0 / 3.0 * 1e-3));  // the same bits
+    replay.Finish();
+  }
+  {
+    ReplayCell replay((base / "S").string());
+    EXPECT_THROW(replay.SetOperatorAlignmentError(0.3e-3), InputError);  // another value
+  }
+  {
+    RecordingCell rec(std::make_unique<FakeCell>(), (base / "R").string(), RecordingManifest());
+    EXPECT_FALSE(rec.SetOperatorAlignmentError(0.0005));  // FakeCell: no simulated operator
+    rec.ReadEncoders(0);
+    rec.Finish();
+  }
+  ReplayCell replay((base / "R").string());
+  EXPECT_FALSE(replay.SetOperatorAlignmentError(0.0005));
+  replay.ReadEncoders(0);
+  replay.Finish();
+  fs::remove_all(base);
+}
+
+}  // namespace
+}  // namespace twin

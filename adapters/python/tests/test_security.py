@@ -89,6 +89,10 @@ class SecurityTest(unittest.TestCase):
             self.assertEqual(run.returncode, 2, args)
             self.assertIn("refusing to listen on 0.0.0.0:0", run.stderr)
             self.assertEqual(run.stdout, "")
+        # An abstract unix socket has no file permissions: any local user reaches it.
+        run = self.run_server("--listen", "unix-abstract:twinbench-test-%d" % os.getpid())
+        self.assertEqual(run.returncode, 2)
+        self.assertIn("refusing to listen on unix-abstract:", run.stderr)
         # Client certificates need TLS, on loopback too; half a key pair is refused.
         run = self.run_server("--listen", "127.0.0.1:0", "--client-ca", self.certs["ca.crt"])
         self.assertEqual(run.returncode, 2)

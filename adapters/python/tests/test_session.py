@@ -71,6 +71,17 @@ class SessionTest(unittest.TestCase):
         code, _ = code_of(self.stub.Heartbeat, pb.HeartbeatRequest(session_id=answer.session_id))
         self.assertEqual(code, FAILED_PRECONDITION)
 
+    def test_a_clients_name_is_kept_to_200_characters(self):
+        answer = self.stub.OpenSession(pb.OpenSessionRequest(client="n" * 5000))
+        try:
+            with self.assertRaises(grpc.RpcError) as refused:
+                self.stub.OpenSession(pb.OpenSessionRequest(client="second"))
+            message = refused.exception.details()
+            self.assertIn("n" * 200, message)  # the holder is named ...
+            self.assertNotIn("n" * 201, message)  # ... by its first 200 characters
+        finally:
+            self.stub.CloseSession(pb.CloseSessionRequest(session_id=answer.session_id))
+
     def test_heartbeats_keep_a_session_and_silence_ends_it(self):
         sid = self.stub.OpenSession(pb.OpenSessionRequest(client="silent")).session_id
         # Heartbeats for twice the timeout keep it alive...
@@ -132,6 +143,8 @@ class SessionTest(unittest.TestCase):
             cell.stop()
             mover.join(5)
             self.assertFalse(mover.is_alive())
+            # The fake polls should_stop every 10 ms; 0.5 s leaves room for a loaded CI machine
+            # and is still a quarter of the move's remaining 1.6 s or more.
             self.assertLess(time.monotonic() - t_stop, 0.5)
             self.assertEqual(results[0].status, "STOPPED")
             q1 = cell.read_encoders(0)
@@ -140,6 +153,34 @@ class SessionTest(unittest.TestCase):
             self.assertGreater(abs(q1[0] - target[0]), 1.0)
             # The session stays open, and the next move runs.
             self.assertEqual(cell.move_to(0, start).status, "SETTLED")
+
+    def test_a_client_gone_mid_move_ends_its_session_at_once(self):
+        # A 5 s heartbeat timeout, so that "at once" (within 1 s of the call's end) cannot be
+        # the watchdog's doing. The move's deadline passes 0.3 s into a move of 2 s or more.
+        cell = FakeCell(heartbeat_s=5.0)
+        channel, s = stub(cell.address)
+        try:
+            sid = s.OpenSession(pb.OpenSessionRequest(client=self.id())).session_id
+            start = list(s.ReadEncoders(pb.ReadEncodersRequest(session_id=sid, robot=0)).q_rad)
+            target = list(start)
+            target[0] = 2.0 if start[0] < 0 else -2.0
+            code, _ = code_of(s.MoveTo, pb.MoveToRequest(session_id=sid, robot=0,
+                                                         q_target_rad=target), timeout=0.3)
+            self.assertEqual(code, grpc.StatusCode.DEADLINE_EXCEEDED)
+            t_end = time.monotonic()
+
+            def ended():
+                code, _ = code_of(s.Heartbeat, pb.HeartbeatRequest(session_id=sid))
+                return code == FAILED_PRECONDITION
+
+            self.assertIsNotNone(wait_for(ended, 1.0), "the session outlived its client's move")
+            self.assertLess(time.monotonic() - t_end, 1.0)
+            # And a new session opens at once.
+            code, _ = code_of(s.OpenSession, pb.OpenSessionRequest(client="next"))
+            self.assertEqual(code, grpc.StatusCode.OK)
+        finally:
+            channel.close()
+            cell.close()
 
     def test_full_image_is_the_synthetic_frame(self):
         with self.remote() as cell:

@@ -11,8 +11,8 @@ gets it right:
   counts (Heartbeat included), and a call still in flight (a long MoveTo) keeps it alive while
   its client is connected. Ending calls driver.stop(), makes a move in flight return STOPPED,
   and every later call naming the old session is FAILED_PRECONDITION.
-- A MoveTo whose call ends early (the client disconnected or was killed, or its deadline
-  passed) stops its motion at once; the silence then counts from that moment.
+- A motion call that ends early (the client disconnected or was killed, or its deadline
+  passed) stops its motion and ends its session at once.
 - Malformed requests are INVALID_ARGUMENT (robot index the cell lacks, wrong vector length,
   NaN or infinity, a region of zero or negative width or height, a BracketTarget that is
   UNSPECIFIED or a number the proto does not name); targets outside the joint limits are
@@ -253,9 +253,10 @@ class CellServer:
             if self._session is not None:
                 raise _Refusal(grpc.StatusCode.FAILED_PRECONDITION,
                                "the cell is held by another session (of %r)" % self._session.client)
-            s = _Session(secrets.token_hex(16), request.client)
+            # The client's name as the C++ server keeps it: at most 200 characters.
+            s = _Session(secrets.token_hex(16), request.client[:200])
             self._session = s
-        log.info("session opened by %r (peer %s)", request.client, context.peer())
+        log.info("session opened by %r (peer %s)", s.client, context.peer())
         return self.pb.OpenSessionResponse(session_id=s.id,
                                            heartbeat_timeout_s=self.heartbeat_timeout_s)
 
@@ -289,13 +290,19 @@ class CellServer:
         def should_stop():
             return s.ended or s.stop_count != stops or not context.is_active()
 
-        if not self._motion(should_stop):
-            return self.pb.MoveResult(status=MoveStatus.STOPPED,
-                                      reason="stopped before the motion started")
         try:
-            return self._move_result(action(should_stop))
+            if not self._motion(should_stop):
+                return self.pb.MoveResult(status=MoveStatus.STOPPED,
+                                          reason="stopped before the motion started")
+            try:
+                return self._move_result(action(should_stop))
+            finally:
+                self._motion_lock.release()
         finally:
-            self._motion_lock.release()
+            # A client gone during its motion call (disconnected, killed, or past its deadline)
+            # ends its session at once, as the C++ server does: no later call may use it.
+            if not context.is_active():
+                self._end(s, "its client went away during a motion call", True)
 
     @_rpc
     def MoveTo(self, request, context):
@@ -495,8 +502,12 @@ class TokenInterceptor(grpc.ServerInterceptor):
 
 
 def is_loopback(listen):
-    """True for 127.0.0.0/8, ::1, localhost (and unix sockets, guarded by file permissions)."""
-    if listen.startswith(("unix:", "unix-abstract:")):
+    """True for 127.0.0.0/8, ::1, localhost, and unix sockets in the file system (guarded by
+    their file permissions). An abstract unix socket has no permissions: any local user can
+    connect, so it is not loopback here."""
+    if listen.startswith("unix-abstract:"):
+        return False
+    if listen.startswith("unix:"):
         return True
     host = listen.rsplit(":", 1)[0] if ":" in listen else listen
     if host.startswith("ipv4:") or host.startswith("ipv6:"):
