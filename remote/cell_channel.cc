@@ -6,7 +6,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "calib/common/errors.h"
-#include "remote/cell_server.h"  // IsLoopbackAddress
+#include "remote/cell_server.h"  // IsLoopbackAddress, TokenOfText
 
 namespace twin::remote {
 
@@ -18,15 +18,6 @@ std::string ReadFile(const std::string& path, const std::string& where, const st
   std::ostringstream os;
   os << in.rdbuf();
   return os.str();
-}
-
-std::string FirstLineTrimmed(const std::string& text) {
-  std::string line = text.substr(0, text.find('\n'));
-  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
-  while (!line.empty() && blank(line.back())) line.pop_back();
-  std::size_t start = 0;
-  while (start < line.size() && blank(line[start])) ++start;
-  return line.substr(start);
 }
 
 const char* CodeName(grpc::StatusCode code) {
@@ -83,7 +74,7 @@ CellChannel OpenCellChannel(const std::string& host_port, const GrpcCellCredenti
     if (!channel_credentials_tls && !IsLoopbackAddress(host_port)) {
       throw InputError(where, "a token is sent only over TLS beyond loopback: give --cell-ca");
     }
-    const std::string token = FirstLineTrimmed(
+    const std::string token = TokenOfText(
         ReadFile(credentials.token_file, where, "token file (--cell-token-file)"));
     if (token.empty()) throw InputError(where, "the token file holds no token on its first line");
     out.authorization = "Bearer " + token;

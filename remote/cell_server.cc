@@ -50,17 +50,11 @@ std::string ReadFileOrThrow(const std::string& path, const std::string& option) 
   return os.str();
 }
 
-// The first line of a token file, without surrounding blanks.
+// The token of a token file.
 std::string ReadToken(const std::string& path, const std::string& option) {
-  const std::string text = ReadFileOrThrow(path, option);
-  std::string line = text.substr(0, text.find('\n'));
-  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
-  while (!line.empty() && blank(line.back())) line.pop_back();
-  std::size_t start = 0;
-  while (start < line.size() && blank(line[start])) ++start;
-  line = line.substr(start);
-  if (line.empty()) throw InputError(option, "'" + path + "' holds no token on its first line");
-  return line;
+  const std::string token = TokenOfText(ReadFileOrThrow(path, option));
+  if (token.empty()) throw InputError(option, "'" + path + "' holds no token on its first line");
+  return token;
 }
 
 // Equal strings, in a time that does not depend on where they differ.
@@ -667,6 +661,15 @@ std::shared_ptr<grpc::ServerCredentials> ServerCredentialsFor(const ServerOption
 }
 
 }  // namespace
+
+std::string TokenOfText(const std::string& text) {
+  std::string line = text.substr(0, text.find('\n'));
+  const auto blank = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
+  while (!line.empty() && blank(line.back())) line.pop_back();
+  std::size_t start = 0;
+  while (start < line.size() && blank(line[start])) ++start;
+  return line.substr(start);
+}
 
 CellServer::CellServer(Cell& cell, CellDescription description, ServerOptions options)
     : impl_(std::make_unique<Impl>(cell, std::move(description), std::move(options))) {

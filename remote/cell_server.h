@@ -66,6 +66,10 @@ class CellServer {
   std::unique_ptr<Impl> impl_;
 };
 
+/// The bearer token of a token file's text (`--token-file`, `--cell-token-file`): its first
+/// line without surrounding blanks; empty when there is none.
+std::string TokenOfText(const std::string& text);
+
 /// True for addresses that stay on this machine: 127.0.0.0/8, [::1], localhost (any port).
 bool IsLoopbackAddress(const std::string& host_port);
 

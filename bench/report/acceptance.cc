@@ -5,7 +5,9 @@
 #include <iostream>
 #include <algorithm>
 #include <cctype>
+#include <set>
 #include <sstream>
+#include <string>
 
 #include "bench/io/model_loader.h"
 #include "bench/io/output_files.h"
@@ -186,12 +188,29 @@ Acceptance ParseAcceptance(const Scenario& sc) {
 
 Acceptance WithoutTruthCriteria(const Acceptance& acceptance, bool quiet) {
   Acceptance kept;
-  // The figures a report without truth has as null: those against the truth ("truth*", a
-  // parameter's or a combination's "true" value, the count within 3 sigma of the truth) and
-  // the twin's tracker noise.
+  // The figures a report without truth has as null: those against the truth (a key "truth*"
+  // anywhere in the path, a "true" value, the count within 3 sigma of the truth, the
+  // intrinsics' error_px, the identifiable combinations' rms_error and max_error, a base
+  // frame's errors e_tran_mm and e_rot_deg (eq. 33-34) and their means, the coupled motion's
+  // tip-to-tip deviations, the pendant tips' errors) and the twin's tracker noise.
+  static const std::set<std::string> kAgainstTruth = {
+      "e_tran_mm",    "e_rot_deg",        "mean_e_tran_mm",   "mean_e_rot_deg",
+      "deviation_mm", "max_deviation_mm", "pendant_tip_error"};
   const auto against_truth = [](const std::string& f) {
-    return f.rfind("truth", 0) == 0 || f.find(".true") != std::string::npos ||
-           f.find("within_3_sigma") != std::string::npos || f == "tracker.sigma_mm";
+    const std::vector<std::string> parts = SplitPath(f);
+    for (std::size_t i = 0; i < parts.size(); ++i) {
+      const std::string& p = parts[i];
+      const std::string parent = i > 0 ? parts[i - 1] : "";
+      if (p.rfind("truth", 0) == 0 || p == "true" || kAgainstTruth.count(p) > 0 ||
+          p.find("within_3_sigma") != std::string::npos) {
+        return true;
+      }
+      if (parent == "intrinsics" && p == "error_px") return true;
+      if (parent == "identifiable_combinations" && (p == "rms_error" || p == "max_error")) {
+        return true;
+      }
+    }
+    return f == "tracker.sigma_mm";
   };
   for (const AcceptanceCriterion& c : acceptance.criteria) {
     if (against_truth(c.figure)) {

@@ -350,7 +350,7 @@ json RobotReportJson(const RobotCalibration& rc, const RobotStageResult& s,
   }
   r["split"] = SplitJson(rc);
   r["misaligned_error_mm"] = MisalignedErrorJson(rc);
-  r["truth_position_error_mm"] = Gauges(s.score);
+  if (stage.truth_available) r["truth_position_error_mm"] = Gauges(s.score);
   if (s.covered_region) {
     r["truth_position_error_mm_covered_region"] = CoveredRegionJson(*s.covered_region);
   }
@@ -400,6 +400,11 @@ json CalibrationStageJson(const Scenario& scenario, const CalibrationStageResult
         RobotReportJson(stage.procedure.robots[i], stage.robots[i], stage);
   }
   report["robots"] = robots;
+  if (!stage.truth_available) {
+    report["truth"] = {{"available", false},
+                       {"reason", "the cell offers no truth (a real cell, or serve-cell "
+                                  "--no-truth): the estimates alone, every true value null"}};
+  }
   report["timing_s"] = TimingJson(stage.timing);
   return report;
 }

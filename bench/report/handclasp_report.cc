@@ -100,6 +100,7 @@ void AddEstimates(const HandclaspStageResult& r, json* rep) {
       Scored(r.X_B1B2_general, r.general.kinematic, cal.rms_residual_general_m);
   (*rep)["constrained"] =
       Scored(r.X_B1B2_constrained, r.constrained.kinematic, cal.rms_residual_constrained_m);
+  if (!r.truth_available) return;
   (*rep)["physical_truth"]["general"] = ErrorsJson(r.general.physical);
   (*rep)["physical_truth"]["constrained"] = ErrorsJson(r.constrained.physical);
 }
@@ -115,7 +116,9 @@ void AddIdentifiedTips(const HandclaspStageResult& r, json* rep) {
     t["rms_residual_before_mm"] = 1e3 * tips.rms_residual_before_m;
     t["dt_flange_mm"] = {Xyz(tips.dt1_F1), Xyz(tips.dt2_F2)};
     t["sigma_dt_flange_mm"] = {Xyz(tips.sigma_dt1_F1), Xyz(tips.sigma_dt2_F2)};
-    (*rep)["physical_truth"]["tips_identified"] = ErrorsJson(r.tips.physical);
+    if (r.truth_available) {
+      (*rep)["physical_truth"]["tips_identified"] = ErrorsJson(r.tips.physical);
+    }
   } else {
     t["reason"] = tips.reason;
   }
@@ -123,7 +126,7 @@ void AddIdentifiedTips(const HandclaspStageResult& r, json* rep) {
 
 // The stage from scoring on: frames, contacts, the estimates or why there are none.
 void AddScoredStage(const HandclaspStageResult& r, json* rep) {
-  AddScoringFrames(r.frames, rep);
+  if (r.truth_available) AddScoringFrames(r.frames, rep);
   AddContacts(r.procedure, rep);
   if (!r.ok()) {
     (*rep)["status"] = "failed";
@@ -179,6 +182,10 @@ json CoupledMotionJson(const CoupledMotionResult& check) {
   if (!check.ok) {
     out["status"] = "failed";
     out["reason"] = check.reason;
+  } else if (!check.measured) {
+    out["status"] = "not_measured";
+    out["reason"] = "the cell offers no truth: robot 2 followed, and nothing measured the tips' "
+                    "distance";
   } else {
     out["status"] = "ok";
     out["deviation_mm"] = check.deviation_mm;
@@ -210,6 +217,12 @@ std::string HandclaspReportText(const Scenario& scenario, const HandclaspBatchRe
   // trial 0: the scenario's own seed
   report["base_frame"] = batch.done.empty() ? json() : HandclaspStageJson(batch.done.front());
   if (batch.trials > 1) report["base_frame"]["batch"] = BatchSummary(batch);
+  if (!batch.done.empty() && !batch.done.front().truth_available) {
+    report["truth"] = {{"available", false},
+                       {"reason", "the cell offers no truth (a real cell, or serve-cell "
+                                  "--no-truth): the estimates alone, their errors null, the "
+                                  "coupled motion not measured"}};
+  }
   *verdict = EvaluateAcceptance(acceptance, &report);
   return report.dump(2) + "\n";
 }

@@ -18,8 +18,10 @@ json StageSummary(const HandclaspStageResult& r, const std::string& kinematics) 
     j["estimate"] = r.delivered_name();
     j["e_tran_mm"] = d.kinematic.e_tran_mm;
     j["e_rot_deg"] = d.kinematic.e_rot_deg;
-    j["physical_truth"] = {{"e_tran_mm", d.physical.e_tran_mm},
-                           {"e_rot_deg", d.physical.e_rot_deg}};
+    if (r.truth_available) {
+      j["physical_truth"] = {{"e_tran_mm", d.physical.e_tran_mm},
+                             {"e_rot_deg", d.physical.e_rot_deg}};
+    }
   }
   j["stage"] = HandclaspStageJson(r);
   return j;
@@ -55,6 +57,12 @@ json WorkflowReportJson(const Scenario& scenario, const WorkflowResult& w) {
   report["base_frame"]["installation"] = ToString(w.installation);
   report["base_frame"]["workflow"] = WorkflowJson(w);
   if (report.contains("timing_s")) report["timing_s"]["workflow_total"] = w.total_s;
+  if (w.stage_a && !w.stage_a->truth_available) {
+    report["truth"] = {{"available", false},
+                       {"reason", "the cell offers no truth (a real cell, or serve-cell "
+                                  "--no-truth): the estimates alone, their errors null, the "
+                                  "coupled motion not measured"}};
+  }
   return report;
 }
 

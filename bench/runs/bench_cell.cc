@@ -82,26 +82,13 @@ void RequireReadable(const std::string& path, const std::string& flag) {
   if (!in) throw InputError(flag, "cannot read '" + path + "'");
 }
 
-// A cell without truth, for a run that needs it (options.needs_truth), is bad input.
-void RequireTruth(BenchCell& cell, const CellOptions& options) {
-  if (options.needs_truth.empty() || cell.HasTruth()) return;
-  throw InputError(options.replay_dir.empty() ? "--cell " + options.address : options.replay_dir,
-                   "the cell offers no truth, and " + options.needs_truth +
-                       " (serve the twin without --no-truth; the tracker procedure runs on a "
-                       "cell without truth)");
-}
-
 }  // namespace
 
 std::unique_ptr<BenchCell> OpenBenchCell(const TwinSpec& twin, const std::string& where,
                                          const CellOptions& options) {
-  std::unique_ptr<BenchCell> cell;
   // A recording played back: no cell at all (a replay records nothing).
-  if (!options.replay_dir.empty()) {
-    cell = std::make_unique<ReplayCell>(options.replay_dir);
-    RequireTruth(*cell, options);
-    return cell;
-  }
+  if (!options.replay_dir.empty()) return std::make_unique<ReplayCell>(options.replay_dir);
+  std::unique_ptr<BenchCell> cell;
   if (options.address.empty()) {
     for (const auto& [value, flag] :
          {std::pair{&options.tls_ca_file, "--cell-ca"},
@@ -128,7 +115,6 @@ std::unique_ptr<BenchCell> OpenBenchCell(const TwinSpec& twin, const std::string
     credentials.token_file = options.token_file;
     cell = std::make_unique<RemoteBenchCell>(host_port, credentials, "--cell " + options.address);
   }
-  RequireTruth(*cell, options);
   if (!options.record_dir.empty()) {
     cell = std::make_unique<RecordingCell>(std::move(cell), options.record_dir,
                                            options.record_info);

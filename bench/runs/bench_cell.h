@@ -108,17 +108,12 @@ struct CellOptions {
   /// A recording to play back (`twinbench replay`; bench/runs/replay_cell.h) instead of a
   /// cell: every call must match the next recorded exchange.
   std::string replay_dir;
-  /// Non-empty: the run has no report without the twin's truth; a cell that offers none (a
-  /// real cell, `serve-cell --no-truth`) is refused with this reason (InputError naming
-  /// --cell), before anything moves and before a recording is begun.
-  std::string needs_truth;
 };
 
 /// The cell a run drives: the scenario's twin here, the cell at options.address, or the
 /// recording options.replay_dir played back; recorded into options.record_dir when one is
 /// given. Throws InputError naming `where` for a bad
-/// address, an unreachable cell, a record folder that exists, or a cell without truth when
-/// options.needs_truth says why the run needs it.
+/// address, an unreachable cell or a record folder that exists.
 std::unique_ptr<BenchCell> OpenBenchCell(const TwinSpec& twin, const std::string& where,
                                          const CellOptions& options);
 

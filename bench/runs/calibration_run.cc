@@ -296,7 +296,7 @@ std::optional<CoveredRegionScore> ScoreCoveredRegion(const RobotCalibration& rc,
 struct RobotScoringInputs {
   const Scenario& sc;
   const CalibrationConfig& config;
-  const TwinTruth& truth;           ///< read after the procedure ended
+  const TwinTruth* truth;           ///< read after the procedure ended; null: a cell without
   const PinholeIntrinsics& ei;      ///< estimated intrinsics (the servo images' annotation)
   const std::map<int, RobotDiagnosisResult>& diagnoses;  ///< model discovery per robot
   const fs::path& staging;          ///< where the servo images go
@@ -310,23 +310,28 @@ RobotStageResult ScoreRobotStage(const RobotCalibration& rc, const RobotScoringI
   s.name = in.sc.robot_names[rc.robot];
   s.camera_robot = in.sc.robot_names[rc.camera_robot];
   const CalibrationConfig& config = in.config;
-  const KinematicModel true_model =
-      BoardRobotModel(in.truth.models[rc.robot], in.truth.board.X_FT);
   s.observability = rc.refit                    ? rc.refit_result.observability
                     : rc.method == "linearized" ? rc.linearized.observability
                                                 : rc.nonlinear.observability;
-  s.score = ScoreRobot(rc.nominal, rc.identified, true_model, s.observability,
-                       config.scoring_configurations, config.scoring_seed);
   s.servo = ServoFiguresOf(rc);
   s.images = WriteServoImages(rc, s.name, in.ei, in.staging);
+  const auto d = in.diagnoses.find(rc.robot);
+  if (d != in.diagnoses.end()) s.diagnosis = d->second;
+  if (!in.truth) {  // a cell without truth: the estimates alone
+    s.score = EstimatesWithoutTruth(rc.nominal, rc.identified, s.observability,
+                                    config.scoring_configurations, config.scoring_seed);
+    return s;
+  }
+  const KinematicModel true_model =
+      BoardRobotModel(in.truth->models[rc.robot], in.truth->board.X_FT);
+  s.score = ScoreRobot(rc.nominal, rc.identified, true_model, s.observability,
+                       config.scoring_configurations, config.scoring_seed);
   s.covered_region = ScoreCoveredRegion(rc, true_model, config);
   if (rc.refit) {
     // The calibration-set model too, so that the refit's gain is visible.
     s.calibration_set_model = ScoreRobot(rc.nominal, rc.holdout, true_model, s.observability,
                                          config.scoring_configurations, config.scoring_seed);
   }
-  const auto d = in.diagnoses.find(rc.robot);
-  if (d != in.diagnoses.end()) s.diagnosis = d->second;
   return s;
 }
 
@@ -390,12 +395,19 @@ CalibrationTiming StageTiming(Clock::time_point t_start, const OpticalAxisResult
 
 // What the stage's report shows of the setting: the twin camera's true intrinsics, the plate
 // Zhang's method saw (the intrinsics target when the cell was told one), planner and servo.
-void RecordSetting(const TwinTruth& truth, const CalibrationConfig& config,
+void RecordSetting(const TwinTruth* truth, const CalibrationConfig& config,
                    CalibrationStageResult* stage) {
-  const Intrinsics& ti = truth.camera.intrinsics;
-  const Distortion& td = truth.camera.distortion;
-  stage->true_intrinsics = PinholeIntrinsics{ti.fx, ti.fy, ti.cx, ti.cy};
-  stage->true_distortion = DistortionCoefficients{td.k1, td.k2, td.p1, td.p2, td.k3};
+  stage->truth_available = truth != nullptr;
+  if (truth) {
+    const Intrinsics& ti = truth->camera.intrinsics;
+    const Distortion& td = truth->camera.distortion;
+    stage->true_intrinsics = PinholeIntrinsics{ti.fx, ti.fy, ti.cx, ti.cy};
+    stage->true_distortion = DistortionCoefficients{td.k1, td.k2, td.p1, td.p2, td.k3};
+  } else {  // a cell without truth: NaN, written as null
+    constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+    stage->true_intrinsics = PinholeIntrinsics{kNone, kNone, kNone, kNone};
+    stage->true_distortion = DistortionCoefficients{kNone, kNone, kNone, kNone, kNone};
+  }
   const CellKnowledge& k = config.knowledge;
   stage->plate = k.intrinsics_target ? *k.intrinsics_target : k.board;
   stage->dedicated_target = k.intrinsics_target.has_value();
@@ -427,13 +439,15 @@ CalibrationStageResult RunCalibrationStage(BenchCell& cell, const Scenario& sc,
       DiagnoseRobots(sc, config, result, quiet, t_start);
   const double diagnosis_s = SecondsSince(t_diagnosis);
 
-  // Scoring: estimates meet truth only here, after the procedure ended.
+  // Scoring: estimates meet truth only here, after the procedure ended (a cell without truth,
+  // a real one: the estimates alone).
   const auto t_score = Clock::now();
-  const TwinTruth truth = cell.Truth();
-  RecordSetting(truth, config, &stage);
+  const std::optional<TwinTruth> truth =
+      cell.HasTruth() ? std::optional<TwinTruth>(cell.Truth()) : std::nullopt;
+  RecordSetting(truth ? &*truth : nullptr, config, &stage);
   // Each robot's scores, servo images and identified model; then measurements.csv.
-  const RobotScoringInputs inputs{sc,        config,  truth, result.intrinsics.intrinsics,
-                                  diagnosis, staging};
+  const RobotScoringInputs inputs{sc,        config,  truth ? &*truth : nullptr,
+                                  result.intrinsics.intrinsics, diagnosis, staging};
   ScoredRobots robots = ScoreRobots(result, inputs);
   WriteText(staging / "measurements.csv", robots.csv);
   const double scoring = SecondsSince(t_score);
@@ -593,6 +607,10 @@ void ScorePhysicalTruth(BenchCell& cell, const Scenario& sc, const CalibrationCo
     const RobotCalibration& rc = stage->procedure.robots[i];
     RobotStageResult& s = stage->robots[i];
     if (!s.diagnosis.result) continue;
+    if (!stage->truth_available) {
+      s.physical_skipped = "the cell offers no truth";
+      continue;
+    }
     if (cell.Truth().board.robot != rc.robot) {
       s.physical_skipped = "the board is on the other robot at the end of the procedure";
       continue;
@@ -632,8 +650,11 @@ AcceptanceVerdict RunAndPublishReport(BenchCell& cell, const OpticalAxisRun& run
                                  run.t_start);
     ScorePhysicalTruth(cell, run.sc, run.config, stage);
     cell.Finish();  // the last call: a recording is complete, a replay used up
-    const JudgedReport report =
-        CalibrationReport(run.sc, *stage, run.acceptance, run.options.images);
+    // Criteria on figures against the truth cannot be judged without it: left out, and said so.
+    const Acceptance judged = stage->truth_available
+                                  ? run.acceptance
+                                  : WithoutTruthCriteria(run.acceptance, run.options.quiet);
+    const JudgedReport report = CalibrationReport(run.sc, *stage, judged, run.options.images);
     verdict = report.verdict;
     WriteText(run.staging / "report.json", report.json);
     if (run.options.images) WriteText(run.staging / "report.html", report.html);
@@ -669,7 +690,11 @@ void PrintRobotErrors(const RobotCalibration& rc, const RobotStageResult& s) {
   const std::pair<const char*, PositionErrorStats GaugeErrors::*> gauges[] = {
       {"raw", &GaugeErrors::raw}, {"rigid", &GaugeErrors::rigid},
       {"similarity", &GaugeErrors::similarity}};
+  if (!std::isfinite(b.raw.rms)) {  // a cell without truth
+    std::printf("%-6s %-22s (the cell offers no truth)\n", name, "truth RMS");
+  }
   for (const auto& [gauge, g] : gauges) {
+    if (!std::isfinite((b.*g).rms)) break;
     std::printf("%-6s %-22s %10.4f %10.4f   (max %.4f -> %.4f)\n", name,
                 (std::string("truth RMS ") + gauge).c_str(), Mm((b.*g).rms), Mm((a.*g).rms),
                 Mm((b.*g).max), Mm((a.*g).max));
@@ -712,9 +737,13 @@ void PrintRobotDiagnosis(const RobotCalibration& rc, const RobotStageResult& s) 
                 Mm(ph.discovered.rigid.rms));
   }
   const int aligned = static_cast<int>(rc.aligned.size());
-  std::printf("%-6s scale estimated %.6f, true %.6f; servo %d aligned, %d failed, %.2f "
+  char scale_true[32] = "no truth";
+  if (std::isfinite(s.score.scale_true)) {
+    std::snprintf(scale_true, sizeof(scale_true), "%.6f", s.score.scale_true);
+  }
+  std::printf("%-6s scale estimated %.6f, true %s; servo %d aligned, %d failed, %.2f "
               "frames/pose\n",
-              name, s.score.scale_estimated, s.score.scale_true, aligned,
+              name, s.score.scale_estimated, scale_true, aligned,
               static_cast<int>(rc.failed.size()),
               aligned > 0 ? double(s.servo.frames) / aligned
                           : std::numeric_limits<double>::quiet_NaN());
@@ -803,11 +832,9 @@ int RunCalibrationScenario(const RunOptions& o) {
   ValidateOutputFolder(o.out_dir, "--out");
   if (!o.junit.empty()) ValidateJunitFile(o.junit, o.out_dir);
   InstallMujocoErrorHandlers();
-  // The optical-axis report is made against the twin's truth; a cell without it is refused
-  // before anything moves or is recorded (the tracker run reports without truth).
-  CellOptions cell_options = RunCellOptions(o, sc, text);
-  cell_options.needs_truth = "the optical-axis run has no report without it yet";
-  const std::unique_ptr<BenchCell> cell = OpenBenchCell(sc.twin, sc.path, cell_options);
+  // On a cell without truth (a real one) the report has the estimates alone.
+  const std::unique_ptr<BenchCell> cell =
+      OpenBenchCell(sc.twin, sc.path, RunCellOptions(o, sc, text));
   const fs::path out(o.out_dir);
   const fs::path staging = CreateStagingDirectory(o.out_dir);
   // The calibration, scored and judged, written and published as out_dir.

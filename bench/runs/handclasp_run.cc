@@ -57,11 +57,12 @@ Transform TrueX_B1B2(const TwinTruth& truth) { return truth.X_WB[0].inverse() * 
 
 // The coupled-motion check (issue item 6, after the paper's cooperative motion): robot 1's tip
 // follows a short path by its pendant IK; robot 2 is commanded through the estimated X_B1B2 to
-// face it, by its pendant IK; the true tip-to-tip distance is measured after each pair of moves.
+// face it, by its pendant IK; the true tip-to-tip distance is measured after each pair of moves
+// when `measure` (a cell without truth makes the same moves, and nothing measures them).
 CoupledMotionResult CoupledMotion(BenchCell& cell,
                                   const std::array<KinematicModel, 2>& tip_models,
                                   const HandclaspContact& start,
-                                  const Transform& X_B1B2_estimate) {
+                                  const Transform& X_B1B2_estimate, bool measure) {
   CoupledMotionResult out;
   const auto fail = [&](const std::string& why) {
     out.reason = why;
@@ -102,14 +103,16 @@ CoupledMotionResult CoupledMotion(BenchCell& cell,
     q2 = r2.q;
     const MoveResult m2 = cell.MoveTo(1, q2);
     if (m2.status != MoveStatus::kSettled) return fail("robot 2 follow move: " + m2.reason);
+    if (!measure) continue;
     const TwinTruth truth = cell.Truth();  // scoring only
     const double d = 1e3 * (truth.p_WTip[0] - truth.p_WTip[1]).norm();
     deviations.push_back(d);
     worst = std::max(worst, d);
   }
   out.ok = true;
+  out.measured = measure;
   out.deviation_mm = deviations;
-  out.max_deviation_mm = worst;
+  out.max_deviation_mm = measure ? worst : std::numeric_limits<double>::quiet_NaN();
   return out;
 }
 
@@ -345,6 +348,7 @@ StageInputs PrepareStage(BenchCell& cell, const Scenario& scenario,
   if (stage_options.operator_error_m) config.operator_error_m = *stage_options.operator_error_m;
   if (!cell.SetOperatorAlignmentError(config.operator_error_m)) {
     progress << "handclasp: the cell's operator is a person: operator_error is not simulated\n";
+    config.operator_error_m = std::numeric_limits<double>::quiet_NaN();  // null in the report
   }
   // The pendants' tips are the told ones (by drawing), never the twin's true tips.
   for (int k = 0; k < 2; ++k) {
@@ -467,16 +471,21 @@ void ScoreIdentifiedTips(const TipRefinementResult& tips, const ScoringFrames& s
   out->X_B1B2_tips = tips.X_B1B2;
 }
 
-// The coupled-motion check with the delivered estimate, into out.
+// The coupled-motion check with the delivered estimate, into out; the deviations measured
+// against the truth when `measure`.
 void RunCoupledMotionCheck(BenchCell& cell, const StageInputs& in, const HandclaspResult& result,
-                           const ScoringFrames& s, HandclaspStageResult* out) {
+                           bool measure, HandclaspStageResult* out) {
   // With identified tips the controllers use them (the TCP a pendant would store).
+  const bool tips_ok = result.ok() && result.tips.ok;
   std::array<KinematicModel, 2> used = in.tip_models;
-  for (int k = 0; k < 2; ++k) used[k] = WithTipCorrection(in.tip_models[k], s.dt[k]);
+  if (tips_ok) {
+    used[0] = WithTipCorrection(in.tip_models[0], result.tips.dt1_F1);
+    used[1] = WithTipCorrection(in.tip_models[1], result.tips.dt2_F2);
+  }
   CoupledMotionResult check =
       CoupledMotion(cell, used, result.contacts.front(),
-                    s.tips_ok ? result.tips.X_B1B2 : result.calibration.X_B1B2_constrained);
-  check.estimate = s.tips_ok ? "tips_identified" : "constrained";
+                    tips_ok ? result.tips.X_B1B2 : result.calibration.X_B1B2_constrained, measure);
+  check.estimate = tips_ok ? "tips_identified" : "constrained";
   if (check.ok) out->coupled_motion_max_deviation_mm = check.max_deviation_mm;
   out->coupled_motion = std::move(check);
 }
@@ -506,6 +515,33 @@ void PrintStageSummary(BaseConstraint constraint, const HandclaspStageResult& ou
            << out.constrained.kinematic.e_rot_deg << " deg\n";
 }
 
+// A cell without truth (a real cell): the estimates alone, their errors NaN (null in the
+// report); the coupled-motion check makes its moves, as on the twin, and nothing measures the
+// tips' distance.
+HandclaspStageResult UnscoredStage(BenchCell& cell, const StageInputs& in,
+                                   std::ostream& progress, HandclaspStageResult out) {
+  out.truth_available = false;
+  const HandclaspResult& result = out.procedure;
+  if (!result.ok()) {
+    ReportProcedureFailure(result, progress, &out);
+    return out;
+  }
+  constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+  const ScoredBaseFrame unscored{true, {kNone, kNone}, {kNone, kNone}};
+  out.status = HandclaspStageStatus::kOk;
+  out.X_B1B2_general = result.calibration.X_B1B2_general;
+  out.X_B1B2_constrained = result.calibration.X_B1B2_constrained;
+  out.general = out.constrained = unscored;
+  if (in.options.identify_tips && result.tips.ok) {
+    out.tips = unscored;
+    out.X_B1B2_tips = result.tips.X_B1B2;
+  }
+  if (in.config.coupled_motion) RunCoupledMotionCheck(cell, in, result, false, &out);
+  progress << "handclasp: " << ToString(in.config.constraint)
+           << " estimated (the cell offers no truth to score against)\n";
+  return out;
+}
+
 }  // namespace
 
 HandclaspStageResult RunHandclaspStage(BenchCell& cell, const Scenario& scenario,
@@ -528,6 +564,7 @@ HandclaspStageResult RunHandclaspStage(BenchCell& cell, const Scenario& scenario
   out.procedure = RunProcedure(cell, in, teaching.taught, progress);
   const HandclaspResult& result = out.procedure;
   // --- the procedure has ended: scoring against the truth from here on ---
+  if (!cell.HasTruth()) return UnscoredStage(cell, in, progress, std::move(out));
   const ScoringFrames frames = ComputeScoringFrames(cell.Truth(), in, result);
   out.frames = ScoringFramesRecord(frames, in);
   if (!result.ok()) {
@@ -537,7 +574,7 @@ HandclaspStageResult RunHandclaspStage(BenchCell& cell, const Scenario& scenario
   // The general and constrained estimates (eq. 33-34).
   ScoreEstimates(result.calibration, frames, &out);
   if (stage_options.identify_tips) ScoreIdentifiedTips(result.tips, frames, &out);
-  if (in.config.coupled_motion) RunCoupledMotionCheck(cell, in, result, frames, &out);
+  if (in.config.coupled_motion) RunCoupledMotionCheck(cell, in, result, true, &out);
   PrintStageSummary(in.config.constraint, out, progress);
   return out;
 }
@@ -598,7 +635,7 @@ HandclaspBatchResult RunTrials(const Scenario& scenario, const HandclaspConfig& 
     const std::unique_ptr<BenchCell> cell = OpenBenchCell(spec, scenario.path, cell_options);
     HandclaspStageResult stage = RunHandclaspStage(*cell, scenario, nominal, progress);
     cell->Finish();  // the last call: a recording is complete, a replay used up
-    stage.seed = spec.seed;
+    if (stage.truth_available) stage.seed = spec.seed;  // a real cell has no seed
     if (!stage.ok()) {
       // A refused procedure is exit 2 with its reason (docs/reference/exit-codes-and-safety.md);
       // nothing is written.
@@ -640,16 +677,18 @@ int RunHandclasp(const RunOptions& o, std::ostream& progress) {
   // The scenario, its handclasp and acceptance sections and the output paths, all checked.
   std::string text;
   const HandclaspRunInputs in = LoadAndValidate(o, &text);
-  // The report scores every estimate against the twin's truth: a cell without it is refused
-  // before anything moves or is recorded.
-  CellOptions cell_options = RunCellOptions(o, in.scenario, text);
-  cell_options.needs_truth = "the handclasp run has no report without it yet";
   InstallMujocoErrorHandlers();
-  // Each trial's handclasp stage on its own twin (or the one trial on the cell named).
-  const HandclaspBatchResult batch = RunTrials(in.scenario, in.config, cell_options, progress);
-  // report.json with the acceptance criteria judged on it.
+  // Each trial's handclasp stage on its own twin (or the one trial on the cell named; on a cell
+  // without truth, a real one, the estimates alone).
+  const HandclaspBatchResult batch =
+      RunTrials(in.scenario, in.config, RunCellOptions(o, in.scenario, text), progress);
+  // report.json with the acceptance criteria judged on it; without truth, those on figures
+  // against it are left out, and said so.
+  const bool scored = batch.done.empty() || batch.done.front().truth_available;
   AcceptanceVerdict verdict;
-  const std::string report = HandclaspReportText(in.scenario, batch, in.acceptance, &verdict);
+  const std::string report = HandclaspReportText(
+      in.scenario, batch, scored ? in.acceptance : WithoutTruthCriteria(in.acceptance, false),
+      &verdict);
   PublishReport(report, out_dir);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

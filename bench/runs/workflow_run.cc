@@ -191,6 +191,11 @@ void PrintStageLine(const HandclaspStageResult& r, const char* label) {
     std::printf("%-34s failed\n", label);
     return;
   }
+  if (!r.truth_available) {
+    std::printf("%-34s estimated (%s; the cell offers no truth to score against)\n", label,
+                r.delivered_name());
+    return;
+  }
   const ScoredBaseFrame& d = r.delivered();
   std::printf("%-34s e_tran %8.3f mm  e_rot %7.4f deg  (%s; physical %.3f mm, %.4f deg)\n",
               label, d.kinematic.e_tran_mm, d.kinematic.e_rot_deg, r.delivered_name(),
@@ -233,8 +238,11 @@ AcceptanceVerdict RunWorkflow(const WorkflowContext& ctx, CalibrationConfig* con
   state.total_s = SecondsSince(ctx.t_start);
   // A refused stage ends the run here.
   ThrowIfRefused(ctx.sc, state);
-  // The report, judged by the acceptance criteria.
-  const JudgedReport report = WorkflowReport(ctx.sc, state, acceptance);
+  // The report, judged by the acceptance criteria; without truth, those on figures against it
+  // are left out, and said so.
+  const bool scored = state.stage_a->truth_available;
+  const JudgedReport report = WorkflowReport(
+      ctx.sc, state, scored ? acceptance : WithoutTruthCriteria(acceptance, ctx.quiet));
   // report.json and report.html, published with the stages' files.
   WriteWorkflowReport(ctx.staging, report);
   PublishDirectory(ctx.staging.string(), out.string());
@@ -251,12 +259,10 @@ int RunWorkflowScenario(const RunOptions& o) {
   WorkflowInputs in = LoadWorkflowInputs(o);
   const Scenario& sc = in.sc;
   InstallMujocoErrorHandlers();
-  // The report scores every stage against the twin's truth: a cell without it is refused before
-  // anything moves or is recorded. The twin here: one that does not settle at its start is bad
-  // input.
-  CellOptions cell_options = RunCellOptions(o, sc, in.text);
-  cell_options.needs_truth = "the dual-arm workflow has no report without it yet";
-  const std::unique_ptr<BenchCell> owned_cell = OpenBenchCell(sc.twin, sc.path, cell_options);
+  // The cell (the twin here: one that does not settle at its start is bad input); on a cell
+  // without truth, a real one, the report has the estimates alone.
+  const std::unique_ptr<BenchCell> owned_cell =
+      OpenBenchCell(sc.twin, sc.path, RunCellOptions(o, sc, in.text));
   BenchCell& cell = *owned_cell;
 
   const fs::path out(o.out_dir);

@@ -88,6 +88,9 @@ inline double DecreasePercent(double before, double after) {
 /// One optical-axis calibration stage, scored.
 struct CalibrationStageResult {
   OpticalAxisResult procedure;  ///< what calib delivered
+  /// False on a cell without truth (a real cell): every figure against truth is NaN (null in
+  /// the report), the covered region, calibration-set model and physical truth left out.
+  bool truth_available = true;
   /// robots[i] scores procedure.robots[i].
   std::vector<RobotStageResult> robots;
   PinholeIntrinsics true_intrinsics;  ///< the twin camera's truth

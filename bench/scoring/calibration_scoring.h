@@ -84,6 +84,13 @@ RobotScore ScoreRobot(const KinematicModel& nominal, const KinematicModel& ident
                       const KinematicModel& truth, const ObservabilityReport& observability,
                       int configurations, std::uint64_t seed);
 
+/// The estimates alone, for a cell without truth (a real cell): the parameters' and the
+/// identifiable combinations' estimates and the estimated scale as ScoreRobot gives them, and
+/// NaN for every figure against truth (the gauges, the true values, their differences).
+RobotScore EstimatesWithoutTruth(const KinematicModel& nominal, const KinematicModel& identified,
+                                 const ObservabilityReport& observability, int configurations,
+                                 std::uint64_t seed);
+
 /// Errors after the best rigid (with_scale false) or similarity transform mapping `model`
 /// points onto `truth` points (Umeyama), and raw; also returns the fitted scale.
 GaugeErrors CompareInGauges(const std::vector<Vector3>& model, const std::vector<Vector3>& truth,

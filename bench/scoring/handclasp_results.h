@@ -62,8 +62,9 @@ struct CoupledMotionResult {
   bool ok = false;
   std::string reason;                ///< why not ok
   std::string estimate;              ///< "tips_identified" or "constrained"
+  bool measured = true;              ///< false on a cell without truth: the moves alone
   std::vector<double> deviation_mm;  ///< true tip-to-tip distance after each step [mm]
-  double max_deviation_mm = 0.0;
+  double max_deviation_mm = 0.0;     ///< NaN when not measured
 };
 
 /// Estimates of one handclasp stage, typed, with the bench's scores.
@@ -73,7 +74,10 @@ struct HandclaspStageResult {
   /// kProcedureFailed the procedure's reason; empty when ok.
   std::string reason;
   HandclaspTeaching teaching;
-  HandclaspScoringFrames frames;  ///< unless kTeachingFailed
+  /// False on a cell without truth (a real cell): the estimates alone, their errors NaN, no
+  /// scoring frames; the coupled-motion check moves, and nothing measures the tips' distance.
+  bool truth_available = true;
+  HandclaspScoringFrames frames;  ///< unless kTeachingFailed or without truth
   HandclaspResult procedure;      ///< contacts, skipped, calibration, tips (unless teaching failed)
   bool tips_attempted = false;    ///< the stage asked for the tips (HandclaspStageOptions)
   ScoredBaseFrame general, constrained;  ///< eq. 3 and 12; the refined one

@@ -10,37 +10,11 @@
 #include <nlohmann/json.hpp>
 
 #include "../bench/cli_run.h"
+#include "report_timings.h"
 #include "serve_cell_process.h"
 
 namespace twin::testing {
 namespace {
-
-// Wall-clock keys, as bench/report/trial_record.cc tells them from figures: timing_s, time_s
-// (a stage's compute time) and *_time_s (planning's wait).
-bool IsWallClockKey(const std::string& key) {
-  return key == "timing_s" || key == "time_s" ||
-         (key.size() > 7 && key.compare(key.size() - 7, 7, "_time_s") == 0);
-}
-
-// report.json without its wall-clock keys, wherever they are: everything else is compared
-// exactly.
-nlohmann::json ReportWithoutTimes(const std::string& path) {
-  nlohmann::json j = nlohmann::json::parse(ReadText(path));
-  std::function<void(nlohmann::json&)> strip = [&](nlohmann::json& node) {
-    if (node.is_object()) {
-      std::vector<std::string> times;
-      for (auto& [key, value] : node.items()) {
-        if (IsWallClockKey(key)) times.push_back(key);
-      }
-      for (const std::string& key : times) node.erase(key);
-      for (auto& [key, value] : node.items()) strip(value);
-    } else if (node.is_array()) {
-      for (auto& value : node) strip(value);
-    }
-  };
-  strip(j);
-  return j;
-}
 
 // First differing path of two JSON values, for the failure message.
 std::string FirstDifference(const nlohmann::json& a, const nlohmann::json& b) {
@@ -78,10 +52,10 @@ void ExpectRemoteReportEqualsLocalAt(const std::string& path, double timeout_s,
       {"replay", dir / "recording", "--out", dir / "replayed", "--quiet"}, timeout_s);
   ASSERT_TRUE(replay.exited && replay.code == 0) << replay.output;
 
-  const nlohmann::json a = ReportWithoutTimes(dir / "local/report.json");
-  const nlohmann::json b = ReportWithoutTimes(dir / "remote/report.json");
+  const nlohmann::json a = ReportWithoutTimings(dir / "local/report.json");
+  const nlohmann::json b = ReportWithoutTimings(dir / "remote/report.json");
   EXPECT_EQ(a, b) << "first difference: " << FirstDifference(a, b);
-  const nlohmann::json c = ReportWithoutTimes(dir / "replayed/report.json");
+  const nlohmann::json c = ReportWithoutTimings(dir / "replayed/report.json");
   EXPECT_EQ(b, c) << "replay against the live remote run, first difference: "
                   << FirstDifference(b, c);
   // The comparison compares something: the report has its results.
@@ -175,13 +149,13 @@ TEST(RemoteRun, HandclaspOnAServedCellReadsOnlyWhatItIsToldFromTheScenario) {
        "grpc://127.0.0.1:" + std::to_string(server.port())},
       120);
   ASSERT_TRUE(remote.exited && remote.code == 0) << remote.output;
-  const nlohmann::json a = ReportWithoutTimes(dir / "local/report.json");
-  const nlohmann::json b = ReportWithoutTimes(dir / "remote/report.json");
+  const nlohmann::json a = ReportWithoutTimings(dir / "local/report.json");
+  const nlohmann::json b = ReportWithoutTimings(dir / "remote/report.json");
   EXPECT_EQ(a, b) << "first difference: " << FirstDifference(a, b);
   // The altered copy, run in process, is another twin: its report differs (the test can fail).
   const ProcessRun other = TwinbenchArgs({"run", told, "--out", dir / "other", "--quiet"}, 120);
   ASSERT_TRUE(other.exited && other.code == 0) << other.output;
-  EXPECT_NE(a, ReportWithoutTimes(dir / "other/report.json"));
+  EXPECT_NE(a, ReportWithoutTimings(dir / "other/report.json"));
 }
 
 // A handclasp batch of several trials runs each on its own twin: on a served cell (one twin)
@@ -316,26 +290,81 @@ TEST(RemoteRun, TrackerRunOnACellWithoutTruthReportsTheEstimatesOnly) {
   EXPECT_EQ(ReadText(dir / "local/measurements.csv"), ReadText(dir / "out/measurements.csv"));
 }
 
-// The optical-axis, handclasp and workflow runs score against the twin's truth and have no
-// report without it yet: on a cell without truth each refuses at the start (exit 2 naming
-// --cell), before anything moves, writing neither the output nor the recording.
-TEST(RemoteRun, RunsThatNeedTheTruthRefuseACellWithoutItAtTheStart) {
+// On a cell without truth (a real cell's case, here `serve-cell --no-truth`) the optical-axis
+// and the handclasp runs report their estimates alone: truth.available false, every true
+// value and error against truth null, nothing scored. The estimates are those of the
+// in-process run on the same twin (the same measurements), to the bit.
+TEST(RemoteRun, OpticalAxisAndHandclaspOnACellWithoutTruthReportTheEstimatesAlone) {
   TempDir dir;
   const std::string handclasp = OneTrialCopy("gan2014_floor_floor", dir.path());
-  for (const std::string& path :
-       {std::string(TWIN_SOURCE_DIR) + "/scenarios/study_small.yaml", handclasp,
-        std::string(TWIN_SOURCE_DIR) + "/scenarios/workflow_dual.yaml"}) {
+  const std::string optical = std::string(TWIN_SOURCE_DIR) + "/scenarios/study_small.yaml";
+  for (const std::string& path : {optical, handclasp}) {
+    const std::filesystem::path local = dir / "local", out = dir / "out";
+    std::filesystem::remove_all(local);
+    std::filesystem::remove_all(out);
+    const ProcessRun in_process =
+        TwinbenchArgs({"run", path, "--out", local, "--quiet"}, 120);
+    ASSERT_TRUE(in_process.exited && in_process.code == 0) << in_process.output;
     ServeCellProcess server({path, "--listen", "127.0.0.1:0", "--no-truth"});
     ASSERT_GT(server.port(), 0) << server.output();
     const ProcessRun r = TwinbenchArgs(
-        {"run", path, "--out", dir / "out", "--quiet", "--record", dir / "recording", "--cell",
+        {"run", path, "--out", out, "--quiet", "--cell",
          "grpc://127.0.0.1:" + std::to_string(server.port())},
         120);
-    EXPECT_TRUE(r.exited && r.code == 2) << path << "\n" << r.output;
-    EXPECT_NE(r.output.find("error: --cell"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("no truth"), std::string::npos) << r.output;
-    EXPECT_FALSE(std::filesystem::exists(dir / "out")) << path;
-    EXPECT_FALSE(std::filesystem::exists(dir / "recording")) << path;
+    ASSERT_TRUE(r.exited && r.code == 0) << path << "\n" << r.output;
+    const nlohmann::json a = nlohmann::json::parse(ReadText(local / "report.json"));
+    const nlohmann::json b = nlohmann::json::parse(ReadText(out / "report.json"));
+    EXPECT_FALSE(a.contains("truth")) << path;
+    ASSERT_TRUE(b.contains("truth")) << path;
+    EXPECT_EQ(b["truth"]["available"], false);
+    if (path == optical) {
+      const nlohmann::json& ra = a["robots"]["r2"];
+      const nlohmann::json& rb = b["robots"]["r2"];
+      ASSERT_EQ(ra["parameters"].size(), rb["parameters"].size());
+      ASSERT_GT(ra["parameters"].size(), 0u);
+      for (size_t i = 0; i < ra["parameters"].size(); ++i) {
+        EXPECT_EQ(ra["parameters"][i]["estimated"], rb["parameters"][i]["estimated"]) << i;
+        EXPECT_FALSE(ra["parameters"][i]["true"].is_null()) << i;
+        EXPECT_TRUE(rb["parameters"][i]["true"].is_null()) << i;
+      }
+      EXPECT_EQ(ra["misaligned_error_mm"], rb["misaligned_error_mm"]);
+      EXPECT_EQ(a["intrinsics"]["estimated"], b["intrinsics"]["estimated"]);
+      EXPECT_TRUE(b["intrinsics"]["true"]["fx"].is_null());
+      EXPECT_TRUE(b["intrinsics"]["error_px"]["fx"].is_null());
+      EXPECT_TRUE(rb["scale"]["true"].is_null());
+      EXPECT_TRUE(rb["identifiable_combinations"]["rms_error"].is_null());
+      EXPECT_TRUE(ra.contains("truth_position_error_mm"));
+      for (const auto& [key, value] : rb.items()) {
+        if (key.rfind("truth_", 0) != 0) continue;
+        EXPECT_EQ(key, "truth_position_error_mm_physical") << "a figure against truth";
+        EXPECT_TRUE(value.contains("skipped")) << value.dump();
+      }
+      // The identified model and the measurements are written as in process.
+      EXPECT_EQ(ReadText(local / "identified_r2.yaml"), ReadText(out / "identified_r2.yaml"));
+      EXPECT_EQ(ReadText(local / "measurements.csv"), ReadText(out / "measurements.csv"));
+    } else {
+      const nlohmann::json& fa = a["base_frame"];
+      const nlohmann::json& fb = b["base_frame"];
+      for (const char* estimate : {"general", "constrained"}) {
+        for (const char* key : {"xyz_mm", "zyz_deg", "rms_residual_mm"}) {
+          EXPECT_EQ(fa[estimate][key], fb[estimate][key]) << estimate << " " << key;
+        }
+        EXPECT_FALSE(fa[estimate]["e_tran_mm"].is_null()) << estimate;
+        EXPECT_TRUE(fb[estimate]["e_tran_mm"].is_null()) << estimate;
+        EXPECT_TRUE(fb[estimate]["e_rot_deg"].is_null()) << estimate;
+      }
+      EXPECT_EQ(fa["contacts"], fb["contacts"]);
+      for (const char* truth_only : {"truth", "physical_truth", "pendant_tip_error",
+                                     "scoring_frame", "seed"}) {
+        EXPECT_FALSE(fb.contains(truth_only)) << truth_only;
+      }
+      // Robot 2 followed robot 1 as on the twin; nothing measured the tips' distance.
+      EXPECT_EQ(fa["coupled_motion"]["status"], "ok");
+      EXPECT_EQ(fb["coupled_motion"]["status"], "not_measured");
+      // Its operator is a person: no simulated alignment error to report.
+      EXPECT_EQ(fa["operator_error_mm"], 0.5);
+      EXPECT_TRUE(fb["operator_error_mm"].is_null());
+    }
   }
 }
 

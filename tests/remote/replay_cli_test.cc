@@ -16,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "../bench/cli_run.h"
+#include "report_timings.h"
 
 namespace twin {
 namespace {
@@ -43,35 +44,6 @@ std::string ReadFile(const fs::path& path) {
   std::ostringstream os;
   os << in.rdbuf();
   return os.str();
-}
-
-// report.json less what is wall-clock time and so differs between any two runs, live or
-// replayed: `timing_s` (every stage's seconds; the cell's frame and move counts stay), and
-// per robot the stages' `time_s` / `wait_time_s` (identification, planning, servo). Everything
-// else must be equal exactly (doubles bit for bit: nlohmann reads the shortest round-trip
-// printing back to the same double).
-json ReportWithoutTimings(const fs::path& file) {
-  json report = json::parse(ReadFile(file));
-  if (report.contains("timing_s")) {
-    json& t = report["timing_s"];
-    json kept = json::object();
-    if (t.contains("cell")) {
-      for (const char* count : {"frames", "region_frames", "region_mean_pixels", "moves"}) {
-        if (t["cell"].contains(count)) kept[count] = t["cell"][count];
-      }
-    }
-    t = kept;
-  }
-  if (report.contains("robots")) {
-    for (auto& [name, robot] : report["robots"].items()) {
-      for (const char* stage : {"identification", "planning", "servo"}) {
-        if (!robot.contains(stage)) continue;
-        robot[stage].erase("time_s");
-        robot[stage].erase("wait_time_s");
-      }
-    }
-  }
-  return report;
 }
 
 // Runs `scenario` recorded into base/R (report in base/A) and replays it into base/B.

@@ -144,3 +144,51 @@ TEST(Acceptance, JunitHasOneTestCasePerCriterion) {
 
 }  // namespace
 }  // namespace twin
+
+namespace twin {
+namespace {
+
+// On a cell without truth every criterion on a figure against the truth is left out (the
+// figure is null there), and every other one kept: the paths of the optical-axis, handclasp,
+// workflow and tracker reports.
+TEST(Acceptance, WithoutTruthKeepsOnlyFiguresThatNeedNoTruth) {
+  const std::vector<std::string> against_truth = {
+      "robots.r2.truth_position_error_mm.rigid.after.rms",
+      "robots.r1.truth_position_error_mm_physical.calibrated_model.rigid.rms",
+      "robots.r2.parameters[3].true",
+      "robots.r2.scale.true",
+      "robots.r2.identifiable_combinations.rms_error",
+      "intrinsics.error_px.fx",
+      "base_frame.constrained.e_tran_mm",
+      "base_frame.workflow.calibrated_kinematics.e_rot_deg",
+      "base_frame.batch.general.mean_e_tran_mm",
+      "base_frame.coupled_motion.max_deviation_mm",
+      "truth_position_error_mm.rigid.after.rms",
+      "parameters.within_3_sigma",
+      "tracker.sigma_mm"};
+  const std::vector<std::string> kept = {
+      "robots.r2.misaligned_error_mm.validation.after",
+      "robots.r2.parameters[3].estimated",
+      "robots.r2.scale.estimated",
+      "intrinsics.rms_reprojection_px",
+      "base_frame.constrained.rms_residual_mm",
+      "heldout.region.after.rms",
+      "status"};
+  Acceptance all;
+  for (const std::vector<std::string>* figures : {&against_truth, &kept}) {
+    for (const std::string& f : *figures) {
+      AcceptanceCriterion c;
+      c.figure = f;
+      c.name = f;
+      c.max = 1.0;
+      all.criteria.push_back(c);
+    }
+  }
+  const Acceptance left = WithoutTruthCriteria(all, true);
+  std::vector<std::string> figures;
+  for (const AcceptanceCriterion& c : left.criteria) figures.push_back(c.figure);
+  EXPECT_EQ(figures, kept);
+}
+
+}  // namespace
+}  // namespace twin
