@@ -293,11 +293,21 @@ TEST(RemoteRun, TrackerRunOnACellWithoutTruthReportsTheEstimatesOnly) {
 // On a cell without truth (a real cell's case, here `serve-cell --no-truth`) the optical-axis
 // and the handclasp runs report their estimates alone: truth.available false, every true
 // value and error against truth null, nothing scored. The estimates are those of the
-// in-process run on the same twin (the same measurements), to the bit.
+// in-process run on the same twin (the same measurements), to the bit, though the client's
+// optical-axis scenario has other values where only the twin reads them (no effects, another
+// hand-eye pose, focal length and base of robot 2), as a real cell's user writes the drawing's.
 TEST(RemoteRun, OpticalAxisAndHandclaspOnACellWithoutTruthReportTheEstimatesAlone) {
   TempDir dir;
   const std::string handclasp = OneTrialCopy("gan2014_floor_floor", dir.path());
-  const std::string optical = std::string(TWIN_SOURCE_DIR) + "/scenarios/study_small.yaml";
+  const std::string optical = OneTrialCopy("study_small", dir.path());
+  const std::string told = dir / "study_small_told.yaml";
+  std::ofstream(told) << Altered(
+      ReadText(optical),
+      {{"  effects:\n", ""},
+       {"hand_eye: {xyz_mm: [62.1, -58.4, -24.3]", "hand_eye: {xyz_mm: [60.1, -58.4, -24.3]"},
+       {"fx: 521.44375", "fx: 525.0"},
+       {"base_from_robot1: {xyz_mm: [1203.2, -2.6, 0.8]",
+        "base_from_robot1: {xyz_mm: [1208.2, -2.6, 0.8]"}});
   for (const std::string& path : {optical, handclasp}) {
     const std::filesystem::path local = dir / "local", out = dir / "out";
     std::filesystem::remove_all(local);
@@ -308,7 +318,7 @@ TEST(RemoteRun, OpticalAxisAndHandclaspOnACellWithoutTruthReportTheEstimatesAlon
     ServeCellProcess server({path, "--listen", "127.0.0.1:0", "--no-truth"});
     ASSERT_GT(server.port(), 0) << server.output();
     const ProcessRun r = TwinbenchArgs(
-        {"run", path, "--out", out, "--quiet", "--cell",
+        {"run", path == optical ? told : path, "--out", out, "--quiet", "--cell",
          "grpc://127.0.0.1:" + std::to_string(server.port())},
         120);
     ASSERT_TRUE(r.exited && r.code == 0) << path << "\n" << r.output;
