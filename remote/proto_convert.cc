@@ -1,5 +1,6 @@
 #include "remote/proto_convert.h"
 
+#include <limits>
 #include <vector>
 
 #include <opencv2/imgcodecs.hpp>
@@ -392,7 +393,10 @@ TwinTruth FromProto(const bpb::TwinTruth& truth) {
   CheckRobots(truth.q_motor_size(), "q_motor");
   CheckRobots(truth.tip_in_world_m_size(), "tip_in_world_m");
   CheckRobots(truth.world_to_flange_size(), "world_to_flange");
-  CheckRobots(truth.flange_to_tip_size(), "flange_to_tip");
+  // flange_to_tip came later within v1: a truth without it (an older serve-cell or recording)
+  // has its tips as NaN, so that what is scored with them is null, never silently wrong.
+  const bool tips = truth.flange_to_tip_size() > 0;
+  if (tips) CheckRobots(truth.flange_to_tip_size(), "flange_to_tip");
   for (int r = 0; r < kMaxRobots; ++r) {
     out.models[r] = FromProto(truth.models(r));
     out.length_scale[r] = truth.length_scale(r);
@@ -401,7 +405,11 @@ TwinTruth FromProto(const bpb::TwinTruth& truth) {
     out.q_motor[r] = JointsFromProto(truth.q_motor(r).q_rad());
     out.p_WTip[r] = FromProto(truth.tip_in_world_m(r));
     out.X_WF[r] = FromProto(truth.world_to_flange(r), "truth: world_to_flange");
-    out.X_FTip[r] = FromProto(truth.flange_to_tip(r), "truth: flange_to_tip");
+    if (tips) {
+      out.X_FTip[r] = FromProto(truth.flange_to_tip(r), "truth: flange_to_tip");
+    } else {
+      out.X_FTip[r].translation().setConstant(std::numeric_limits<double>::quiet_NaN());
+    }
   }
   out.time_s = truth.time_s();
   out.X_WC = FromProto(truth.world_to_camera(), "truth: world_to_camera");

@@ -188,20 +188,22 @@ Acceptance ParseAcceptance(const Scenario& sc) {
 
 Acceptance WithoutTruthCriteria(const Acceptance& acceptance, bool quiet) {
   Acceptance kept;
-  // The figures a report without truth has as null: those against the truth (a key "truth*"
-  // anywhere in the path, a "true" value, the count within 3 sigma of the truth, the
-  // intrinsics' error_px, the identifiable combinations' rms_error and max_error, a base
-  // frame's errors e_tran_mm and e_rot_deg (eq. 33-34) and their means, the coupled motion's
-  // tip-to-tip deviations, the pendant tips' errors) and the twin's tracker noise.
+  // The figures a report without truth has as null or not at all: those against the truth (a
+  // key with "truth" in it anywhere in the path, a "true" value, the count within 3 sigma of
+  // the truth, the intrinsics' error_px, the identifiable combinations' rms_error and
+  // max_error, a base frame's errors e_tran_mm and e_rot_deg (eq. 33-34) and their means, the
+  // frames they are scored in, the coupled motion's tip-to-tip deviations, the pendant tips'
+  // errors) and the twin's own settings (its simulated operator, its tracker noise).
   static const std::set<std::string> kAgainstTruth = {
-      "e_tran_mm",    "e_rot_deg",        "mean_e_tran_mm",   "mean_e_rot_deg",
-      "deviation_mm", "max_deviation_mm", "pendant_tip_error"};
+      "e_tran_mm",    "e_rot_deg",        "mean_e_tran_mm",    "mean_e_rot_deg",
+      "deviation_mm", "max_deviation_mm", "pendant_tip_error", "scoring_frame",
+      "operator_error_mm"};
   const auto against_truth = [](const std::string& f) {
     const std::vector<std::string> parts = SplitPath(f);
     for (std::size_t i = 0; i < parts.size(); ++i) {
       const std::string& p = parts[i];
       const std::string parent = i > 0 ? parts[i - 1] : "";
-      if (p.rfind("truth", 0) == 0 || p == "true" || kAgainstTruth.count(p) > 0 ||
+      if (p.find("truth") != std::string::npos || p == "true" || kAgainstTruth.count(p) > 0 ||
           p.find("within_3_sigma") != std::string::npos) {
         return true;
       }
@@ -255,7 +257,8 @@ AcceptanceVerdict EvaluateAcceptance(const Acceptance& acceptance, nlohmann::jso
     }
     CriterionResult res;
     res.criterion = c;
-    if (node->is_null()) {
+    // A NaN is written as null: no value either (the report is judged before it is written).
+    if (node->is_null() || (node->is_number() && !std::isfinite(node->get<double>()))) {
       res.passed = false;
       res.message = c.figure + " has no value (null in the report: not computed)";
     } else if (node->is_number()) {

@@ -61,7 +61,7 @@ json WorkflowReportJson(const Scenario& scenario, const WorkflowResult& w) {
     report["truth"] = {{"available", false},
                        {"reason", "the cell offers no truth (a real cell, or serve-cell "
                                   "--no-truth): the estimates alone, their errors null, the "
-                                  "coupled motion not measured"}};
+                                  "coupled-motion check skipped"}};
   }
   return report;
 }

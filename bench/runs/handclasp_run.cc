@@ -57,12 +57,11 @@ Transform TrueX_B1B2(const TwinTruth& truth) { return truth.X_WB[0].inverse() * 
 
 // The coupled-motion check (issue item 6, after the paper's cooperative motion): robot 1's tip
 // follows a short path by its pendant IK; robot 2 is commanded through the estimated X_B1B2 to
-// face it, by its pendant IK; the true tip-to-tip distance is measured after each pair of moves
-// when `measure` (a cell without truth makes the same moves, and nothing measures them).
+// face it, by its pendant IK; the true tip-to-tip distance is measured after each pair of moves.
 CoupledMotionResult CoupledMotion(BenchCell& cell,
                                   const std::array<KinematicModel, 2>& tip_models,
                                   const HandclaspContact& start,
-                                  const Transform& X_B1B2_estimate, bool measure) {
+                                  const Transform& X_B1B2_estimate) {
   CoupledMotionResult out;
   const auto fail = [&](const std::string& why) {
     out.reason = why;
@@ -103,16 +102,14 @@ CoupledMotionResult CoupledMotion(BenchCell& cell,
     q2 = r2.q;
     const MoveResult m2 = cell.MoveTo(1, q2);
     if (m2.status != MoveStatus::kSettled) return fail("robot 2 follow move: " + m2.reason);
-    if (!measure) continue;
     const TwinTruth truth = cell.Truth();  // scoring only
     const double d = 1e3 * (truth.p_WTip[0] - truth.p_WTip[1]).norm();
     deviations.push_back(d);
     worst = std::max(worst, d);
   }
   out.ok = true;
-  out.measured = measure;
   out.deviation_mm = deviations;
-  out.max_deviation_mm = measure ? worst : std::numeric_limits<double>::quiet_NaN();
+  out.max_deviation_mm = worst;
   return out;
 }
 
@@ -471,10 +468,9 @@ void ScoreIdentifiedTips(const TipRefinementResult& tips, const ScoringFrames& s
   out->X_B1B2_tips = tips.X_B1B2;
 }
 
-// The coupled-motion check with the delivered estimate, into out; the deviations measured
-// against the truth when `measure`.
+// The coupled-motion check with the delivered estimate, into out.
 void RunCoupledMotionCheck(BenchCell& cell, const StageInputs& in, const HandclaspResult& result,
-                           bool measure, HandclaspStageResult* out) {
+                           HandclaspStageResult* out) {
   // With identified tips the controllers use them (the TCP a pendant would store).
   const bool tips_ok = result.ok() && result.tips.ok;
   std::array<KinematicModel, 2> used = in.tip_models;
@@ -484,7 +480,7 @@ void RunCoupledMotionCheck(BenchCell& cell, const StageInputs& in, const Handcla
   }
   CoupledMotionResult check =
       CoupledMotion(cell, used, result.contacts.front(),
-                    tips_ok ? result.tips.X_B1B2 : result.calibration.X_B1B2_constrained, measure);
+                    tips_ok ? result.tips.X_B1B2 : result.calibration.X_B1B2_constrained);
   check.estimate = tips_ok ? "tips_identified" : "constrained";
   if (check.ok) out->coupled_motion_max_deviation_mm = check.max_deviation_mm;
   out->coupled_motion = std::move(check);
@@ -516,10 +512,10 @@ void PrintStageSummary(BaseConstraint constraint, const HandclaspStageResult& ou
 }
 
 // A cell without truth (a real cell): the estimates alone, their errors NaN (null in the
-// report); the coupled-motion check makes its moves, as on the twin, and nothing measures the
-// tips' distance.
-HandclaspStageResult UnscoredStage(BenchCell& cell, const StageInputs& in,
-                                   std::ostream& progress, HandclaspStageResult out) {
+// report). The coupled-motion check is skipped: it drives robot 2's tip onto robot 1's
+// through an estimate nothing has checked, and on a real cell nothing would measure it.
+HandclaspStageResult UnscoredStage(const StageInputs& in, std::ostream& progress,
+                                   HandclaspStageResult out) {
   out.truth_available = false;
   const HandclaspResult& result = out.procedure;
   if (!result.ok()) {
@@ -536,7 +532,14 @@ HandclaspStageResult UnscoredStage(BenchCell& cell, const StageInputs& in,
     out.tips = unscored;
     out.X_B1B2_tips = result.tips.X_B1B2;
   }
-  if (in.config.coupled_motion) RunCoupledMotionCheck(cell, in, result, false, &out);
+  if (in.config.coupled_motion) {
+    CoupledMotionResult skipped;
+    skipped.skipped = "the cell offers no truth: robot 2's tip is not driven onto robot 1's "
+                      "through an unchecked estimate, and nothing would measure the distance";
+    skipped.max_deviation_mm = std::numeric_limits<double>::quiet_NaN();
+    skipped.estimate = out.tips.present ? "tips_identified" : "constrained";
+    out.coupled_motion = std::move(skipped);
+  }
   progress << "handclasp: " << ToString(in.config.constraint)
            << " estimated (the cell offers no truth to score against)\n";
   return out;
@@ -564,7 +567,7 @@ HandclaspStageResult RunHandclaspStage(BenchCell& cell, const Scenario& scenario
   out.procedure = RunProcedure(cell, in, teaching.taught, progress);
   const HandclaspResult& result = out.procedure;
   // --- the procedure has ended: scoring against the truth from here on ---
-  if (!cell.HasTruth()) return UnscoredStage(cell, in, progress, std::move(out));
+  if (!cell.HasTruth()) return UnscoredStage(in, progress, std::move(out));
   const ScoringFrames frames = ComputeScoringFrames(cell.Truth(), in, result);
   out.frames = ScoringFramesRecord(frames, in);
   if (!result.ok()) {
@@ -574,7 +577,7 @@ HandclaspStageResult RunHandclaspStage(BenchCell& cell, const Scenario& scenario
   // The general and constrained estimates (eq. 33-34).
   ScoreEstimates(result.calibration, frames, &out);
   if (stage_options.identify_tips) ScoreIdentifiedTips(result.tips, frames, &out);
-  if (in.config.coupled_motion) RunCoupledMotionCheck(cell, in, result, true, &out);
+  if (in.config.coupled_motion) RunCoupledMotionCheck(cell, in, result, &out);
   PrintStageSummary(in.config.constraint, out, progress);
   return out;
 }
@@ -610,7 +613,8 @@ HandclaspRunInputs LoadAndValidate(const RunOptions& o, std::string* text) {
     throw InputError(scenario.path + " scenario.handclasp.trials",
                      "a run on a served, recorded or replayed cell runs one trial on that one "
                      "cell; trials must be 1, got " + std::to_string(config.trials) +
-                         " (serve each trial with `serve-cell --trial N`)");
+                         " (serve each trial with `serve-cell --trial N` and run it with "
+                         "`run --trial N`)");
   }
   Acceptance acceptance = ParseAcceptance(scenario);
   ValidateOutputFolder(o.out_dir, "--out");

@@ -161,8 +161,8 @@ int RunHandclaspScenario(const std::string& scenario_path, const std::string& ou
                          std::ostream& progress, int trial = 0, const std::string& junit = "");
 struct RunOptions;  // bench/runs/calibration_run.h
 /// As above with the run's options: on the cell options.cell names (a served cell, a
-/// recording, a replay: one trial, on a cell that offers the truth; InputError otherwise, before
-/// anything moves), progress on std::cerr.
+/// recording, a replay: one trial, InputError otherwise, before anything moves; on a cell
+/// without truth the estimates alone), progress on std::cerr.
 int RunHandclaspScenario(const RunOptions& options);
 /// As above, with progress on std::cerr.
 int RunHandclaspScenario(const std::string& scenario_path, const std::string& out_dir);

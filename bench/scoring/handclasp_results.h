@@ -62,7 +62,7 @@ struct CoupledMotionResult {
   bool ok = false;
   std::string reason;                ///< why not ok
   std::string estimate;              ///< "tips_identified" or "constrained"
-  bool measured = true;              ///< false on a cell without truth: the moves alone
+  std::string skipped;               ///< why it did not run (a cell without truth); ok false
   std::vector<double> deviation_mm;  ///< true tip-to-tip distance after each step [mm]
   double max_deviation_mm = 0.0;     ///< NaN when not measured
 };
@@ -75,7 +75,7 @@ struct HandclaspStageResult {
   std::string reason;
   HandclaspTeaching teaching;
   /// False on a cell without truth (a real cell): the estimates alone, their errors NaN, no
-  /// scoring frames; the coupled-motion check moves, and nothing measures the tips' distance.
+  /// scoring frames; the coupled-motion check skipped (coupled_motion->skipped says why).
   bool truth_available = true;
   HandclaspScoringFrames frames;  ///< unless kTeachingFailed or without truth
   HandclaspResult procedure;      ///< contacts, skipped, calibration, tips (unless teaching failed)

@@ -26,17 +26,22 @@ struct TwinTruth {
   std::array<double, kMaxRobots> length_scale{1.0, 1.0};  ///< factor on d and a of every link
                                                    ///< of `models` now (drift; 1 without)
   double time_s = 0.0;                             ///< the twin's clock now [s]
-  std::array<Transform, kMaxRobots> X_WB;          ///< base poses in the world
+  std::array<Transform, kMaxRobots> X_WB{Transform::Identity(), Transform::Identity()};
+                                                   ///< base poses in the world (identity
+                                                   ///< beyond num_robots, as X_WF, X_FTip)
   std::array<JointVector, kMaxRobots> q_link;      ///< current link-side joint angles [rad]
   std::array<JointVector, kMaxRobots> q_motor;     ///< current motor-side angles [rad]
-  Transform X_WC;                                  ///< camera optical frame in the world now
+  Transform X_WC = Transform::Identity();          ///< camera optical frame in the world now
                                                    ///< (identity without a camera)
-  Transform X_WT;                                  ///< board frame (origin P) in the world now
+  Transform X_WT = Transform::Identity();          ///< board frame (origin P) in the world now
                                                    ///< (identity without a board)
-  std::array<Vector3, kMaxRobots> p_WTip;          ///< measuring tip points in the world now
-  std::array<Transform, kMaxRobots> X_WF;          ///< flange frames in the world now (physics:
+  std::array<Vector3, kMaxRobots> p_WTip{Vector3::Zero(), Vector3::Zero()};
+                                                   ///< measuring tip points in the world now
+  std::array<Transform, kMaxRobots> X_WF{Transform::Identity(), Transform::Identity()};
+                                                   ///< flange frames in the world now (physics:
                                                    ///< every effect included)
-  std::array<Transform, kMaxRobots> X_FTip;        ///< the measuring tips in their flange
+  std::array<Transform, kMaxRobots> X_FTip{Transform::Identity(), Transform::Identity()};
+                                                   ///< the measuring tips in their flange
                                                    ///< frames, as made (TwinSpec::tips)
   CameraSpec camera;                               ///< true intrinsics, distortion, hand-eye
   BoardSpec board;                                 ///< true board geometry and mount (both

@@ -368,9 +368,10 @@ TEST(RemoteRun, OpticalAxisAndHandclaspOnACellWithoutTruthReportTheEstimatesAlon
                                      "scoring_frame", "seed"}) {
         EXPECT_FALSE(fb.contains(truth_only)) << truth_only;
       }
-      // Robot 2 followed robot 1 as on the twin; nothing measured the tips' distance.
+      // The coupled-motion check would drive robot 2's tip onto robot 1's through an unchecked
+      // estimate, and nothing would measure it: skipped.
       EXPECT_EQ(fa["coupled_motion"]["status"], "ok");
-      EXPECT_EQ(fb["coupled_motion"]["status"], "not_measured");
+      EXPECT_EQ(fb["coupled_motion"]["status"], "skipped");
       // Its operator is a person: no simulated alignment error to report.
       EXPECT_EQ(fa["operator_error_mm"], 0.5);
       EXPECT_TRUE(fb["operator_error_mm"].is_null());

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 namespace twin::remote {
@@ -192,6 +193,17 @@ TEST(ProtoConvert, TheTruthComesBackBitForBit) {
   bpb::TwinTruth bad_rotation = message;
   bad_rotation.mutable_world_to_camera()->mutable_rotation()->RemoveLast();
   EXPECT_THROW(FromProto(bad_rotation), ProtocolError);
+  // A truth from before flange_to_tip (an older serve-cell or recording) is read, with its tips
+  // NaN, so that what is scored with them is null rather than wrong; one tip of two is refused.
+  bpb::TwinTruth without_tips = message;
+  without_tips.clear_flange_to_tip();
+  const TwinTruth old = FromProto(without_tips);
+  EXPECT_TRUE(std::isnan(old.X_FTip[0].translation().x()));
+  EXPECT_TRUE(std::isnan(old.X_FTip[1].translation().z()));
+  EXPECT_TRUE(same(t.X_WF[0], old.X_WF[0]));
+  bpb::TwinTruth one_tip = message;
+  one_tip.mutable_flange_to_tip()->RemoveLast();
+  EXPECT_THROW(FromProto(one_tip), ProtocolError);
 }
 
 }  // namespace

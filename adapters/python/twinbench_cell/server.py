@@ -290,19 +290,20 @@ class CellServer:
         def should_stop():
             return s.ended or s.stop_count != stops or not context.is_active()
 
+        acquired = self._motion(should_stop)
         try:
-            if not self._motion(should_stop):
+            if not acquired:
                 return self.pb.MoveResult(status=MoveStatus.STOPPED,
                                           reason="stopped before the motion started")
-            try:
-                return self._move_result(action(should_stop))
-            finally:
-                self._motion_lock.release()
+            return self._move_result(action(should_stop))
         finally:
             # A client gone during its motion call (disconnected, killed, or past its deadline)
-            # ends its session at once, as the C++ server does: no later call may use it.
+            # ends its session at once, as the C++ server does, and before the motion lock is
+            # released: no motion call of that session may start after it.
             if not context.is_active():
                 self._end(s, "its client went away during a motion call", True)
+            if acquired:
+                self._motion_lock.release()
 
     @_rpc
     def MoveTo(self, request, context):

@@ -163,6 +163,10 @@ TEST(Acceptance, WithoutTruthKeepsOnlyFiguresThatNeedNoTruth) {
       "base_frame.workflow.calibrated_kinematics.e_rot_deg",
       "base_frame.batch.general.mean_e_tran_mm",
       "base_frame.coupled_motion.max_deviation_mm",
+      "base_frame.physical_truth.xyz_mm[0]",
+      "base_frame.scoring_frame.link1_offsets[0].dd1_mm",
+      "base_frame.workflow.nominal_kinematics.physical_truth.e_tran_mm",
+      "base_frame.operator_error_mm",
       "truth_position_error_mm.rigid.after.rms",
       "parameters.within_3_sigma",
       "tracker.sigma_mm"};
