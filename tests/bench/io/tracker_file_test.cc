@@ -1,5 +1,7 @@
 #include "bench/io/tracker_file.h"
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <cmath>
 #include <fstream>
@@ -21,8 +23,13 @@ const std::string kModel = std::string(TWIN_SOURCE_DIR) + "/models/motoman_sda10
 const std::string kHeader = "pose,q_E_rad,q_S_rad,q_L_rad,q_U_rad,q_R_rad,q_B_rad,q_T_rad,x_m,y_m,z_m,sigma_m\n";
 const std::string kRow = "1,0.0,-0.16,0.59,-0.43,-1.29,0.14,-0.94,-2.84,0.85,-0.39,7e-06\n";
 
+// A file of this test's own (ctest runs the tests of this file side by side: a shared name made
+// one read what the other wrote).
 std::string Write(const std::string& name, const std::string& text) {
-  const fs::path p = fs::path(::testing::TempDir()) / ("tracker_file_" + name + ".csv");
+  const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  const fs::path p = fs::path(::testing::TempDir()) /
+                     ("tracker_file_" + test + "_" + std::to_string(::getpid()) + "_" + name +
+                      ".csv");
   std::ofstream(p) << text;
   return p.string();
 }

@@ -1,5 +1,7 @@
 #include "bench/report/scenario_schema.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -31,9 +33,12 @@ using testing::Twinbench;
 const std::string kRoot = TWIN_SOURCE_DIR;
 const std::string kDemoPath = kRoot + "/scenarios/twin_demo.yaml";
 
-// The demo scenario, edited, written to a temporary file; returns its path.
+// The demo scenario, edited, written to a temporary file of this test's own (ctest runs the
+// tests side by side); returns its path.
 std::string WriteScenario(const std::string& name, const std::string& text) {
-  const fs::path dir = fs::path(::testing::TempDir()) / "scenario_schema_test";
+  const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  const fs::path dir = fs::path(::testing::TempDir()) /
+                       ("scenario_schema_test_" + test + "_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const std::string path = (dir / (name + ".yaml")).string();
   std::ofstream(path) << text;
