@@ -442,16 +442,22 @@ HandclaspScoringFrames ScoringFramesRecord(const ScoringFrames& s, const StageIn
 }
 
 // An estimate scored against the kinematic-frame truth and the physical X_B1B2.
-ScoredBaseFrame ScoreEstimate(const Transform& X, const ScoringFrames& s) {
+// Without frames (a cell without truth) the errors are NaN, null in the report.
+ScoredBaseFrame ScoreEstimate(const Transform& X, const ScoringFrames* s) {
   ScoredBaseFrame f;
   f.present = true;
-  f.kinematic = CompareBaseFrames(X, s.truth);  // eq. 33-34
-  f.physical = CompareBaseFrames(X, s.physical);
+  if (!s) {
+    constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
+    f.kinematic = f.physical = {kNone, kNone};
+    return f;
+  }
+  f.kinematic = CompareBaseFrames(X, s->truth);  // eq. 33-34
+  f.physical = CompareBaseFrames(X, s->physical);
   return f;
 }
 
 // Marks the stage ok and scores the general and constrained estimates into out.
-void ScoreEstimates(const BaseCalibrationResult& cal, const ScoringFrames& s,
+void ScoreEstimates(const BaseCalibrationResult& cal, const ScoringFrames* s,
                     HandclaspStageResult* out) {
   out->status = HandclaspStageStatus::kOk;
   out->X_B1B2_general = cal.X_B1B2_general;
@@ -461,7 +467,7 @@ void ScoreEstimates(const BaseCalibrationResult& cal, const ScoringFrames& s,
 }
 
 // When the tips were identified, the estimate with the tips scored into out.
-void ScoreIdentifiedTips(const TipRefinementResult& tips, const ScoringFrames& s,
+void ScoreIdentifiedTips(const TipRefinementResult& tips, const ScoringFrames* s,
                          HandclaspStageResult* out) {
   if (!tips.ok) return;
   out->tips = ScoreEstimate(tips.X_B1B2, s);
@@ -511,38 +517,15 @@ void PrintStageSummary(BaseConstraint constraint, const HandclaspStageResult& ou
            << out.constrained.kinematic.e_rot_deg << " deg\n";
 }
 
-// A cell without truth (a real cell): the estimates alone, their errors NaN (null in the
-// report). The coupled-motion check is skipped: it drives robot 2's tip onto robot 1's
-// through an estimate nothing has checked, and on a real cell nothing would measure it.
-HandclaspStageResult UnscoredStage(const StageInputs& in, std::ostream& progress,
-                                   HandclaspStageResult out) {
-  out.truth_available = false;
-  const HandclaspResult& result = out.procedure;
-  if (!result.ok()) {
-    ReportProcedureFailure(result, progress, &out);
-    return out;
-  }
-  constexpr double kNone = std::numeric_limits<double>::quiet_NaN();
-  const ScoredBaseFrame unscored{true, {kNone, kNone}, {kNone, kNone}};
-  out.status = HandclaspStageStatus::kOk;
-  out.X_B1B2_general = result.calibration.X_B1B2_general;
-  out.X_B1B2_constrained = result.calibration.X_B1B2_constrained;
-  out.general = out.constrained = unscored;
-  if (in.options.identify_tips && result.tips.ok) {
-    out.tips = unscored;
-    out.X_B1B2_tips = result.tips.X_B1B2;
-  }
-  if (in.config.coupled_motion) {
-    CoupledMotionResult skipped;
-    skipped.skipped = "the cell offers no truth: robot 2's tip is not driven onto robot 1's "
-                      "through an unchecked estimate, and nothing would measure the distance";
-    skipped.max_deviation_mm = std::numeric_limits<double>::quiet_NaN();
-    skipped.estimate = out.tips.present ? "tips_identified" : "constrained";
-    out.coupled_motion = std::move(skipped);
-  }
-  progress << "handclasp: " << ToString(in.config.constraint)
-           << " estimated (the cell offers no truth to score against)\n";
-  return out;
+// On a cell without truth (a real cell) the coupled-motion check is skipped: it drives robot
+// 2's tip onto robot 1's through an estimate nothing has checked, and nothing would measure it.
+void SkipCoupledMotionCheck(HandclaspStageResult* out) {
+  CoupledMotionResult skipped;
+  skipped.skipped = "the cell offers no truth: robot 2's tip is not driven onto robot 1's "
+                    "through an unchecked estimate, and nothing would measure the distance";
+  skipped.max_deviation_mm = std::numeric_limits<double>::quiet_NaN();
+  skipped.estimate = out->delivered_name();
+  out->coupled_motion = std::move(skipped);
 }
 
 }  // namespace
@@ -566,17 +549,28 @@ HandclaspStageResult RunHandclaspStage(BenchCell& cell, const Scenario& scenario
   // The contacts and the calibration, through the Cell interface only.
   out.procedure = RunProcedure(cell, in, teaching.taught, progress);
   const HandclaspResult& result = out.procedure;
-  // --- the procedure has ended: scoring against the truth from here on ---
-  if (!cell.HasTruth()) return UnscoredStage(in, progress, std::move(out));
-  const ScoringFrames frames = ComputeScoringFrames(cell.Truth(), in, result);
-  out.frames = ScoringFramesRecord(frames, in);
+  // --- the procedure has ended: scoring against the truth from here on (a cell without truth,
+  // a real one: the estimates alone, their errors NaN) ---
+  out.truth_available = cell.HasTruth();
+  std::optional<ScoringFrames> frames;
+  if (out.truth_available) {
+    frames = ComputeScoringFrames(cell.Truth(), in, result);
+    out.frames = ScoringFramesRecord(*frames, in);
+  }
   if (!result.ok()) {
     ReportProcedureFailure(result, progress, &out);
     return out;
   }
   // The general and constrained estimates (eq. 33-34).
-  ScoreEstimates(result.calibration, frames, &out);
-  if (stage_options.identify_tips) ScoreIdentifiedTips(result.tips, frames, &out);
+  const ScoringFrames* scoring = frames ? &*frames : nullptr;
+  ScoreEstimates(result.calibration, scoring, &out);
+  if (stage_options.identify_tips) ScoreIdentifiedTips(result.tips, scoring, &out);
+  if (!out.truth_available) {
+    if (in.config.coupled_motion) SkipCoupledMotionCheck(&out);
+    progress << "handclasp: " << ToString(in.config.constraint)
+             << " estimated (the cell offers no truth to score against)\n";
+    return out;
+  }
   if (in.config.coupled_motion) RunCoupledMotionCheck(cell, in, result, &out);
   PrintStageSummary(in.config.constraint, out, progress);
   return out;
