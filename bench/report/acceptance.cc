@@ -227,6 +227,11 @@ Acceptance WithoutTruthCriteria(const Acceptance& acceptance, bool quiet) {
   return kept;
 }
 
+nlohmann::json TruthUnavailableJson(const std::string& holds) {
+  return {{"available", false},
+          {"reason", "the cell offers no truth (a real cell, or serve-cell --no-truth): " + holds}};
+}
+
 AcceptanceVerdict EvaluateAcceptance(const Acceptance& acceptance, nlohmann::json* report) {
   AcceptanceVerdict verdict;
   nlohmann::json results = nlohmann::json::array();

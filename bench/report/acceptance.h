@@ -66,10 +66,14 @@ struct AcceptanceVerdict {
   bool passed() const;
 };
 
-/// The criteria without those on figures against the truth (key paths starting with "truth",
-/// holding ".true" or "within_3_sigma", and tracker.sigma_mm), for a run on a cell that has none; unless `quiet`, a line on stdout names each one
-/// left out.
+/// The criteria without those on figures against the truth, or on the twin's own settings, which
+/// a report without truth has as null or not at all (the list is in acceptance.cc), for a run
+/// on a cell that has none; unless `quiet`, a line on stdout names each one left out.
 Acceptance WithoutTruthCriteria(const Acceptance& acceptance, bool quiet);
+
+/// A report's `truth` key on a cell without truth (a real cell, `serve-cell --no-truth`):
+/// available false, and a reason that ends with `holds`, what the report holds instead.
+nlohmann::json TruthUnavailableJson(const std::string& holds);
 
 /// Evaluates the criteria on the finished report and adds report["acceptance"] (the results).
 /// Throws InputError (naming the criterion's file:line) for a figure that is not in the report

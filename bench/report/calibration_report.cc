@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "bench/report/acceptance.h"
 #include "bench/report/diagnosis_report.h"
 #include "bench/report/report_html.h"
 #include "bench/report/scenario_json.h"
@@ -401,9 +402,7 @@ json CalibrationStageJson(const Scenario& scenario, const CalibrationStageResult
   }
   report["robots"] = robots;
   if (!stage.truth_available) {
-    report["truth"] = {{"available", false},
-                       {"reason", "the cell offers no truth (a real cell, or serve-cell "
-                                  "--no-truth): the estimates alone, every true value null"}};
+    report["truth"] = TruthUnavailableJson("the estimates alone, every true value null");
   }
   report["timing_s"] = TimingJson(stage.timing);
   return report;

@@ -217,10 +217,8 @@ std::string HandclaspReportText(const Scenario& scenario, const HandclaspBatchRe
   report["base_frame"] = batch.done.empty() ? json() : HandclaspStageJson(batch.done.front());
   if (batch.trials > 1) report["base_frame"]["batch"] = BatchSummary(batch);
   if (!batch.done.empty() && !batch.done.front().truth_available) {
-    report["truth"] = {{"available", false},
-                       {"reason", "the cell offers no truth (a real cell, or serve-cell "
-                                  "--no-truth): the estimates alone, their errors null, the "
-                                  "coupled-motion check skipped"}};
+    report["truth"] = TruthUnavailableJson(
+        "the estimates alone, their errors null, the coupled-motion check skipped");
   }
   *verdict = EvaluateAcceptance(acceptance, &report);
   return report.dump(2) + "\n";

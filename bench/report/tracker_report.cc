@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "bench/report/acceptance.h"
 #include "bench/report/diagnosis_report.h"
 #include "bench/report/report_units.h"
 #include "bench/report/scenario_json.h"
@@ -51,9 +52,7 @@ json ReportHead(const TrackerRunResult& r) {
                             {"after", PointErrorsJson(s.after)}, {"worse", s.worse}};
   }
   if (!r.truth_available) {
-    j["truth"] = {{"available", false},
-                  {"reason", "the cell offers no truth (a real cell, or serve-cell --no-truth): "
-                             "nothing is scored against it"}};
+    j["truth"] = TruthUnavailableJson("nothing is scored against it");
     return j;
   }
   const GaugeErrors& before = r.truth.before;

@@ -58,10 +58,8 @@ json WorkflowReportJson(const Scenario& scenario, const WorkflowResult& w) {
   report["base_frame"]["workflow"] = WorkflowJson(w);
   if (report.contains("timing_s")) report["timing_s"]["workflow_total"] = w.total_s;
   if (w.stage_a && !w.stage_a->truth_available) {
-    report["truth"] = {{"available", false},
-                       {"reason", "the cell offers no truth (a real cell, or serve-cell "
-                                  "--no-truth): the estimates alone, their errors null, the "
-                                  "coupled-motion check skipped"}};
+    report["truth"] = TruthUnavailableJson(
+        "the estimates alone, their errors null, the coupled-motion check skipped");
   }
   return report;
 }
