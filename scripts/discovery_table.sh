@@ -6,7 +6,7 @@
 # how often something else was added, and the physical-truth RMS (rigid gauge, the twin's
 # reflector with every effect against the model at the same readings) of the geometric-only
 # model, of the discovered one and of the same trials without the effect (*_clean.yaml).
-# Usage: [SCENARIOS="clean other ..."] scripts/discovery_table.sh [TRIALS] [OUT_DIR] [tracker|optical]
+# Usage: [SCENARIOS="clean other ..."] [REUSE=1] scripts/discovery_table.sh [TRIALS] [OUT_DIR] [tracker|optical]
 #   tracker (default): the laser-tracker scenarios; optical: the optical-axis ones (robot r2,
 #   the board's feature point instead of the reflector). Needs a build: scripts/build.sh.
 set -euo pipefail
@@ -28,6 +28,7 @@ declare -A INJECTED=(
   [tracker_thermal_drift_sensed]="thermal_"   # the same with the arm's temperature sensor
   [tracker_thermal_drift_declared]=""   # the same warm-up declared (the estimator's warm-up)
   [tracker_lateral_compliance_j2]="lateral_compliance (joint 2)"
+  [tracker_lateral_compliance_j2_declared]=""   # the same declared: the control of its RMS
   [tracker_base_compliance]="lateral_compliance (joint 1)"   # the estimator's base tilt
   [tracker_axis_wobble_j1]="axis_wobble (joint 1, order 2)"
   [tracker_transmission_j2_order3]="transmission_error (joint 2, order 3)"
@@ -48,7 +49,8 @@ case "$PROCEDURE" in
   tracker)
     ORDER=(tracker_clean tracker_compliance_j2 tracker_transmission_j1 tracker_backlash_j3
            tracker_thermal_drift tracker_thermal_drift_sensed tracker_thermal_drift_declared
-           tracker_compliance_j2_declared tracker_lateral_compliance_j2 tracker_base_compliance
+           tracker_compliance_j2_declared tracker_lateral_compliance_j2
+           tracker_lateral_compliance_j2_declared tracker_base_compliance
            tracker_axis_wobble_j1 tracker_transmission_j2_order3)
     PREFIX="" ;;
   optical)
@@ -63,18 +65,22 @@ esac
 # SCENARIOS="a b ...": only these (the clean one of the procedure first), e.g. to add a row.
 if [ -n "${SCENARIOS:-}" ]; then read -r -a ORDER <<< "$SCENARIOS"; fi
 CLEAN="${ORDER[0]}"
+# REUSE=1: a scenario whose study is already in OUT (trials.jsonl) is tabled as it is, not rerun.
 for s in "${ORDER[@]}"; do
+  if [ "${REUSE:-0}" = 1 ] && [ -s "$OUT/$s/trials.jsonl" ]; then continue; fi
   "$BIN" study "scenarios/discovery/$s.yaml" --trials "$TRIALS" --jobs 2 --out "$OUT/$s" >&2
 done
 # Per trial: trial, effects added (labels joined by ;), geometric-only and discovered RMS over
-# the whole joint space, then the same over the covered region (optical runs; nan otherwise).
+# the whole joint space, then the same over the covered region (optical runs; nan otherwise),
+# then the candidates the verdict names as indistinguishable from an added effect (joined by ;).
 rows() {
   jq -r --arg p "$PREFIX" '[.trial,
           ([.labels | to_entries[] | select(.key | startswith($p)) | select(.key[($p | length):] | test("^diagnosis\\.effects_added\\[[0-9]+\\]\\.label$")) | .value] | join(";")),
           (.figures[$p + "truth_position_error_mm_physical.calibrated_model.rigid.rms"] // "nan"),
           (.figures[$p + "truth_position_error_mm_discovered_model.rigid.rms"] // "nan"),
           (.figures[$p + "truth_position_error_mm_physical_covered_region.calibrated_model.rigid.rms"] // "nan"),
-          (.figures[$p + "truth_position_error_mm_physical_covered_region.discovered_model.rigid.rms"] // "nan")] | @tsv' \
+          (.figures[$p + "truth_position_error_mm_physical_covered_region.discovered_model.rigid.rms"] // "nan"),
+          ([.labels | to_entries[] | select(.key | startswith($p)) | select(.key[($p | length):] | test("^diagnosis\\.effects_added\\[[0-9]+\\]\\.indistinguishable_from\\[[0-9]+\\]$")) | .value] | join(";"))] | @tsv' \
      "$OUT/$1/trials.jsonl" | sort -t$'\t' -k1,1
 }
 rows "$CLEAN" > "$OUT/clean.tsv"
@@ -86,18 +92,21 @@ printf -- '- date: %s\n- commit: %s\n- machine: %s, %s cores, %s GiB\n' "$(date 
 printf -- '- command: `%sscripts/discovery_table.sh %s %s %s`\n' \
   "${SCENARIOS:+SCENARIOS=\"$SCENARIOS\" }" "$TRIALS" "$OUT" "$PROCEDURE"
 printf -- '- %s trials a scenario: trial t draws the truth from seeds.truth + t and the estimator randomness from seeds.estimator + t of the scenario (twinbench study)\n\n' "$TRIALS"
-printf '| scenario | injected (undeclared) | named | something else added | truth RMS geometric-only [mm] | discovered [mm] | effect-free [mm] | discovered <= 1.2 x effect-free | covered region: geometric-only / discovered / effect-free [mm] | covered: within 1.2 x |\n'
-printf '|---|---|---|---|---|---|---|---|---|---|\n'
+printf '| scenario | injected (undeclared) | named | named, or named indistinguishable from the effect added | something else added | truth RMS geometric-only [mm] | discovered [mm] | effect-free [mm] | discovered <= 1.2 x effect-free | covered region: geometric-only / discovered / effect-free [mm] | covered: within 1.2 x |\n'
+printf '|---|---|---|---|---|---|---|---|---|---|---|\n'
 for s in "${ORDER[@]}"; do
   rows "$s" > "$OUT/$s.tsv"
   join -t $'\t' "$OUT/$s.tsv" "$OUT/clean.tsv" | awk -F'\t' -v inj="${INJECTED[$s]}" -v name="$s" '
-    { n++; named += (inj != "" && index($2, inj) > 0);
+    # $1-$7: this scenario (trial, added, RMS x4, indistinguishable); $8-$13: the clean one.
+    { n++; named += (inj != "" && index($2, inj) > 0)
+      named_any += (inj != "" && (index($2, inj) > 0 || index($7, inj) > 0))
       split($2, added, ";")
       for (k in added) if (added[k] != "" && (inj == "" || index(added[k], inj) == 0)) { other++; break }
-      g += $3; d += $4; f += $8; within += ($4 <= 1.2 * $8)
-      if ($6 != "nan" && $10 != "nan") { nc++; gc += $5; dc += $6; fc += $10; withinc += ($6 <= 1.2 * $10) } }
+      g += $3; d += $4; f += $9; within += ($4 <= 1.2 * $9)
+      if ($6 != "nan" && $11 != "nan") { nc++; gc += $5; dc += $6; fc += $11; withinc += ($6 <= 1.2 * $11) } }
     END { covered = nc > 0 ? sprintf("%.4f / %.4f / %.4f | %d of %d", gc / nc, dc / nc, fc / nc, withinc, nc) : "- | -"
-          printf "| %s | %s | %s | %d of %d | %.4f | %.4f | %.4f | %d of %d | %s |\n", name,
-          (inj == "" ? "none" : inj), (inj == "" ? "-" : named " of " n), other, n, g / n, d / n,
+          printf "| %s | %s | %s | %s | %d of %d | %.4f | %.4f | %.4f | %d of %d | %s |\n", name,
+          (inj == "" ? "none" : inj), (inj == "" ? "-" : named " of " n),
+          (inj == "" ? "-" : named_any " of " n), other, n, g / n, d / n,
           f / n, within, n, covered }'
 done
