@@ -567,7 +567,9 @@ void AddModelBenchmarkVerbs(CLI::App* app, CliValues* v, Verbs* verbs) {
   synth->add_option("--out", synth_options.out, "output CSV")->required();
 
   auto* kbench = app->add_subcommand(
-      "benchmark-kinematics", "time the analytic end-point Jacobian against autodiff");
+      "benchmark-kinematics",
+      "time the kinematics: the analytic end-point Jacobian against autodiff, the iterative IK "
+      "against the closed form of a spherical wrist");
   verbs->kbench = kbench;
   kbench->add_option("model", kb_options.model, "model file (.yaml or .urdf)")->required();
   AddLinkOptions(kbench, &v->links);

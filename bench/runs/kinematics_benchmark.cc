@@ -2,12 +2,16 @@
 
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "bench/io/model_loader.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
+#include "calib/kinematics/inverse_kinematics.h"
+#include "calib/kinematics/spherical_wrist_ik.h"
 #include "calib/model/end_point_jacobian.h"
 
 namespace twin {
@@ -20,6 +24,47 @@ double MicrosecondsPerCall(int n, F&& f) {
   const auto t0 = Clock::now();
   for (int i = 0; i < n; ++i) f(i);
   return std::chrono::duration<double, std::micro>(Clock::now() - t0).count() / n;
+}
+
+// Inverse kinematics of the end poses at `contexts`' joints: the iterative solver from a
+// seed elsewhere in the joint space (the next context's joints), and the closed form of a
+// spherical-wrist arm (all solutions; the nearest inside the limits) where the model has one.
+void PrintInverseKinematics(const KinematicModel& chain,
+                            const std::vector<MeasurementContext>& contexts, int n,
+                            double* sink) {
+  const int m = static_cast<int>(contexts.size());
+  std::vector<Transform> targets;
+  for (const MeasurementContext& c : contexts) targets.push_back(EndPose(chain, c.q));
+  long iterations = 0;
+  int solved = 0;
+  const double iterative = MicrosecondsPerCall(n, [&](int i) {
+    const IkResult r = SolveIk(chain, targets[i % m], contexts[(i + 1) % m].q);
+    iterations += r.iterations;
+    solved += r.status == IkStatus::kSuccess;
+    *sink += r.q(0);
+  });
+  std::printf("inverse kinematics, iterative          %8.3f us  (%.1f iterations a solve, %d of "
+              "%d solved)\n",
+              iterative, static_cast<double>(iterations) / n, solved, n);
+  std::string why;
+  const std::optional<SphericalWristIk> ik = SphericalWristIk::For(chain, &why);
+  if (!ik) {
+    std::printf("inverse kinematics, closed form        not applicable (%s)\n", why.c_str());
+    return;
+  }
+  long solutions = 0;
+  const double all = MicrosecondsPerCall(n, [&](int i) {
+    const std::vector<JointVector> s = ik->Solve(targets[i % m]);
+    solutions += static_cast<long>(s.size());
+    *sink += s.empty() ? 0.0 : s[0](0);
+  });
+  const double nearest = MicrosecondsPerCall(n, [&](int i) {
+    *sink += SolveIkSphericalWrist(chain, targets[i % m], contexts[(i + 1) % m].q).q(0);
+  });
+  std::printf("inverse kinematics, closed form        %8.3f us  (all %.1f solutions; %.1fx "
+              "faster)\n",
+              all, static_cast<double>(solutions) / n, iterative / all);
+  std::printf("  nearest solution inside the limits   %8.3f us\n", nearest);
 }
 
 }  // namespace
@@ -62,6 +107,7 @@ int RunKinematicsBenchmark(const KinematicsBenchmarkOptions& o) {
   std::printf("end-point Jacobian, analytic           %8.3f us\n", analytic);
   std::printf("end-point Jacobian, autodiff (Jet<%d>)  %8.3f us  (%.1fx the analytic)\n",
               kJetStride, autodiff, autodiff / analytic);
+  PrintInverseKinematics(chain, contexts, std::max(1, n / 10), &sink);
   if (sink == 1234.5) std::printf(" ");  // keeps the loops from being optimized away
   return 0;
 }

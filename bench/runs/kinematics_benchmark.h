@@ -1,6 +1,7 @@
 // `twinbench benchmark-kinematics`: times the analytic end-point Jacobian against forward-mode
 // autodiff of the templated forward kinematics (the justification for keeping the analytic
-// one), and the forward kinematics itself, for a model file.
+// one), the forward kinematics itself, and the inverse kinematics, iterative against the
+// closed form of a spherical-wrist arm (issue 42), for a model file.
 #pragma once
 
 #include <string>

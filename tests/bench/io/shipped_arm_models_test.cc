@@ -8,6 +8,7 @@
 #include "bench/io/scenario.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
+#include "calib/kinematics/spherical_wrist_ik.h"
 #include "calib/model/parameters.h"
 
 namespace twin {
@@ -74,6 +75,36 @@ TEST(ShippedArmModels, DefaultTipsPointOutOfTheFlangeFace) {
     EXPECT_LT(kuka.twin.tips[i].X_FTip.translation().norm(), 1e-12);
     ASSERT_GT(abb.twin.robots[i].model.flange().dh.d, 0.0);
     EXPECT_TRUE(abb.twin.tips[i].X_FTip.isApprox(Transform::Identity())) << "abb robot " << i;
+  }
+}
+
+// The shipped six-axis arms of the twin have a spherical wrist and parallel joints 2 and 3 (the
+// closed-form IK of calib/kinematics/spherical_wrist_ik.h applies), as their makers' drawings
+// show; the Motoman's wrist has 30 mm between axes 5 and 6 (link B's a) and the UR5e of
+// tests/data three offset wrist axes, so neither has it. Round trip at one pose each as a smoke check (the
+// solver's own tests cover it at length).
+TEST(ShippedArmModels, SixAxisArmsHaveTheClosedFormInverseKinematics) {
+  for (const std::string file : {"models/reinovo_r1.yaml", "models/reinovo_r2.yaml",
+                                 "models/abb_irb2400.urdf", "models/kuka_kr6r900sixx.urdf"}) {
+    const KinematicModel m = LoadRobotModel(kRoot + "/" + file, {"", file.find(".urdf") !=
+                                                                         std::string::npos
+                                                                     ? "tool0"
+                                                                     : ""});
+    std::string why;
+    const auto ik = SphericalWristIk::For(m, &why);
+    ASSERT_TRUE(ik.has_value()) << file << ": " << why;
+    const JointVector q = Deg({10, -20, 30, 40, 50, 60});
+    const Transform target = EndPose(m, q);
+    double nearest = INFINITY;
+    for (const JointVector& s : ik->Solve(target)) nearest = std::min(nearest, (s - q).norm());
+    EXPECT_LT(nearest, 1e-6) << file;  // 1e-6 rad: see spherical_wrist_ik_test.cc
+  }
+  for (const std::string file : {"models/motoman_sda10_right.yaml", "tests/data/ur5e.urdf"}) {
+    std::string why;
+    const KinematicModel m = LoadRobotModel(
+        kRoot + "/" + file, {"", file.find(".urdf") != std::string::npos ? "tool0" : ""});
+    EXPECT_FALSE(SphericalWristIk::For(m, &why).has_value()) << file;
+    EXPECT_NE(why.find("wrist axes do not meet"), std::string::npos) << why;
   }
 }
 
