@@ -10,12 +10,26 @@ namespace {
 // torso it stands on, tilts under the bending moment it carries. In the frame X_BL[i] (joint
 // i's axis z, before it turns), with M the gravity moment about its origin of everything joint
 // i turns:
-//   w_x += c_x M_x,   w_y += c_y M_y                       (stage 5: x and y tilt the axis)
-// where the model has masses (M from the nominal masses, c_x, c_y [rad/(N m)]); for a model
-// without them, the weight is lumped at the points LumpsBeyond gives, m_k at P_k, and what the
-// data identify is the compliance times each lump's weight:
-//   w_x += sum_k a_xk ((P_k - o_i) x g_B)_x,   w_y += sum_k a_yk ((P_k - o_i) x g_B)_y
+//   w_x += c M_x,   w_y += (c + e) M_y                       (stage 5: x and y tilt the axis)
+// one compliance c across the axis, as a bearing (or a round pedestal) has whatever the
+// direction, and e the excess of y's over x's for one that is stiffer one way (a base on feet,
+// a rectangular torso). Where the model has masses, M comes from the nominal masses and c, e
+// are in rad/(N m); for a model without them, the weight is lumped at the points LumpsBeyond
+// gives, m_k at P_k, and what the data identify is the compliance times each lump's weight:
+//   w_x += sum_k a_k ((P_k - o_i) x g_B)_x,   w_y += sum_k (a_k + e_k) ((P_k - o_i) x g_B)_y
 // with a_k = c m_k g [rad/m]. Joint 1 is the base's tilt under the arm's moment about it.
+//
+// Why one c for both directions, not a c_x and a c_y: on an arm whose links lie in the plane
+// of a joint's axis (joint 2 of most six-axis arms) the nominal moment across that axis has no
+// y part at all, M_y = 0 at every pose, so a c_y of its own has a zero column where the fit
+// starts and is held at zero as unidentifiable. The true arm's axis is not quite square to
+// gravity (its link twist a fraction of a degree off), and then M_y = (that angle) x (the drive
+// torque along the axis, tens of N m): the bearing tilts by c M_y there too. Measured on the
+// twin (tracker_lateral_compliance_j2_declared, tracker and encoders noise-free, 5 trials):
+// with c_x, c_y the physical-truth RMS was 0.004-0.019 mm, growing with the link-1 twist error
+// (0.05-0.075 mm per degree); with c_y freed it was 0.0013-0.0020 mm. The excess e keeps an
+// anisotropic bearing or base representable (c, c + e span what c_x, c_y did) and is held at
+// zero where its column is.
 //
 // With masses, the term also carries the tilt of true gravity against the model's g_B (the
 // base is levelled to a fraction of a degree, and nothing the arm measures tells it): the
@@ -25,7 +39,7 @@ namespace {
 // gives the moment M + gamma_1 M_1 + gamma_2 M_2, M_k the moment under g e_k; with one
 // compliance c for the tilt's part the term stays linear in its parameters u_k = c gamma_k
 // [rad/(N m)]:
-//   w_x += c_x M_x + u_1 M_1x + u_2 M_2x,   w_y += c_y M_y + u_1 M_1y + u_2 M_2y
+//   w_x += c M_x + u_1 M_1x + u_2 M_2x,   w_y += (c + e) M_y + u_1 M_1y + u_2 M_2y
 // (twin, tracker_lateral_compliance_j2: a base tilted 0.2 deg left 0.023 mm RMS at the
 // reflector that c_x, c_y cannot take and the geometry cannot either).
 class LateralCompliance : public ErrorTermT<LateralCompliance> {
@@ -44,7 +58,7 @@ class LateralCompliance : public ErrorTermT<LateralCompliance> {
     if (lumps_.points.empty()) {
       const Vec3T<T> m = NominalGravityMoment(nominal_, in, i);
       w[3 * i] += p[0] * m.x();
-      w[3 * i + 1] += p[1] * m.y();
+      w[3 * i + 1] += (p[0] + p[1]) * m.y();
       // The gravity tilt's parts: e_1, e_2 across g_B.
       const Vector3 g = in.g_B.normalized();
       Vector3 e1 = Vector3::UnitX() - Vector3::UnitX().dot(g) * g;
@@ -63,7 +77,7 @@ class LateralCompliance : public ErrorTermT<LateralCompliance> {
       const Vec3T<T> r = LumpPoint(in, lumps_.points[k], n) - X.p;
       const Vec3T<T> m = X.R.transpose() * r.cross(in.g_B.template cast<T>());
       w[3 * i] += p[2 * k] * m.x();
-      w[3 * i + 1] += p[2 * k + 1] * m.y();
+      w[3 * i + 1] += (p[2 * k] + p[2 * k + 1]) * m.y();
     }
   }
 
@@ -85,8 +99,8 @@ std::shared_ptr<const ErrorTerm> MakeLateralCompliance(const TermInput& in) {
     const double tau_ref =
         std::max(1.0, kStandardGravity * mass * 0.5 * NominalReach(in.nominal));
     // The gravity tilt's parts: a compliance times a tilt of 0.01 rad.
-    params = {{prefix + "_x", "rad/(N m)", 1.0 / tau_ref},
-              {prefix + "_y", "rad/(N m)", 1.0 / tau_ref},
+    params = {{prefix, "rad/(N m)", 1.0 / tau_ref},
+              {prefix + "_y_excess", "rad/(N m)", 1.0 / tau_ref},
               {prefix + "_times_gravity_tilt_1", "rad/(N m)", 0.01 / tau_ref},
               {prefix + "_times_gravity_tilt_2", "rad/(N m)", 0.01 / tau_ref}};
   } else {
@@ -94,8 +108,8 @@ std::shared_ptr<const ErrorTerm> MakeLateralCompliance(const TermInput& in) {
     lumps = LumpsBeyond(in.nominal, in.spec.joint);
     const double scale = 1.0 / NominalReach(in.nominal);
     for (const std::string& name : lumps.names) {
-      params.push_back({prefix + "_x_weight_at_" + name, "rad/m", scale});
-      params.push_back({prefix + "_y_weight_at_" + name, "rad/m", scale});
+      params.push_back({prefix + "_weight_at_" + name, "rad/m", scale});
+      params.push_back({prefix + "_y_excess_weight_at_" + name, "rad/m", scale});
     }
   }
   return std::make_shared<LateralCompliance>(in.spec, params, in.nominal, std::move(lumps));

@@ -125,8 +125,8 @@ TEST(DeflectionTerms, LateralComplianceTiltsItsAxisByComplianceTimesTheNominalMo
   RobotModel model = MakeRobotModel(chain);
   // Joint 1: its axis is vertical, so the arm's whole gravity moment bends it.
   model = WithTerm(model, MakeErrorTerm({"lateral_compliance", 0, {}}, chain, "r1"));
-  const double cx = 3e-6, cy = -2e-6;  // [rad/(N m)]
-  model.term_values << cx, cy, 0.0, 0.0;  // no gravity tilt
+  const double cx = 3e-6, cy = -2e-6;  // [rad/(N m)], an anisotropic base: e = cy - cx
+  model.term_values << cx, cy - cx, 0.0, 0.0;  // no gravity tilt
   const JointVector q = (JointVector(6) << 0.4, 0.3, -0.6, 0.8, 0.9, -0.2).finished();
   // The test's own moment about the origin of X_BL[0] of links 1..6 and the tool, each at its
   // centre of mass, in X_BL[0]'s axes.
@@ -155,7 +155,7 @@ TEST(DeflectionTerms, LateralComplianceTakesTheTiltOfGravityAgainstTheBase) {
   model = WithTerm(model, MakeErrorTerm({"lateral_compliance", 1, {}}, chain, "r1"));
   ASSERT_EQ(model.term_values.size(), 4);
   const double c = 5e-4, gamma1 = 3.5e-3, gamma2 = -2e-3;  // [rad/(N m)], [rad]
-  model.term_values << c, c, c * gamma1, c * gamma2;
+  model.term_values << c, 0.0, c * gamma1, c * gamma2;  // a bearing: the same c both ways
   const JointVector q = (JointVector(6) << 0.4, 0.3, -0.6, 0.8, 0.9, -0.2).finished();
   const Vector3 g =
       kStandardGravity * (-Vector3::UnitZ() + gamma1 * Vector3::UnitX() - gamma2 * Vector3::UnitY());
