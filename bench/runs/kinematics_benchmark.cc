@@ -58,13 +58,17 @@ void PrintInverseKinematics(const KinematicModel& chain,
     solutions += static_cast<long>(s.size());
     *sink += s.empty() ? 0.0 : s[0](0);
   });
+  int fallbacks = 0;
   const double nearest = MicrosecondsPerCall(n, [&](int i) {
-    *sink += SolveIkSphericalWrist(chain, targets[i % m], contexts[(i + 1) % m].q).q(0);
+    const IkResult r = SolveIkSphericalWrist(chain, targets[i % m], contexts[(i + 1) % m].q);
+    fallbacks += r.iterations > 0;
+    *sink += r.q(0);
   });
-  std::printf("inverse kinematics, closed form        %8.3f us  (all %.1f solutions; %.1fx "
-              "faster)\n",
-              all, static_cast<double>(solutions) / n, iterative / all);
-  std::printf("  nearest solution inside the limits   %8.3f us\n", nearest);
+  std::printf("inverse kinematics, closed form        %8.3f us  (all %.1f solutions)\n", all,
+              static_cast<double>(solutions) / n);
+  std::printf("  SolveIkSphericalWrist (the drop-in)  %8.3f us  (%.1fx the iterative; nearest "
+              "inside the limits, %d of %d fell back to the iterative)\n",
+              nearest, iterative / nearest, fallbacks, n);
 }
 
 }  // namespace

@@ -144,8 +144,11 @@ bool AcceptTerm(const Search& search, DiscoveryStep s, int best, RobotModel* cur
 // 1 and 2, in the commonest case), and a bearing's runout next to both. On the real Motoman wide
 // file (right_arm_wide.csv, 8 effects at most) joint 1's axis wobble takes orders 1, 2 and 3;
 // with two orders a joint, order 1 was never tried and the region held-out RMS stopped at
-// 1.705 mm, with three at 1.594 mm. Each further order costs a candidate fit per joint and per
-// periodic term (49 candidates a step there, 61 with three).
+// 1.705 mm, with three at 1.594 mm, while the second session (right_arm_cube.csv) went from
+// 0.1825 to 0.1978 mm (+- 0.007): better in the region folds, slightly worse on the other
+// session. The choice was made on that file. Each further order costs a candidate fit per
+// joint and per periodic term (49 candidates a step there, 61 with three; the cube file's
+// diagnosis took 1405 s against 832 s, both beside other jobs).
 constexpr int kOrdersPerJoint = 3;
 
 // The default candidates (CandidateTermSpecs) with each joint's harmonic orders from the

@@ -11,6 +11,11 @@ namespace {
 
 // Subproblems' degenerate cases: a vector shorter than this [m or unit length] has no direction.
 constexpr double kTiny = 1e-12;
+// A square root or arccosine whose argument is this close to zero is taken as zero: at a
+// singular target (joint 5 straight, the elbow stretched) the argument is rounding noise of
+// ~1e-16, whose square root (~1e-8) would tilt both answers off the target by more than the
+// check below and lose them; a target this close to a singularity gives one answer there.
+constexpr double kSingular = 1e-7;
 // A solution is kept when forward kinematics reproduces the target to within this [m, rad].
 constexpr double kCheckTolerance = 1e-9;
 
@@ -43,7 +48,7 @@ std::vector<double> CosSinRoots(double a, double b, double c) {
   if (std::abs(x) > 1.0 + 1e-12) return {};
   const double phi = std::atan2(b, a);
   const double d = std::acos(std::clamp(x, -1.0, 1.0));
-  if (d < 1e-12) return {phi};
+  if (d < kSingular) return {phi};
   return {phi + d, phi - d};
 }
 
@@ -76,7 +81,7 @@ std::vector<std::pair<double, double>> TurnTwice(const Vector3& w1, const Vector
   if (g2 < -1e-12) return {};
   std::vector<std::pair<double, double>> out;
   const double g = std::sqrt(std::max(g2, 0.0));
-  for (double sign : g > 1e-12 ? std::vector<double>{1.0, -1.0} : std::vector<double>{1.0}) {
+  for (double sign : g > kSingular ? std::vector<double>{1.0, -1.0} : std::vector<double>{0.0}) {
     // z: the intermediate direction, R(w2, q2) p = z = R(w1, -q1) q.
     const Vector3 z = alpha * w1 + beta * w2 + sign * g * n;
     out.push_back({TurnOnto(w1, z, q), TurnOnto(w2, p, z)});
@@ -85,6 +90,24 @@ std::vector<std::pair<double, double>> TurnTwice(const Vector3& w1, const Vector
 }
 
 double AxisAngle(const Vector3& a, const Vector3& b) { return a.cross(b).norm(); }
+
+// Each joint of q turned by whole turns to the angle inside its limits nearest the seed's
+// (limits may be wider than a turn, or lopsided: KUKA's A2 is -190..45 deg, where a solution
+// at 175 deg is the joint at -185 deg); false when some joint has no such angle.
+bool TurnsInsideLimits(const KinematicModel& model, const JointVector& seed, JointVector* q) {
+  for (int i = 0; i < q->size(); ++i) {
+    const JointLimits& l = model.links[i].limits;
+    const double turn = 2.0 * kPi;
+    // The turns k with lower <= q + k turn <= upper, and of those the nearest to the seed.
+    const double k_low = std::ceil((l.lower - (*q)(i)) / turn - 1e-12);
+    const double k_high = std::floor((l.upper - (*q)(i)) / turn + 1e-12);
+    if (k_low > k_high) return false;
+    const double k_seed = std::round((seed(i) - (*q)(i)) / turn);
+    (*q)(i) += std::clamp(k_seed, k_low, k_high) * turn;
+    (*q)(i) = std::clamp((*q)(i), l.lower, l.upper);  // the 1e-12 slack above
+  }
+  return true;
+}
 
 }  // namespace
 
@@ -183,8 +206,12 @@ IkResult SolveIkSphericalWrist(const KinematicModel& model, const Transform& X_B
                                const JointVector& q_seed, const IkOptions& options) {
   ValidateIkOptions(options);
   std::string why;
+  // The closed form answers to 1e-9 m and rad (Solve's check); a caller asking for less gets
+  // the iterative solver.
+  const bool closed_form = !options.position_only && options.position_tolerance >= 1e-9 &&
+                           options.orientation_tolerance >= 1e-9;
   const std::optional<SphericalWristIk> ik =
-      options.position_only ? std::nullopt : SphericalWristIk::For(model, &why);
+      closed_form ? SphericalWristIk::For(model, &why) : std::nullopt;
   if (!ik || q_seed.size() != model.num_joints() || !q_seed.allFinite() ||
       !WithinLimits(model, q_seed)) {
     return SolveIk(model, X_BE_target, q_seed, options);
@@ -193,8 +220,7 @@ IkResult SolveIkSphericalWrist(const KinematicModel& model, const Transform& X_B
   double best_distance = INFINITY;
   std::vector<JointVector> solutions = ik->Solve(X_BE_target);
   for (JointVector& q : solutions) {
-    q = NearestTurns(model, q, q_seed);
-    if (!WithinLimits(model, q)) continue;
+    if (!TurnsInsideLimits(model, q_seed, &q)) continue;
     const double distance = (q - q_seed).norm();
     if (distance < best_distance) {
       best_distance = distance;

@@ -43,9 +43,10 @@ class SphericalWristIk {
 
   /// Every joint vector (each angle in (-pi, pi], limits not applied) whose end pose is
   /// X_BE_target to within 1e-9 m and 1e-9 rad, checked by forward kinematics; empty when the
-  /// target is out of reach or on a singularity where the closed form is degenerate (the wrist
-  /// centre on axis 1, joint 5 straight, the elbow fully stretched are handled: they give the
-  /// coinciding solutions once each).
+  /// target is out of reach, or when the wrist centre is on axis 1 (every joint-1 angle
+  /// would do: no closed-form answer). Joint 5 straight gives one wrist answer of the family
+  /// (joints 4 and 6 then turn the same axis), the elbow stretched one elbow answer; within
+  /// about 1e-7 rad of those singularities the answers off them may be missing.
   std::vector<JointVector> Solve(const Transform& X_BE_target) const;
 
  private:
@@ -58,11 +59,12 @@ class SphericalWristIk {
 };
 
 /// SolveIk with the closed form where `model` has a spherical wrist and orientation counts:
-/// of the closed form's solutions, each turned by whole turns to the angles nearest q_seed
-/// (NearestTurns), those inside the limits; the nearest to q_seed (joint-space distance) is
-/// returned with iterations 0 and starts 1. Without the structure (or position_only), or when
-/// no solution lies inside the limits, it is SolveIk itself (the result says which in `reason`
-/// only when it fails).
+/// of the closed form's solutions, each joint turned by whole turns to its angle inside the
+/// limits nearest q_seed's, those that fit; the nearest to q_seed (joint-space distance) is
+/// returned with iterations 0 and starts 1. Without the structure, for position_only or
+/// tolerances below the closed form's 1e-9, or when no solution fits the limits, it is SolveIk
+/// itself. It prepares the closed form (one forward kinematics) on every call; a caller
+/// solving many targets of one model can keep a SphericalWristIk.
 IkResult SolveIkSphericalWrist(const KinematicModel& model, const Transform& X_BE_target,
                                const JointVector& q_seed, const IkOptions& options = {});
 

@@ -26,11 +26,14 @@ namespace {
 // starts and is held at zero as unidentifiable. The true arm's axis is not quite square to
 // gravity (its link twist a fraction of a degree off), and then M_y = (that angle) x (the drive
 // torque along the axis, tens of N m): the bearing tilts by c M_y there too. Measured on the
-// twin (tracker_lateral_compliance_j2_declared, tracker and encoders noise-free, 5 trials):
-// with c_x, c_y the physical-truth RMS was 0.004-0.019 mm, growing with the link-1 twist error
-// (0.05-0.075 mm per degree); with c_y freed it was 0.0013-0.0020 mm. The excess e keeps an
-// anisotropic bearing or base representable (c, c + e span what c_x, c_y did) and is held at
-// zero where its column is.
+// twin (tracker_lateral_compliance_j2_declared with the tracker's and encoders' noise set to
+// 1e-4 mm and 1e-6 deg, 5 trials; a variant not shipped): with c_x, c_y the physical-truth
+// RMS was 0.004-0.019 mm, growing with the link-1 twist error (0.05-0.075 mm per degree); with
+// (c, e) it was 0.0013-0.0020 mm. The twin's bearing has one stiffness both ways, so that
+// control favours the form by construction. The excess e keeps an anisotropic bearing or base
+// representable (c, c + e span what c_x, c_y did) where M_y has a column; where it has none at
+// the nominal geometry, e is held at zero and the y tilt is taken as c M_y: right for a round
+// bearing, wrong by e M_y for one stiffer one way.
 // The lumped form keeps a weight per lump and direction, a_xk and a_yk. Its (a_k, a_k + e_k)
 // form spans the same, but on the real Motoman cube file (right_arm_cube.csv) its joint-1 term
 // has 8 parameters of which the data identify 7, and the fit held a different direction than

@@ -100,6 +100,45 @@ TEST(SphericalWristIk, AgreesWithTheIterativeSolver) {
   EXPECT_GT(compared, 150);  // the iterative solver succeeds on nearly all of them
 }
 
+// Joint 5 straight (axes 4 and 6 in line): joints 4 and 6 turn the same axis, a family of
+// answers. The closed form must still give one that reaches the pose with the joints 1-3 the
+// target came from (rounding noise under the square root of the wrist's subproblem made it
+// lose every wrist answer there before).
+TEST(SphericalWristIk, AStraightWristStillHasAnAnswer) {
+  const KinematicModel m = ReinovoLikeModel();
+  const auto ik = SphericalWristIk::For(m, nullptr);
+  ASSERT_TRUE(ik.has_value());
+  // The joint-5 angle where axes 4 and 6 line up, found here by forward kinematics.
+  JointVector q = (JointVector(6) << 0.3, -0.4, 0.6, 0.7, 0.0, -0.5).finished();
+  double straight = NAN;
+  for (double q5 : {0.0, kPi / 2, -kPi / 2}) {
+    q(4) = q5;
+    const FrameSet f = ForwardKinematics(m, q);
+    if (std::abs(f.X_BL[3].linear().col(2).dot(f.X_BL[5].linear().col(2))) > 1.0 - 1e-12) {
+      straight = q5;
+    }
+  }
+  ASSERT_FALSE(std::isnan(straight));
+  std::mt19937_64 rng(9);
+  for (int trial = 0; trial < 50; ++trial) {
+    q = RandomJoints(m, rng);
+    q(4) = straight;
+    const Transform target = EndPose(m, q);
+    const std::vector<JointVector> solutions = ik->Solve(target);
+    bool same_arm = false;
+    for (const JointVector& s : solutions) {
+      // As in the tests above: FK here, 1e-9 for rounding.
+      EXPECT_LT((EndPose(m, s).translation() - target.translation()).norm(), 1e-9);
+      const double arm = std::max({std::abs(std::remainder(s(0) - q(0), 2 * kPi)),
+                                   std::abs(std::remainder(s(1) - q(1), 2 * kPi)),
+                                   std::abs(std::remainder(s(2) - q(2), 2 * kPi))});
+      // 1e-6 rad as above; the wrist's answer is one of its family, checked by FK above.
+      same_arm |= arm < 1e-6;
+    }
+    EXPECT_TRUE(same_arm) << "trial " << trial << ", " << solutions.size() << " answers";
+  }
+}
+
 TEST(SphericalWristIk, RefusesArmsWithoutTheStructureAndSaysWhy) {
   std::string why;
   EXPECT_FALSE(SphericalWristIk::For(testing::SevenJointModel(), &why).has_value());
@@ -154,6 +193,19 @@ TEST(SolveIkSphericalWrist, TakesTheNearestSolutionInsideTheLimitsWithoutIterati
   }
 }
 
+// Limits wider than a turn on one side only (KUKA's A2: -190..45 deg): the answer at -185 deg
+// is found as -185, not dropped as 175 (outside) nor taken at 175.
+TEST(SolveIkSphericalWrist, TurnsEachJointIntoLopsidedLimits) {
+  KinematicModel m = ReinovoLikeModel();
+  m.links[1].limits = {DegToRad(-190.0), DegToRad(45.0)};
+  JointVector q = (JointVector(6) << 0.2, DegToRad(-185.0), 0.4, 0.3, 0.8, -0.2).finished();
+  ASSERT_TRUE(WithinLimits(m, q));
+  const IkResult r = SolveIkSphericalWrist(m, EndPose(m, q), q);
+  ASSERT_EQ(r.status, IkStatus::kSuccess) << r.reason;
+  EXPECT_EQ(r.iterations, 0);  // the closed form answered, not the fallback
+  EXPECT_LT((r.q - q).norm(), 1e-6);  // the seed is an answer: it is the nearest (1e-6: above)
+}
+
 TEST(SolveIkSphericalWrist, FallsBackToTheIterativeSolver) {
   // A seven-joint arm has no closed form here: the iterative solver answers.
   const KinematicModel m = testing::SevenJointModel();
@@ -162,7 +214,14 @@ TEST(SolveIkSphericalWrist, FallsBackToTheIterativeSolver) {
   const IkResult r = SolveIkSphericalWrist(m, target, MidRange(m));
   ASSERT_EQ(r.status, IkStatus::kSuccess) << r.reason;
   EXPECT_GT(r.iterations, 0);
+  // IkOptions' default position tolerance, 1e-7 m, plus rounding.
   EXPECT_LT((EndPose(m, r.q).translation() - target.translation()).norm(), 1.1e-7);
+  // Tolerances tighter than the closed form's 1e-9: the iterative solver answers.
+  IkOptions tight;
+  tight.position_tolerance = tight.orientation_tolerance = 1e-10;
+  const KinematicModel reinovo = ReinovoLikeModel();
+  const Transform pose = EndPose(reinovo, RandomJoints(reinovo, rng));
+  EXPECT_GT(SolveIkSphericalWrist(reinovo, pose, MidRange(reinovo), tight).iterations, 0);
   // Position only: the closed form needs the orientation, so the iterative solver answers.
   IkOptions position_only;
   position_only.position_only = true;
