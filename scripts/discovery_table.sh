@@ -67,7 +67,9 @@ if [ -n "${SCENARIOS:-}" ]; then read -r -a ORDER <<< "$SCENARIOS"; fi
 CLEAN="${ORDER[0]}"
 # REUSE=1: a scenario whose study is already in OUT (trials.jsonl) is tabled as it is, not rerun.
 for s in "${ORDER[@]}"; do
-  if [ "${REUSE:-0}" = 1 ] && [ -s "$OUT/$s/trials.jsonl" ]; then continue; fi
+  # (only a finished study of exactly TRIALS trials: an interrupted one is run again)
+  if [ "${REUSE:-0}" = 1 ] && [ -s "$OUT/$s/trials.jsonl" ] &&
+     [ "$(wc -l < "$OUT/$s/trials.jsonl")" -eq "$TRIALS" ]; then continue; fi
   "$BIN" study "scenarios/discovery/$s.yaml" --trials "$TRIALS" --jobs 2 --out "$OUT/$s" >&2
 done
 # Per trial: trial, effects added (labels joined by ;), geometric-only and discovered RMS over
@@ -89,8 +91,10 @@ printf '# Model discovery on the twin, %s procedure\n\n' "$PROCEDURE"
 printf -- '- date: %s\n- commit: %s\n- machine: %s, %s cores, %s GiB\n' "$(date -u '+%Y-%m-%d %H:%M UTC')" \
   "$(git rev-parse --short HEAD)$(git diff --quiet HEAD -- calib sim bench || echo ' (with uncommitted changes)')" \
   "$(uname -m)" "$(nproc)" "$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)"
-printf -- '- command: `%sscripts/discovery_table.sh %s %s %s`\n' \
+printf -- '- command: `%s%s%sscripts/discovery_table.sh %s %s %s`\n' \
+  "${TWINBENCH:+TWINBENCH=$TWINBENCH }" "${REUSE:+REUSE=$REUSE }" \
   "${SCENARIOS:+SCENARIOS=\"$SCENARIOS\" }" "$TRIALS" "$OUT" "$PROCEDURE"
+printf -- '- binary: %s\n' "$("$BIN" --version)"
 printf -- '- %s trials a scenario: trial t draws the truth from seeds.truth + t and the estimator randomness from seeds.estimator + t of the scenario (twinbench study)\n\n' "$TRIALS"
 printf '| scenario | injected (undeclared) | named | named, or named indistinguishable from the effect added | something else added | truth RMS geometric-only [mm] | discovered [mm] | effect-free [mm] | discovered <= 1.2 x effect-free | covered region: geometric-only / discovered / effect-free [mm] | covered: within 1.2 x |\n'
 printf '|---|---|---|---|---|---|---|---|---|---|---|\n'
