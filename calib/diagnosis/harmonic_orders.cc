@@ -74,4 +74,11 @@ std::vector<std::vector<int>> SpectrumOrdersPerJoint(
   return orders;
 }
 
+std::vector<std::vector<int>> WithFundamental(std::vector<std::vector<int>> orders) {
+  for (std::vector<int>& h : orders) {
+    if (!h.empty() && h.front() != 1) h.insert(h.begin(), 1);
+  }
+  return orders;
+}
+
 }  // namespace twin::discovery

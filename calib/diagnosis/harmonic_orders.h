@@ -39,4 +39,10 @@ std::vector<std::vector<int>> SpectrumOrdersPerJoint(
     const std::vector<std::vector<Eigen::VectorXd>>& residuals,
     const std::vector<const MeasurementContext*>& contexts, int max_order, int per_joint);
 
+/// `orders` with order 1 added to every joint that has any (ascending). The fundamental is tried
+/// whatever the spectrum shows: the geometric fit the residual comes from absorbs much of a
+/// joint's order-1 error (an axis tilt or an offset looks like it over part of a turn), so it can
+/// rank below the leftovers of other orders although the term explains it whole.
+std::vector<std::vector<int>> WithFundamental(std::vector<std::vector<int>> orders);
+
 }  // namespace twin::discovery

@@ -148,7 +148,10 @@ bool AcceptTerm(const Search& search, DiscoveryStep s, int best, RobotModel* cur
 // 0.1825 to 0.1978 mm (+- 0.007): better in the region folds, slightly worse on the other
 // session. The choice was made on that file. Each further order costs a candidate fit per
 // joint and per periodic term (49 candidates a step there, 61 with three; the cube file's
-// diagnosis took 1405 s against 832 s, both beside other jobs).
+// diagnosis took 1405 s against 832 s, both beside other jobs). Order 1 is tried besides these
+// (WithFundamental): on the twin's joint-1 gear error of order 1 (tracker_transmission_j1) the
+// link-frame spectrum ranked orders 2, 5 and 8 above it in 2 of 20 trials, whose discovered
+// model then stayed 2x the effect-free RMS.
 constexpr int kOrdersPerJoint = 3;
 
 // The default candidates (CandidateTermSpecs) with each joint's harmonic orders from the
@@ -185,7 +188,8 @@ std::vector<TermSpec> SpectrumCandidates(const Data& data, const RobotModel& mod
   for (int i = 0; i < data.size(); ++i) contexts[i] = &data.context(i);
   const int joints = model.chain.num_joints();
   const std::vector<TermSpec> fixed = CandidateTermSpecs(
-      model.chain, SpectrumOrders(cv.e, contexts, joints, MaxHarmonicOrder(), kOrdersPerJoint));
+      model.chain, WithFundamental(SpectrumOrders(cv.e, contexts, joints, MaxHarmonicOrder(),
+                                                  kOrdersPerJoint)));
   std::vector<Eigen::VectorXd> e_B = cv.e;
   if (!data.ResidualsInBase(fit, &e_B)) return fixed;
   // A periodic error of the joint's angle (transmission error) turns the lever arm with it: its
@@ -196,8 +200,9 @@ std::vector<TermSpec> SpectrumCandidates(const Data& data, const RobotModel& mod
   // was named 11 of 20 from the fixed frame, 20 of 20 from the link's; a joint-1 wobble of
   // order 2, 20 of 20 from the fixed frame, 11 of 20 from the link's.
   const std::vector<TermSpec> link = CandidateTermSpecs(
-      model.chain, SpectrumOrdersPerJoint(ResidualsInLinkFrames(data, fit.result.model, e_B),
-                                          contexts, MaxHarmonicOrder(), kOrdersPerJoint));
+      model.chain,
+      WithFundamental(SpectrumOrdersPerJoint(ResidualsInLinkFrames(data, fit.result.model, e_B),
+                                             contexts, MaxHarmonicOrder(), kOrdersPerJoint)));
   std::vector<TermSpec> out;
   for (const TermSpec& spec : link) {
     const bool periodic = !spec.orders.empty() && spec.joint >= 0;

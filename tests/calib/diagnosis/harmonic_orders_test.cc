@@ -81,5 +81,12 @@ TEST(HarmonicOrders, InTheLinksFrameAnErrorTurningWithTheJointKeepsItsOrder) {
             (std::vector<std::vector<int>>{{3}}));
 }
 
+TEST(HarmonicOrders, TheFundamentalIsAlwaysTried) {
+  // Added where missing, kept once where present, ascending; a joint without orders (it does
+  // not move) stays without.
+  EXPECT_EQ(WithFundamental({{2, 5, 8}, {1, 3}, {}, {3}}),
+            (std::vector<std::vector<int>>{{1, 2, 5, 8}, {1, 3}, {}, {1, 3}}));
+}
+
 }  // namespace
 }  // namespace twin::discovery
