@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The clean-arm discovery table (docs/results/clean_arms.md): on each shipped arm and on the
+# The clean-arm discovery table (for docs/results/; it prints it on stdout): on each shipped arm and on the
 # UR5e test fixture (tests/data/ur5e.urdf, an arm the repository does not ship), a scenario
 # written by `twinbench new-scenario --procedure PROCEDURE` (geometry errors and encoder noise
 # only: nothing for discovery to find), then a seeded study of TRIALS trials with the diagnosis
@@ -26,11 +26,13 @@ case "$PROCEDURE" in
 esac
 ARMS_GIVEN="${ARMS:-}"
 ARMS="${ARMS:-models/reinovo_r1.yaml models/reinovo_r2.yaml models/abb_irb2400.urdf models/kuka_kr6r900sixx.urdf models/motoman_sda10_right.yaml tests/data/ur5e.urdf}"
+for arm in $ARMS; do   # every arm checked before anything is written or run
+  [ -f "$arm" ] || { echo "clean_arms_table: no arm model '$arm'" >&2; exit 2; }
+done
 mkdir -p "$OUT"
 OUT="$(cd "$OUT" && pwd)"
 STARTED="$(date -u '+%Y-%m-%d %H:%M UTC')"
 for arm in $ARMS; do
-  [ -f "$arm" ] || { echo "clean_arms_table: no arm model '$arm'" >&2; exit 2; }
   name="$(basename "${arm%.*}")"
   scenario="$OUT/$name.yaml"
   [ -f "$scenario" ] || "$BIN" new-scenario --robot "$arm" --procedure "$PROCEDURE" --out "$scenario" >&2
