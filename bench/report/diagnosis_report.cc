@@ -55,6 +55,14 @@ json CandidateJson(const CandidateScore& c, int step) {
           {"p_adjusted", c.tested ? json(c.p_adjusted) : json(nullptr)},
           {"size_test",
            {{"statistic", c.size_statistic}, {"dof", c.size_dof}, {"p_value", c.size_p_value}}},
+          {"detection_limit_mm", std::isfinite(c.detection_limit_m)
+                                     ? json(1e3 * c.detection_limit_m)
+                                     : json(nullptr)},
+          {"blind", std::isinf(c.detection_limit_m)},
+          {"visible_size_test",
+           {{"statistic", c.visible_size_statistic},
+            {"dof", c.visible_size_dof},
+            {"p_value", c.visible_size_p_value}}},
           {"max_geometry_correlation", c.max_geometry_correlation},
           {"min_geometry_correlation", c.min_geometry_correlation},
           {"correlated_with", c.correlated_with},
@@ -168,6 +176,7 @@ json DiagnosisJson(const DiscoveryResult& r) {
   for (std::size_t k = 0; k < r.effects_added.size(); ++k) {
     j["effects_added"].push_back(CandidateJson(r.effects_added[k], static_cast<int>(k) + 1));
   }
+  j["could_hide"] = r.could_hide;
   j["screened"] = json::array();
   for (const CandidateScore& c : r.screened) j["screened"].push_back(CandidateJson(c, 0));
   j["unexplained_evidence"] = json::array();

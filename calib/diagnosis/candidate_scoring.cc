@@ -9,10 +9,14 @@
 #include <optional>
 #include <thread>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+
 #include "calib/common/errors.h"
 #include "calib/diagnosis/cross_validation.h"
 #include "calib/diagnosis/statistics.h"
 #include "calib/identification/dormant_restart.h"
+#include "calib/model/end_point_jacobian.h"
 #include "calib/model/parameter_layout.h"
 
 namespace twin::discovery {
@@ -133,6 +137,107 @@ void MeasureGeometryDisguise(const CandidateFit& f, int base_rank, CandidateScor
   }
 }
 
+namespace {
+
+// Orthonormal basis of the span of A's columns.
+Eigen::MatrixXd SpanBasisOf(const Eigen::MatrixXd& A) {
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  qr.setThreshold(1e-10);
+  return qr.householderQ() * Eigen::MatrixXd::Identity(A.rows(), qr.rank());
+}
+
+}  // namespace
+
+void MeasureDetectionLimit(const Data& data, const CandidateFit& f, double alpha,
+                           CandidateScore* c) {
+  const std::string block = ParameterLayout(f.model).blocks().back().name;
+  const TermGeometryDependence* d = nullptr;
+  for (const TermGeometryDependence& t : f.all.result.term_dependence) {
+    if (t.block == block) d = &t;
+  }
+  // Over the term's amplitudes, its shape parameters (a warm-up's time constant) held as
+  // fitted: a shape acts only through an amplitude, and one the data tell from zero is
+  // ErrorTerm::SizeMeasures' business, not a hiding place of its own.
+  const int m = f.model.terms.back()->amplitude_parameters();
+  if (d == nullptr || m <= 0 || d->visible_information.rows() != f.added || data.size() == 0) {
+    return;
+  }
+  const Eigen::MatrixXd V = d->visible_information.topLeftCorner(m, m);
+  // E: the end point's displacement at every unit, stacked (3 rows a unit), per unit of the
+  // term's parameters, with the other parameters' compensating response and then less the
+  // best rigid motion of all the points (the scores are taken after a rigid alignment, and a
+  // rigid motion of everything is what a tracker's pose or a cell's frame absorbs); E_raw: the
+  // term's own columns. A = E'E / units.
+  const RobotModel& model = f.all.result.model;
+  const Eigen::VectorXd params = GetParameters(model);
+  const int n = data.size();
+  Eigen::MatrixXd E(3 * n, m), E_raw(3 * n, m), rigid(3 * n, 6);
+  for (int i = 0; i < n; ++i) {
+    Vector3 p;
+    PointJacobian J;
+    EndPointJacobian(model, params.data(), data.context(i), &p, &J);
+    E_raw.middleRows(3 * i, 3) = J.middleCols(f.first, m);
+    Eigen::MatrixXd e = E_raw.middleRows(3 * i, 3);
+    for (std::size_t r = 0; r < d->others.size(); ++r) {
+      e -= J.col(d->others[r]) * d->compensation.row(static_cast<Eigen::Index>(r)).head(m);
+    }
+    E.middleRows(3 * i, 3) = e;
+    rigid.block<3, 3>(3 * i, 0).setIdentity();
+    rigid.block<3, 3>(3 * i, 3) << 0, p.z(), -p.y(), -p.z(), 0, p.x(), p.y(), -p.x(), 0;
+  }
+  const Eigen::MatrixXd Q = SpanBasisOf(rigid);
+  E -= Q * (Q.transpose() * E);
+  const Eigen::MatrixXd A = E.transpose() * E / n;
+  const Eigen::MatrixXd A_raw = E_raw.transpose() * E_raw / n;
+  // Directions of the term the measurements see (eigenvalues of V above a relative cut of
+  // its own columns' scale) and those they do not.
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(V);
+  const double cut = 1e-10 * std::max(d->raw_information_scale,
+                                      std::numeric_limits<double>::min());
+  std::vector<int> seen;
+  for (int k = 0; k < m; ++k) {
+    const Eigen::VectorXd u = es.eigenvectors().col(k);
+    if (es.eigenvalues()(k) > cut) {
+      seen.push_back(k);
+      continue;
+    }
+    // Unseen: does it move the end point at all (beside the term's other directions), and
+    // by more than 1e-3 of what it moves without the compensation (numerical noise of the
+    // projection)? A direction that moves nothing (a time constant while its amplitude is
+    // zero) hides nothing.
+    const double moved = u.dot(A * u), raw = u.dot(A_raw * u);
+    if (raw > 1e-12 * A_raw.diagonal().maxCoeff() && moved > 1e-6 * raw) {
+      c->detection_limit_m = std::numeric_limits<double>::infinity();
+      return;
+    }
+  }
+  if (seen.empty()) {
+    c->detection_limit_m = 0.0;  // nothing the data cannot see, and nothing that moves
+    return;
+  }
+  // The size test on the seen directions, at the fitted amplitudes.
+  const Eigen::VectorXd theta = model.term_values.tail(f.added).head(m);
+  const double s0 = f.all.result.sigma0 > 0.0 ? f.all.result.sigma0 : 1.0;
+  double statistic = 0.0;
+  for (int k : seen) {
+    const double along = es.eigenvectors().col(k).dot(theta);
+    statistic += es.eigenvalues()(k) * along * along;
+  }
+  c->visible_size_statistic = statistic / (s0 * s0);
+  c->visible_size_dof = static_cast<int>(seen.size());
+  c->visible_size_p_value = stats::ChiSquareUpperTail(c->visible_size_statistic,
+                                                      c->visible_size_dof);
+  // max theta' A theta subject to theta' V theta = lambda0, over the seen directions.
+  Eigen::MatrixXd W(m, seen.size());
+  for (std::size_t k = 0; k < seen.size(); ++k) {
+    W.col(k) = es.eigenvectors().col(seen[k]) / std::sqrt(es.eigenvalues()(seen[k]));
+  }
+  const Eigen::MatrixXd M = W.transpose() * A * W;
+  const double mu = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(M).eigenvalues().maxCoeff();
+  const double z = stats::NormalUpperQuantile(0.5 * alpha) + stats::NormalUpperQuantile(0.2);
+  c->detection_limit_m = std::sqrt(std::max(0.0, mu)) * z;
+}
+
 void TestHeldOut(const Data& data, const RobotModel& model, const std::vector<int>& region,
                  int folds, const CrossValidation& base_cv, CandidateScore* c) {
   const CrossValidation cv = CrossValidate(data, model, region, folds, "candidate " + c->label);
@@ -155,7 +260,7 @@ void TestHeldOut(const Data& data, const RobotModel& model, const std::vector<in
 
 CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base_rank,
                               const TermSpec& spec, const std::vector<int>& region, int folds,
-                              const CrossValidation& base_cv, bool cross_validate) {
+                              const CrossValidation& base_cv, bool cross_validate, double alpha) {
   CandidateScore c;
   c.spec = spec;
   c.label = TermLabel(spec);
@@ -166,6 +271,8 @@ CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base
   const CandidateFit fit = FitCandidate(data, std::move(model), base_rank, &c);
   // Its parameters and whether its size is told from zero.
   RecordParametersAndSize(data, fit, &c);
+  // How large an effect of it the data could miss, at the end point.
+  MeasureDetectionLimit(data, fit, alpha, &c);
   // Identifiable at all (the rank rises)?
   if (!RaisesRank(data, fit, base_rank, &c)) return c;
   // How nearly it is the geometry in disguise.
@@ -184,7 +291,7 @@ std::vector<CandidateScore> ScoreAll(const Data& data, const RobotModel& current
                                      const std::vector<TermSpec>& specs,
                                      const std::vector<int>& region, int folds,
                                      const CrossValidation& base_cv, bool cross_validate,
-                                     int jobs,
+                                     double alpha, int jobs,
                                      const std::function<void(const std::string&)>& say,
                                      const std::string& what) {
   TWIN_REQUIRE(jobs >= 1, "ScoreAll: " + std::to_string(jobs) + " jobs");
@@ -198,7 +305,7 @@ std::vector<CandidateScore> ScoreAll(const Data& data, const RobotModel& current
     for (int k = next++; k < static_cast<int>(specs.size()); k = next++) {
       try {
         out[k] = ScoreCandidate(data, current, base_rank, specs[k], region, folds, base_cv,
-                                cross_validate);
+                                cross_validate, alpha);
       } catch (const InputError& e) {
         out[k].spec = specs[k];
         out[k].label = TermLabel(specs[k]);

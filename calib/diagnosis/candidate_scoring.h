@@ -70,6 +70,12 @@ bool RaisesRank(const Data& data, const CandidateFit& f, int base_rank, Candidat
 /// parameter nearest it.
 void MeasureGeometryDisguise(const CandidateFit& f, int base_rank, CandidateScore* c);
 
+/// The term's detection limit at the end point (CandidateScore::detection_limit_m) at level
+/// `alpha`, from the all-data fit's TermGeometryDependence and the end point's Jacobian at
+/// each unit's context.
+void MeasureDetectionLimit(const Data& data, const CandidateFit& f, double alpha,
+                           CandidateScore* c);
+
 /// The candidate's region cross-validation against the base's `base_cv`: held-out RMS, gain
 /// (reduction of the held-out loss sum [%]) and Wilcoxon's one-sided p on the per-unit loss
 /// differences; c->tested true.
@@ -81,7 +87,7 @@ void TestHeldOut(const Data& data, const RobotModel& model, const std::vector<in
 /// where an identification of it refuses the data.
 CandidateScore ScoreCandidate(const Data& data, const RobotModel& base, int base_rank,
                               const TermSpec& spec, const std::vector<int>& region, int folds,
-                              const CrossValidation& base_cv, bool cross_validate = true);
+                              const CrossValidation& base_cv, bool cross_validate, double alpha);
 
 /// Every candidate of `specs` scored beside `current` (ScoreCandidate), `jobs` at a time, in
 /// the order of `specs` whatever `jobs`; a candidate whose identification refuses the data
@@ -92,7 +98,7 @@ std::vector<CandidateScore> ScoreAll(const Data& data, const RobotModel& current
                                      const std::vector<TermSpec>& specs,
                                      const std::vector<int>& region, int folds,
                                      const CrossValidation& base_cv, bool cross_validate,
-                                     int jobs,
+                                     double alpha, int jobs,
                                      const std::function<void(const std::string&)>& say,
                                      const std::string& what);
 

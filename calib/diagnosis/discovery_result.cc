@@ -1,5 +1,7 @@
 #include "calib/diagnosis/discovery_result.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 
@@ -57,6 +59,54 @@ void AddScreeningSummary(const DiscoveryOptions& o, DiscoveryResult* r) {
   r->reason += "; of " + std::to_string(r->screened.size()) +
                " candidates fitted beside the model the data could see " + std::to_string(seen) +
                ", " + std::to_string(unseen) + " are unidentifiable from them (screened[])";
+  // The ones an effect could hide in: blind to a combination of them, or a detection limit
+  // above the stated multiple of the noise floor.
+  const double limit = o.could_hide_noise_multiple * r->noise.sigma_m;
+  std::vector<const CandidateScore*> room;
+  for (const CandidateScore& c : r->screened) {
+    if (c.detection_limit_m > limit) room.push_back(&c);  // NaN: not computed, never named
+  }
+  std::stable_sort(room.begin(), room.end(), [](const CandidateScore* a, const CandidateScore* b) {
+    return a->detection_limit_m > b->detection_limit_m;
+  });
+  r->could_hide.clear();
+  std::ostringstream os;
+  for (const CandidateScore* c : room) {
+    r->could_hide.push_back(c->label);
+    os << (os.tellp() > 0 ? ", " : "") << c->label << " ("
+       << (std::isinf(c->detection_limit_m) ? "unidentifiable: blind to a combination that "
+                                              "moves the end point"
+                                            : "up to " + Mm(c->detection_limit_m))
+       << ")";
+  }
+  if (!room.empty()) {
+    std::ostringstream k;
+    k << o.could_hide_noise_multiple;
+    r->reason += "; an effect of " + std::to_string(room.size()) +
+                 " of them could be there unseen, moving the end point by more than " +
+                 Mm(limit) + " RMS (" + k.str() + " x the noise floor's sigma; the size a test " +
+                 "finds with 80 % power): " + os.str();
+  }
+}
+
+ScreenAlarm StrongestScreenedSize(const DiscoveryOptions& o, const DiscoveryResult& r) {
+  ScreenAlarm a;
+  double smallest = 1.0;
+  for (std::size_t k = 0; k < r.screened.size(); ++k) {
+    const CandidateScore& c = r.screened[k];
+    const Refusal j = Judge(c, o);
+    if (j == Refusal::kNotApplicable || j == Refusal::kNotIdentifiable ||
+        j == Refusal::kGeometryDisguise || c.visible_size_dof <= 0) {
+      continue;
+    }
+    ++a.family;
+    if (a.index < 0 || c.visible_size_p_value < smallest) {
+      a.index = static_cast<int>(k);
+      smallest = c.visible_size_p_value;
+    }
+  }
+  a.p_adjusted = std::min(1.0, smallest * a.family);
+  return a;
 }
 
 void StateSearchVerdict(double heldout_rms_discovered_m, DiscoveryResult* out) {

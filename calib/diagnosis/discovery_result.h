@@ -20,6 +20,18 @@ void StateNoiseVerdict(const DiscoveryOptions& o, DiscoveryResult* r);
 /// unidentifiable (Judge: applicable, and identifiable or not).
 void AddScreeningSummary(const DiscoveryOptions& o, DiscoveryResult* r);
 
+/// The screen's targeted evidence: among the screened candidates the data can see (Judge
+/// does not refuse them as not applicable, not identifiable or a disguise of the geometry,
+/// and they have a visible size test), the one whose visible size test
+/// (CandidateScore::visible_size_p_value) is smallest, with that p Holm-adjusted over them
+/// (for the smallest, times their number).
+struct ScreenAlarm {
+  int index = -1;           ///< into DiscoveryResult::screened; -1: no candidate qualifies
+  double p_adjusted = 1.0;  ///< [-]
+  int family = 0;           ///< candidates adjusted over
+};
+ScreenAlarm StrongestScreenedSize(const DiscoveryOptions& o, const DiscoveryResult& r);
+
 /// The verdict after a search: effects_added, or unexplained where none was added (then
 /// test_after is test_before); `heldout_rms_discovered_m` of the discovered model [m].
 void StateSearchVerdict(double heldout_rms_discovered_m, DiscoveryResult* r);

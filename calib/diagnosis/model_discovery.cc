@@ -5,6 +5,7 @@
 #include <functional>
 #include <map>
 #include <numeric>
+#include <sstream>
 #include <utility>
 
 #include "calib/common/cpus.h"
@@ -86,7 +87,7 @@ void ConcludeConsistentWithNoise(const Search& search, const RobotModel& current
   if (!o.screen_when_noise) return;
   const int base_rank = search.data.FitOn(current, {}, "screen base").result.observability.rank;
   r->screened = ScoreAll(search.data, current, base_rank, search.all_specs, search.region,
-                         search.folds, current_region, false, search.jobs, search.say,
+                         search.folds, current_region, false, o.alpha, search.jobs, search.say,
                          "screen");
   AddScreeningSummary(o, r);
 }
@@ -100,7 +101,8 @@ DiscoveryStep ScoreStep(const Search& search, const RobotModel& current,
   s.index = step;
   s.heldout_rms_before_m = current_region.Rms();
   s.candidates = ScoreAll(search.data, current, base_rank, search.all_specs, search.region,
-                          search.folds, current_region, true, search.jobs, search.say,
+                          search.folds, current_region, true, search.o.alpha, search.jobs,
+                          search.say,
                           "step " + std::to_string(step));
   return s;
 }
@@ -265,6 +267,25 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
   if (!r.test_before.systematic) {
     // Step 4 without a search: consistent with the noise, the candidates screened.
     ConcludeConsistentWithNoise(search, current, current_region, &r);
+    // Unless the screen's targeted tests see what the global one missed: then search.
+    const ScreenAlarm alarm = StrongestScreenedSize(o, r);
+    if (o.screen_when_noise && alarm.index >= 0 && alarm.p_adjusted < o.alpha) {
+      const CandidateScore& c = r.screened[alarm.index];
+      std::ostringstream why;
+      why << "the residual test passed (p = " << r.test_before.p_value << "), but the screen "
+          << "told the size of " << c.label << " from zero (p = " << c.visible_size_p_value
+          << ", Holm-adjusted over " << alarm.family << " screened candidates: "
+          << alarm.p_adjusted << " < alpha = " << o.alpha << "), so the search ran";
+      say("diagnosis: " + why.str());
+      const std::string screened_reason = r.reason;
+      SelectTerms(search, &current, &current_region, &r);
+      if (!r.effects_added.empty()) {
+        StateSearchVerdict(current_region.Rms(), &r);
+        r.reason = why.str() + "; " + r.reason;
+      } else {
+        r.reason = screened_reason + "; " + why.str() + " and added nothing (steps[])";
+      }
+    }
   } else {
     // Step 3: forward selection of terms.
     SelectTerms(search, &current, &current_region, &r);
@@ -321,6 +342,9 @@ void ValidateDiscoveryOptions(const DiscoveryOptions& o) {
     fail("correlation_limit", "must be in (0, 1]");
   }
   if (o.jobs < 0) fail("jobs", "must be >= 0");
+  if (!(o.could_hide_noise_multiple > 0.0 && std::isfinite(o.could_hide_noise_multiple))) {
+    fail("could_hide_noise_multiple", "must be a finite number > 0");
+  }
   if (!(o.joint_sigma_rad >= 0.0 && o.joint_sigma_rad <= 0.01)) {
     fail("joint_sigma", "must be from 0 to 0.01 rad (0.57 deg)");
   }

@@ -148,6 +148,12 @@ struct DiscoveryOptions {
   /// (DiscoveryResult::screened): whether the data could see it at all, and its size with
   /// 1 sigma, i.e. how large an effect the data leave room for.
   bool screen_when_noise = true;
+  /// A screened candidate whose detection limit at the end point
+  /// (CandidateScore::detection_limit_m) exceeds this multiple of the noise floor's sigma, or
+  /// that has a combination the data cannot see at all, is named in the verdict's reason and
+  /// in DiscoveryResult::could_hide: the residual is consistent with the noise, yet an effect
+  /// of that term could be there, larger than this, unseen [-] (> 0).
+  double could_hide_noise_multiple = 3.0;
   IdentificationOptions engine;    ///< of every identification
   TrackerSetOptions set;           ///< default sigma, source for messages (tracker points)
   /// Optical axes: the stated noise (sigma_perpendicular, sigma_depth), the use of depths and
@@ -228,6 +234,28 @@ struct CandidateScore {
   double size_statistic = 0;
   int size_dof = 0;
   double size_p_value = 1;
+  /// Detection limit at the end point [m]: the largest RMS over the data's poses of the end
+  /// point's displacement that an effect of this term could cause, with every other parameter
+  /// refitted to it, while a test of its size at level alpha would find it with probability
+  /// below 0.8 (Baarda's minimal detectable bias: the effect's non-centrality on the weighted
+  /// residuals, theta' V theta with V TermGeometryDependence::visible_information, at most
+  /// (z(1 - alpha / 2) + z(0.8))^2; 7.85 at alpha 0.05). +inf: a combination of its
+  /// parameters the data cannot see at all moves the end point (unidentifiable there, at any
+  /// size). NaN: not computed (not applicable, or its fit refused the data). The displacement
+  /// is the model's end point (EndPose), in the base frame, beside the other parameters' least
+  /// squares response to the effect in the measurements; a nuisance's response (a tracker's
+  /// pose, an axis's line) is not credited, so a limit can overstate an effect the nuisance
+  /// would absorb.
+  double detection_limit_m = std::numeric_limits<double>::quiet_NaN();
+  /// The size test on what the measurements see of the term (the screen's alarm,
+  /// StrongestScreenedSize): theta' V theta / sigma0^2 over V's seen eigen-directions (those
+  /// detection_limit_m keeps), theta the term's fitted amplitudes, sigma0 the fit's a
+  /// posteriori factor, against chi-square(visible_size_dof). Unlike size_p_value it leaves
+  /// out the combinations the data cannot tell from the geometry, where a partly identifiable
+  /// term's marginal covariance says nothing. dof 0, p 1: not computed.
+  double visible_size_statistic = 0;
+  int visible_size_dof = 0;
+  double visible_size_p_value = 1;
   bool tested = false;              ///< applicable, identifiable, and entered the correction
   /// ErrorTerm::driver: a measured quantity, or the session's clock (levelling off or not)
   TermDriver driver = TermDriver::kMeasured;
@@ -336,6 +364,10 @@ struct DiscoveryResult {
   /// all the data beside the starting model, none tested or added (tested false): applicable,
   /// identifiable (by name when not), its parameters with 1-sigma, its disguise of the geometry.
   std::vector<CandidateScore> screened;
+  /// Of the screened candidates, those the data leave room for (detection limit above
+  /// DiscoveryOptions::could_hide_noise_multiple times the noise floor's sigma, or blind to a
+  /// combination of it): their labels, largest limit first, the blind ones first of all.
+  std::vector<std::string> could_hide;
   RobotModel model;               ///< the discovered model, identified on every point
   Transform X_TB = Transform::Identity();  ///< tracker points: the tracker pose
   std::vector<ResidualCorrelation> evidence;  ///< strongest |r| first (at most 8)

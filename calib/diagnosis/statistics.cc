@@ -86,6 +86,16 @@ WaldTest WaldTestZero(const Eigen::VectorXd& a, const Eigen::MatrixXd& C) {
 
 double NormalUpperTail(double z) { return 0.5 * std::erfc(z / std::sqrt(2.0)); }
 
+double NormalUpperQuantile(double p) {
+  TWIN_REQUIRE(p > 0.0 && p < 1.0, "NormalUpperQuantile: p = " + std::to_string(p));
+  double lo = -40.0, hi = 40.0;  // the tail is decreasing in z
+  while (hi - lo > 1e-12) {
+    const double mid = 0.5 * (lo + hi);
+    (NormalUpperTail(mid) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
 PairedTest WilcoxonSignedRankGreater(const std::vector<double>& d) {
   std::vector<double> nz;
   for (double v : d) {

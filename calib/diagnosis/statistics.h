@@ -23,6 +23,9 @@ double ChiSquareUpperTail(double x, double dof);
 /// Standard normal upper tail P(Z >= z).
 double NormalUpperTail(double z);
 
+/// Its inverse: z with P(Z >= z) = p, for p in (0, 1) (bisection to 1e-12 in z).
+double NormalUpperQuantile(double p);
+
 /// Result of the paired test.
 struct PairedTest {
   int pairs = 0;      ///< non-zero differences used

@@ -207,6 +207,23 @@ std::vector<TermGeometryDependence> TermDependence(const Eigen::MatrixXd& Jp, in
       d.canonical_correlations.assign(QT.cols(), 0.0);
       d.nearest_geometric.assign(QT.cols(), "");
     }
+    // Visibility beside every other free parameter (geometry and the other terms).
+    const Eigen::MatrixXd JT = Jm.middleCols(b.begin, b.size);
+    for (int i : free) {
+      if (i < b.begin || i >= b.begin + b.size) d.others.push_back(i);
+    }
+    Eigen::MatrixXd K(Jm.rows(), d.others.size());
+    for (std::size_t c = 0; c < d.others.size(); ++c) K.col(c) = Jm.col(d.others[c]);
+    Eigen::MatrixXd seen = JT;
+    if (K.cols() > 0) {
+      const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(K);
+      d.compensation = cod.solve(JT);
+      seen -= K * d.compensation;
+    } else {
+      d.compensation = Eigen::MatrixXd(0, b.size);
+    }
+    d.visible_information = seen.transpose() * seen;
+    d.raw_information_scale = (JT.transpose() * JT).diagonal().maxCoeff();
     out.push_back(std::move(d));
   }
   return out;

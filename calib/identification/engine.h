@@ -84,6 +84,20 @@ struct TermGeometryDependence {
   std::vector<double> canonical_correlations;
   /// Per direction, the free geometric parameter whose column is most aligned with it.
   std::vector<std::string> nearest_geometric;
+  /// What the measurements see of the term once every other free parameter is refitted
+  /// (weighted rows, nuisance profiled out): with J_T the term's columns, K the other free
+  /// parameters' columns and P the projection onto the complement of K's span,
+  /// visible_information = (P J_T)' (P J_T) (the term's parameters, in their flat order: an
+  /// effect theta moves the weighted residuals by theta' V theta in squared norm, the
+  /// non-centrality of a test for it [SI^-2]), and compensation = K^+ J_T (rows: `others`),
+  /// the other parameters' least-squares change that mimics theta (they move by
+  /// -compensation theta when the term is left out).
+  Eigen::MatrixXd visible_information;
+  Eigen::MatrixXd compensation;
+  std::vector<int> others;  ///< the flat indices of compensation's rows
+  /// Largest diagonal of J_T' J_T: the scale against which visible_information's eigenvalues
+  /// count as zero [SI^-2].
+  double raw_information_scale = 0;
 };
 
 /// One parameter of the identified model.

@@ -116,7 +116,7 @@ TEST(CandidateScoring, ARefusalOfTheDataIsACandidatesOutcomeAndAnyOtherErrorABug
   std::vector<std::string> lines;
   const auto say = [&](const std::string& line) { lines.push_back(line); };
   const std::vector<CandidateScore> out =
-      ScoreAll(data, base, 30, {kCompliance2, kThermalGrowth}, {0, 1, 0}, 2, base_cv, true, 2,
+      ScoreAll(data, base, 30, {kCompliance2, kThermalGrowth}, {0, 1, 0}, 2, base_cv, true, 0.05, 2,
                say, "step 1");
   ASSERT_EQ(out.size(), 2u);
   EXPECT_EQ(out[0].label, TermLabel(kCompliance2));  // in the order of the specs
@@ -128,10 +128,10 @@ TEST(CandidateScoring, ARefusalOfTheDataIsACandidatesOutcomeAndAnyOtherErrorABug
   data.fit = [](const RobotModel&, const std::string&) -> Fit {
     throw std::logic_error("a bug");
   };
-  EXPECT_THROW(ScoreAll(data, base, 30, {kCompliance2}, {0, 1, 0}, 2, base_cv, true, 1, say,
+  EXPECT_THROW(ScoreAll(data, base, 30, {kCompliance2}, {0, 1, 0}, 2, base_cv, true, 0.05, 1, say,
                         "step 1"),
                std::logic_error);
-  EXPECT_THROW(ScoreAll(data, base, 30, {kCompliance2}, {0, 1, 0}, 2, base_cv, true, 0, say,
+  EXPECT_THROW(ScoreAll(data, base, 30, {kCompliance2}, {0, 1, 0}, 2, base_cv, true, 0.05, 0, say,
                         "step 1"),
                PreconditionError);
 }
