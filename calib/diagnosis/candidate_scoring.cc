@@ -139,8 +139,13 @@ void MeasureGeometryDisguise(const CandidateFit& f, int base_rank, CandidateScor
 
 namespace {
 
-// Orthonormal basis of the span of A's columns.
-Eigen::MatrixXd SpanBasisOf(const Eigen::MatrixXd& A) {
+// Orthonormal basis of the span of A's columns (each scaled to unit length first, so that the
+// rank cut does not depend on their units; zero columns add nothing).
+Eigen::MatrixXd SpanBasisOf(Eigen::MatrixXd A) {
+  for (Eigen::Index c = 0; c < A.cols(); ++c) {
+    const double norm = A.col(c).norm();
+    if (norm > 0.0) A.col(c) /= norm;
+  }
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
   qr.setThreshold(1e-10);
   return qr.householderQ() * Eigen::MatrixXd::Identity(A.rows(), qr.rank());
@@ -164,9 +169,9 @@ void MeasureDetectionLimit(const Data& data, const CandidateFit& f, double alpha
   }
   const Eigen::MatrixXd V = d->visible_information.topLeftCorner(m, m);
   // E: the end point's displacement at every unit, stacked (3 rows a unit), per unit of the
-  // term's parameters, with the other parameters' compensating response and then less the
-  // best rigid motion of all the points (the scores are taken after a rigid alignment, and a
-  // rigid motion of everything is what a tracker's pose or a cell's frame absorbs); E_raw: the
+  // term's parameters, with the other parameters' compensating response, then less the best
+  // rigid motion of all the points (the scores are taken after a rigid alignment, and a rigid
+  // motion of everything is what a tracker's pose or a cell's frame absorbs). E_raw: the
   // term's own columns. A = E'E / units.
   const RobotModel& model = f.all.result.model;
   const Eigen::VectorXd params = GetParameters(model);

@@ -241,11 +241,12 @@ struct CandidateScore {
   /// residuals, theta' V theta with V TermGeometryDependence::visible_information, at most
   /// (z(1 - alpha / 2) + z(0.8))^2; 7.85 at alpha 0.05). +inf: a combination of its
   /// parameters the data cannot see at all moves the end point (unidentifiable there, at any
-  /// size). NaN: not computed (not applicable, or its fit refused the data). The displacement
-  /// is the model's end point (EndPose), in the base frame, beside the other parameters' least
-  /// squares response to the effect in the measurements; a nuisance's response (a tracker's
-  /// pose, an axis's line) is not credited, so a limit can overstate an effect the nuisance
-  /// would absorb.
+  /// size). NaN: not computed (not applicable, or its fit refused the data). Over the term's
+  /// amplitudes, its shape parameters held as fitted. The displacement is the model's end
+  /// point (EndPose), in the base frame, beside the other parameters' least-squares response
+  /// to the effect in the measurements (TermGeometryDependence::compensation), less the best
+  /// rigid motion of all the points (what a tracker's pose or the cell's frame takes up, and
+  /// what the rigid scores leave out).
   double detection_limit_m = std::numeric_limits<double>::quiet_NaN();
   /// The size test on what the measurements see of the term (the screen's alarm,
   /// StrongestScreenedSize): theta' V theta / sigma0^2 over V's seen eigen-directions (those

@@ -212,15 +212,29 @@ std::vector<TermGeometryDependence> TermDependence(const Eigen::MatrixXd& Jp, in
     for (int i : free) {
       if (i < b.begin || i >= b.begin + b.size) d.others.push_back(i);
     }
-    Eigen::MatrixXd K(Jm.rows(), d.others.size());
-    for (std::size_t c = 0; c < d.others.size(); ++c) K.col(c) = Jm.col(d.others[c]);
+    // The others' columns in the layout's scaled units (so that a relative singular-value cut
+    // means the same for a length and an angle).
+    const int k_others = static_cast<int>(d.others.size());
+    Eigen::VectorXd scale(k_others);
+    Eigen::MatrixXd K(Jm.rows(), k_others);
+    for (int c = 0; c < k_others; ++c) {
+      scale(c) = layout[d.others[c]].scale;
+      K.col(c) = Jm.col(d.others[c]) * scale(c);
+    }
     Eigen::MatrixXd seen = JT;
-    if (K.cols() > 0) {
-      const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(K);
-      d.compensation = cod.solve(JT);
-      seen -= K * d.compensation;
-    } else {
-      d.compensation = Eigen::MatrixXd(0, b.size);
+    d.compensation = Eigen::MatrixXd::Zero(k_others, b.size);
+    if (k_others > 0) {
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(K, Eigen::ComputeThinU | Eigen::ComputeThinV);
+      const Eigen::VectorXd sv = svd.singularValues();
+      // Least squares on the others' span (a numerical cut only: a fit of everything moves
+      // the others along weakly seen directions too), in scaled coordinates
+      // W S^-1 U' J_T, then in SI; what is left of J_T is what the measurements see.
+      int r = 0;
+      while (r < sv.size() && sv(r) > 1e-12 * sv(0)) ++r;
+      const Eigen::MatrixXd U = svd.matrixU().leftCols(r);
+      d.compensation = scale.asDiagonal() * svd.matrixV().leftCols(r) *
+                       sv.head(r).cwiseInverse().asDiagonal() * (U.transpose() * JT);
+      seen -= U * (U.transpose() * JT);
     }
     d.visible_information = seen.transpose() * seen;
     d.raw_information_scale = (JT.transpose() * JT).diagonal().maxCoeff();

@@ -86,12 +86,14 @@ struct TermGeometryDependence {
   std::vector<std::string> nearest_geometric;
   /// What the measurements see of the term once every other free parameter is refitted
   /// (weighted rows, nuisance profiled out): with J_T the term's columns, K the other free
-  /// parameters' columns and P the projection onto the complement of K's span,
-  /// visible_information = (P J_T)' (P J_T) (the term's parameters, in their flat order: an
-  /// effect theta moves the weighted residuals by theta' V theta in squared norm, the
-  /// non-centrality of a test for it [SI^-2]), and compensation = K^+ J_T (rows: `others`),
-  /// the other parameters' least-squares change that mimics theta (they move by
-  /// -compensation theta when the term is left out).
+  /// parameters' columns (scaled by ParameterInfo::scale) and P the projection onto the
+  /// complement of K's span, visible_information = (P J_T)' (P J_T) (the term's parameters,
+  /// in their flat order: an effect theta moves the weighted residuals by theta' V theta in
+  /// squared norm, the non-centrality of a test for it [SI^-2]), and compensation = K^+ J_T
+  /// (rows: `others`, SI), the other parameters' least-squares change that mimics theta (they
+  /// move by -compensation theta when the term is left out). A direction of the others that
+  /// the data barely see can take up much of a term at a large compensation: the term's
+  /// detection limit is then large, as it should be.
   Eigen::MatrixXd visible_information;
   Eigen::MatrixXd compensation;
   std::vector<int> others;  ///< the flat indices of compensation's rows

@@ -31,6 +31,10 @@ constexpr int kMaxOverviewHeight = 1200;
 // start are tolerated while they get no deeper than this [m] (the stop halts the robot, so
 // only the other robot's servo settling can deepen them, by far less).
 constexpr double kBackOutSlack = 1e-4;
+// A joint standing off its servo's command by more than this at rest, in a contact, is pressed
+// by it [rad]: 0.1 mm at 1 m; ten times the light touch of a board on a link, a fifth of a
+// halted arm pressed against its base (TwinCellImpl::Run).
+constexpr double kPressedOffRad = 1e-4;
 
 // The Euler step with implicit damping of a critically damped servo is stable while
 // omega dt < 2 + 2 sqrt(2) ~ 4.83 (omega = sqrt(kp / M_ii)); measured: armature 0.1 kg m^2 at
@@ -290,6 +294,18 @@ struct TwinCell::Impl {
     return nullptr;
   }
 
+  // The largest angle by which any joint stands off what its servo commands [rad]: with the
+  // gravity feed-forward about 1e-11 at rest; more where something pushes on the arm.
+  double PressedOff() const {
+    double largest = 0.0;
+    for (int k = 0; k < Robots(); ++k) {
+      for (int i = 0; i < Joints(k); ++i) {
+        largest = std::max(largest, std::abs(d->qpos[qadr[k][i]] - d->ctrl[act[k][i]]));
+      }
+    }
+    return largest;
+  }
+
   std::map<std::pair<int, int>, double> CurrentContacts() const {
     std::map<std::pair<int, int>, double> contacts;
     for (int i = 0; i < d->ncon; ++i) {
@@ -413,14 +429,18 @@ struct TwinCell::Impl {
     ApplyModelMotion();
     mj_forward(m.get(), d.get());  // kinematics, cameras and contacts of the final state
     if (result.status == MoveStatus::kSettled) {
-      // At rest, no contact is tolerated, not even one the move started in: a contact it was
-      // allowed to back out of but came to rest still in presses on the arm, which then stands
-      // off its commanded angles while the encoders read them (a UR5e halted against its own
-      // base by a collided move took its next pose 0.45 mrad off at joint 2: a 0.37 mm outlier
-      // of a tracker calibration). A real controller stops on it; the caller gets kCollision.
-      if (const mjContact* c = Collision({})) {
+      if (const mjContact* c = Collision(tolerated)) {
         result.status = MoveStatus::kCollision;
-        result.reason = "came to rest touching: " + ContactText(*c);
+        result.reason = ContactText(*c);
+      } else if (const mjContact* p = Collision({}); p != nullptr && PressedOff() > kPressedOffRad) {
+        // A contact the move started in (allowed, so that it can back out) that it came to
+        // rest still in, pressing the arm off its commanded angles: a UR5e halted against its
+        // own base by a collided move took its next pose 0.45 mrad off at joint 2 while the
+        // encoders read the command, a 0.37 mm outlier of a tracker calibration. A real
+        // controller's collision detection stops on such a force; a light touch (a board
+        // resting on a link, 1e-5 rad) it does not notice, nor does this.
+        result.status = MoveStatus::kCollision;
+        result.reason = "came to rest pressed against it: " + ContactText(*p);
       }
     }
     result.duration_s = d->time - t0;

@@ -3,6 +3,7 @@
 // feature point's offset from the axis measured as a servo with a residual would).
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <string>
 #include <vector>
@@ -149,6 +150,44 @@ TEST(OpticalAxisDiscovery, AnEffectInvisibleToTheLineConstraintIsNamedUnidentifi
   // Without depths 2 rows a sample, lines of 4 parameters.
   EXPECT_LT(r.test_before.dof, 100.0 - 20.0);
   EXPECT_LT(r.noise.depth_sigma_m, 0.0);
+}
+
+// Detection limits on a geometric truth (consistent with the noise, every candidate screened):
+// - thermal growth at a steady 5 K is a uniform scale of the lengths, which the geometry's own
+//   lengths reproduce exactly, at the board's point as in the measurements: it can hide
+//   nothing there (limit 0, to rounding);
+// - the same samples without their depths carry less information, never more: joint 2's
+//   compliance can hide at least as large an effect without them, and where its limit passes
+//   3 x the noise floor's sigma the verdict names it.
+TEST(OpticalAxisDiscovery, DetectionLimitsFollowWhatTheDataSee) {
+  Data d = MakeData(21, {});
+  for (AxisSample& s : d.samples) s.temperature_delta_K = 5.0;
+  const auto screen = [](const Data& data) {
+    return DiscoverOpticalAxisModel(data.nominal, data.samples,
+                                    Options({kThermalGrowth, kCompliance2}));
+  };
+  const DiscoveryResult with = screen(d);
+  for (AxisSample& s : d.samples) s.depth = std::nan("");
+  const DiscoveryResult without = screen(d);
+  for (const DiscoveryResult* r : {&with, &without}) {
+    ASSERT_EQ(r->verdict, DiscoveryVerdict::kConsistentWithNoise) << r->reason;
+    ASSERT_EQ(r->screened.size(), 2u);
+    // 1e-9 m: rounding of the projections, a millionth of the noise floor.
+    EXPECT_NEAR(r->screened[0].detection_limit_m, 0.0, 1e-9) << r->screened[0].note;
+    EXPECT_TRUE(std::isfinite(r->screened[1].detection_limit_m)) << r->screened[1].label;
+  }
+  const double limit_with = with.screened[1].detection_limit_m;
+  const double limit_without = without.screened[1].detection_limit_m;
+  std::printf("[ measured ] joint 2 compliance's detection limit: %.4g mm with depths, %.4g mm "
+              "without\n", 1e3 * limit_with, 1e3 * limit_without);
+  EXPECT_GE(limit_without, limit_with);
+  for (const DiscoveryResult* r : {&with, &without}) {
+    const bool named = std::find(r->could_hide.begin(), r->could_hide.end(),
+                                 "joint_compliance (joint 2)") != r->could_hide.end();
+    EXPECT_EQ(named, r->screened[1].detection_limit_m > 3.0 * r->noise.sigma_m) << r->reason;
+    EXPECT_EQ(named, r->reason.find("joint_compliance (joint 2) (up to") != std::string::npos)
+        << r->reason;
+  }
 }
 
 TEST(OpticalAxisDiscovery, ASystematicResidualNoCandidateExplainsIsUnexplainedAndPlacebosAreRejected) {
