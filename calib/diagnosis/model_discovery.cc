@@ -269,13 +269,14 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
     ConcludeConsistentWithNoise(search, current, current_region, &r);
     // Unless the screen's targeted tests see what the global one missed: then search.
     const ScreenAlarm alarm = StrongestScreenedSize(o, r);
-    if (o.screen_when_noise && alarm.index >= 0 && alarm.p_adjusted < o.alpha) {
+    const double alarm_level = o.screen_alarm_fraction * o.alpha;
+    if (o.screen_when_noise && alarm.index >= 0 && alarm.p_adjusted < alarm_level) {
       const CandidateScore& c = r.screened[alarm.index];
       std::ostringstream why;
       why << "the residual test passed (p = " << r.test_before.p_value << "), but the screen "
           << "told the size of " << c.label << " from zero (p = " << c.visible_size_p_value
           << ", Holm-adjusted over " << alarm.family << " screened candidates: "
-          << alarm.p_adjusted << " < alpha = " << o.alpha << "), so the search ran";
+          << alarm.p_adjusted << " < " << alarm_level << "), so the search ran";
       say("diagnosis: " + why.str());
       const std::string screened_reason = r.reason;
       SelectTerms(search, &current, &current_region, &r);
@@ -342,6 +343,9 @@ void ValidateDiscoveryOptions(const DiscoveryOptions& o) {
     fail("correlation_limit", "must be in (0, 1]");
   }
   if (o.jobs < 0) fail("jobs", "must be >= 0");
+  if (!(o.screen_alarm_fraction > 0.0 && o.screen_alarm_fraction <= 1.0)) {
+    fail("screen_alarm_fraction", "must be in (0, 1]");
+  }
   if (!(o.could_hide_noise_multiple > 0.0 && std::isfinite(o.could_hide_noise_multiple))) {
     fail("could_hide_noise_multiple", "must be a finite number > 0");
   }

@@ -154,6 +154,13 @@ struct DiscoveryOptions {
   /// in DiscoveryResult::could_hide: the residual is consistent with the noise, yet an effect
   /// of that term could be there, larger than this, unseen [-] (> 0).
   double could_hide_noise_multiple = 3.0;
+  /// Level of the screen's alarm (StrongestScreenedSize's Holm-adjusted p below it starts the
+  /// search where the residual test passed) as a fraction of alpha [-] (in (0, 1]). It
+  /// overrides a test that has already passed, on the same data, and its chi-square assumes
+  /// independent noise, which samples along one optical axis do not have (their residual test
+  /// reads p ~ 1): 0.1 asks ten times the evidence. At 1, 3 of 20 clean optical-axis trials of
+  /// the twin raised it (adjusted p 0.02-0.034) and 2 added a term.
+  double screen_alarm_fraction = 0.1;
   IdentificationOptions engine;    ///< of every identification
   TrackerSetOptions set;           ///< default sigma, source for messages (tracker points)
   /// Optical axes: the stated noise (sigma_perpendicular, sigma_depth), the use of depths and
