@@ -151,6 +151,37 @@ Eigen::MatrixXd SpanBasisOf(Eigen::MatrixXd A) {
   return qr.householderQ() * Eigen::MatrixXd::Identity(A.rows(), qr.rank());
 }
 
+// The end point's displacement at every unit of `data`, stacked (3 rows a unit), per unit of
+// the term's first m parameters (E), with the other parameters' compensating response
+// (TermGeometryDependence::compensation), then less the best rigid motion of all the points
+// (the scores are taken after a rigid alignment, and a rigid motion of everything is what a
+// tracker's pose or a cell's frame absorbs); E_raw: the term's own columns. Returns
+// A = E'E / units and A_raw = E_raw'E_raw / units.
+void EndPointMoves(const Data& data, const CandidateFit& f, const TermGeometryDependence& d,
+                   int m, Eigen::MatrixXd* A, Eigen::MatrixXd* A_raw) {
+  const RobotModel& model = f.all.result.model;
+  const Eigen::VectorXd params = GetParameters(model);
+  const int n = data.size();
+  Eigen::MatrixXd E(3 * n, m), E_raw(3 * n, m), rigid(3 * n, 6);
+  for (int i = 0; i < n; ++i) {
+    Vector3 p;
+    PointJacobian J;
+    EndPointJacobian(model, params.data(), data.context(i), &p, &J);
+    E_raw.middleRows(3 * i, 3) = J.middleCols(f.first, m);
+    Eigen::MatrixXd e = E_raw.middleRows(3 * i, 3);
+    for (std::size_t r = 0; r < d.others.size(); ++r) {
+      e -= J.col(d.others[r]) * d.compensation.row(static_cast<Eigen::Index>(r)).head(m);
+    }
+    E.middleRows(3 * i, 3) = e;
+    rigid.block<3, 3>(3 * i, 0).setIdentity();
+    rigid.block<3, 3>(3 * i, 3) << 0, p.z(), -p.y(), -p.z(), 0, p.x(), p.y(), -p.x(), 0;
+  }
+  const Eigen::MatrixXd Q = SpanBasisOf(rigid);
+  E -= Q * (Q.transpose() * E);
+  *A = E.transpose() * E / n;
+  *A_raw = E_raw.transpose() * E_raw / n;
+}
+
 }  // namespace
 
 void MeasureDetectionLimit(const Data& data, const CandidateFit& f, double alpha,
@@ -168,32 +199,9 @@ void MeasureDetectionLimit(const Data& data, const CandidateFit& f, double alpha
     return;
   }
   const Eigen::MatrixXd V = d->visible_information.topLeftCorner(m, m);
-  // E: the end point's displacement at every unit, stacked (3 rows a unit), per unit of the
-  // term's parameters, with the other parameters' compensating response, then less the best
-  // rigid motion of all the points (the scores are taken after a rigid alignment, and a rigid
-  // motion of everything is what a tracker's pose or a cell's frame absorbs). E_raw: the
-  // term's own columns. A = E'E / units.
   const RobotModel& model = f.all.result.model;
-  const Eigen::VectorXd params = GetParameters(model);
-  const int n = data.size();
-  Eigen::MatrixXd E(3 * n, m), E_raw(3 * n, m), rigid(3 * n, 6);
-  for (int i = 0; i < n; ++i) {
-    Vector3 p;
-    PointJacobian J;
-    EndPointJacobian(model, params.data(), data.context(i), &p, &J);
-    E_raw.middleRows(3 * i, 3) = J.middleCols(f.first, m);
-    Eigen::MatrixXd e = E_raw.middleRows(3 * i, 3);
-    for (std::size_t r = 0; r < d->others.size(); ++r) {
-      e -= J.col(d->others[r]) * d->compensation.row(static_cast<Eigen::Index>(r)).head(m);
-    }
-    E.middleRows(3 * i, 3) = e;
-    rigid.block<3, 3>(3 * i, 0).setIdentity();
-    rigid.block<3, 3>(3 * i, 3) << 0, p.z(), -p.y(), -p.z(), 0, p.x(), p.y(), -p.x(), 0;
-  }
-  const Eigen::MatrixXd Q = SpanBasisOf(rigid);
-  E -= Q * (Q.transpose() * E);
-  const Eigen::MatrixXd A = E.transpose() * E / n;
-  const Eigen::MatrixXd A_raw = E_raw.transpose() * E_raw / n;
+  Eigen::MatrixXd A, A_raw;
+  EndPointMoves(data, f, *d, m, &A, &A_raw);
   // Directions of the term the measurements see (eigenvalues of V above a relative cut of
   // its own columns' scale) and those they do not.
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(V);
