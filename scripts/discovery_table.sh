@@ -44,6 +44,9 @@ declare -A INJECTED=(
   [optical_lateral_compliance_j2]="lateral_compliance (joint 2)"
   [optical_base_compliance]="lateral_compliance (joint 1)"
   [optical_axis_wobble_j1]="axis_wobble (joint 1, order 2)"
+  [optical_lateral_compliance_j2_declared]=""   # the same effects declared: the control of
+  [optical_base_compliance_declared]=""         # what the procedure's data can reach with
+  [optical_axis_wobble_j1_declared]=""          # the term in the model
 )
 case "$PROCEDURE" in
   tracker)
@@ -57,8 +60,9 @@ case "$PROCEDURE" in
     ORDER=(optical_clean optical_clean_reseeded optical_compliance_j2 optical_transmission_j3
            optical_backlash_j3
            optical_thermal_drift optical_thermal_drift_sensed optical_mount_deflection
-           optical_compliance_j2_declared optical_lateral_compliance_j2 optical_base_compliance
-           optical_axis_wobble_j1)
+           optical_compliance_j2_declared optical_lateral_compliance_j2
+           optical_lateral_compliance_j2_declared optical_base_compliance
+           optical_base_compliance_declared optical_axis_wobble_j1 optical_axis_wobble_j1_declared)
     PREFIX="robots.r2." ;;
   *) echo "discovery_table: procedure must be tracker or optical, got '$PROCEDURE'" >&2; exit 2 ;;
 esac
@@ -74,7 +78,8 @@ for s in "${ORDER[@]}"; do
 done
 # Per trial: trial, effects added (labels joined by ;), geometric-only and discovered RMS over
 # the whole joint space, then the same over the covered region (optical runs; nan otherwise),
-# then the candidates the verdict names as indistinguishable from an added effect (joined by ;).
+# then the candidates the verdict names as indistinguishable from an added effect (joined by ;),
+# then those it names as where an effect could be there unseen (could_hide, joined by ;).
 rows() {
   jq -r --arg p "$PREFIX" '[.trial,
           ([.labels | to_entries[] | select(.key | startswith($p)) | select(.key[($p | length):] | test("^diagnosis\\.effects_added\\[[0-9]+\\]\\.label$")) | .value] | join(";")),
@@ -82,7 +87,8 @@ rows() {
           (.figures[$p + "truth_position_error_mm_discovered_model.rigid.rms"] // "nan"),
           (.figures[$p + "truth_position_error_mm_physical_covered_region.calibrated_model.rigid.rms"] // "nan"),
           (.figures[$p + "truth_position_error_mm_physical_covered_region.discovered_model.rigid.rms"] // "nan"),
-          ([.labels | to_entries[] | select(.key | startswith($p)) | select(.key[($p | length):] | test("^diagnosis\\.effects_added\\[[0-9]+\\]\\.indistinguishable_from\\[[0-9]+\\]$")) | .value] | join(";"))] | @tsv' \
+          ([.labels | to_entries[] | select(.key | startswith($p)) | select(.key[($p | length):] | test("^diagnosis\\.effects_added\\[[0-9]+\\]\\.indistinguishable_from\\[[0-9]+\\]$")) | .value] | join(";")),
+          ([.labels | to_entries[] | select(.key | startswith($p)) | select(.key[($p | length):] | test("^diagnosis\\.could_hide\\[[0-9]+\\]$")) | .value] | join(";"))] | @tsv' \
      "$OUT/$1/trials.jsonl" | sort -t$'\t' -k1,1
 }
 rows "$CLEAN" > "$OUT/clean.tsv"
@@ -96,21 +102,23 @@ printf -- '- command: `%s%s%sscripts/discovery_table.sh %s %s %s`\n' \
   "${SCENARIOS:+SCENARIOS=\"$SCENARIOS\" }" "$TRIALS" "$OUT" "$PROCEDURE"
 printf -- '- binary: %s\n' "$("$BIN" --version)"
 printf -- '- %s trials a scenario: trial t draws the truth from seeds.truth + t and the estimator randomness from seeds.estimator + t of the scenario (twinbench study)\n\n' "$TRIALS"
-printf '| scenario | injected (undeclared) | named | named, or named indistinguishable from the effect added | something else added | truth RMS geometric-only [mm] | discovered [mm] | effect-free [mm] | discovered <= 1.2 x effect-free | covered region: geometric-only / discovered / effect-free [mm] | covered: within 1.2 x |\n'
-printf '|---|---|---|---|---|---|---|---|---|---|---|\n'
+printf '| scenario | injected (undeclared) | named | named, or named indistinguishable from the effect added | something else added | truth RMS geometric-only [mm] | discovered [mm] | effect-free [mm] | not named, but named where an effect could be unseen | discovered <= 1.2 x effect-free | covered region: geometric-only / discovered / effect-free [mm] | covered: within 1.2 x |\n'
+printf '|---|---|---|---|---|---|---|---|---|---|---|---|\n'
 for s in "${ORDER[@]}"; do
   rows "$s" > "$OUT/$s.tsv"
   join -t $'\t' "$OUT/$s.tsv" "$OUT/clean.tsv" | awk -F'\t' -v inj="${INJECTED[$s]}" -v name="$s" '
-    # $1-$7: this scenario (trial, added, RMS x4, indistinguishable); $8-$13: the clean one.
+    # $1-$8: this scenario (trial, added, RMS x4, indistinguishable, could hide); $9-$15: the
+    # clean one.
     { n++; named += (inj != "" && index($2, inj) > 0)
-      named_any += (inj != "" && (index($2, inj) > 0 || index($7, inj) > 0))
+      hit = inj != "" && (index($2, inj) > 0 || index($7, inj) > 0); named_any += hit
+      unseen += (inj != "" && !hit && index($8, inj) > 0)
       split($2, added, ";")
       for (k in added) if (added[k] != "" && (inj == "" || index(added[k], inj) == 0)) { other++; break }
-      g += $3; d += $4; f += $9; within += ($4 <= 1.2 * $9)
-      if ($6 != "nan" && $11 != "nan") { nc++; gc += $5; dc += $6; fc += $11; withinc += ($6 <= 1.2 * $11) } }
+      g += $3; d += $4; f += $10; within += ($4 <= 1.2 * $10)
+      if ($6 != "nan" && $12 != "nan") { nc++; gc += $5; dc += $6; fc += $12; withinc += ($6 <= 1.2 * $12) } }
     END { covered = nc > 0 ? sprintf("%.4f / %.4f / %.4f | %d of %d", gc / nc, dc / nc, fc / nc, withinc, nc) : "- | -"
-          printf "| %s | %s | %s | %s | %d of %d | %.4f | %.4f | %.4f | %d of %d | %s |\n", name,
+          printf "| %s | %s | %s | %s | %d of %d | %.4f | %.4f | %.4f | %s | %d of %d | %s |\n", name,
           (inj == "" ? "none" : inj), (inj == "" ? "-" : named " of " n),
           (inj == "" ? "-" : named_any " of " n), other, n, g / n, d / n,
-          f / n, within, n, covered }'
+          f / n, (inj == "" ? "-" : unseen " of " n), within, n, covered }'
 done

@@ -10,12 +10,12 @@
 #include <thread>
 
 #include <Eigen/Eigenvalues>
-#include <Eigen/QR>
 
 #include "calib/common/errors.h"
 #include "calib/diagnosis/cross_validation.h"
 #include "calib/diagnosis/statistics.h"
 #include "calib/identification/dormant_restart.h"
+#include "calib/identification/observability.h"
 #include "calib/model/end_point_jacobian.h"
 #include "calib/model/parameter_layout.h"
 
@@ -121,10 +121,23 @@ bool RaisesRank(const Data& data, const CandidateFit& f, int base_rank, Candidat
   return true;
 }
 
-void MeasureGeometryDisguise(const CandidateFit& f, int base_rank, CandidateScore* c) {
+namespace {
+
+// The engine's TermGeometryDependence of the candidate (the last block of its model), or null
+// where the fit did not compute one.
+const TermGeometryDependence* TermDependenceOf(const CandidateFit& f) {
   const std::string block = ParameterLayout(f.model).blocks().back().name;
   for (const TermGeometryDependence& d : f.all.result.term_dependence) {
-    if (d.block != block) continue;
+    if (d.block == block) return &d;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+void MeasureGeometryDisguise(const CandidateFit& f, int base_rank, CandidateScore* c) {
+  if (const TermGeometryDependence* found = TermDependenceOf(f)) {
+    const TermGeometryDependence& d = *found;
     const int rise = f.rank - base_rank;
     const int skip = std::max(0, static_cast<int>(d.canonical_correlations.size()) - rise);
     if (skip < static_cast<int>(d.canonical_correlations.size())) {
@@ -138,18 +151,6 @@ void MeasureGeometryDisguise(const CandidateFit& f, int base_rank, CandidateScor
 }
 
 namespace {
-
-// Orthonormal basis of the span of A's columns (each scaled to unit length first, so that the
-// rank cut does not depend on their units; zero columns add nothing).
-Eigen::MatrixXd SpanBasisOf(Eigen::MatrixXd A) {
-  for (Eigen::Index c = 0; c < A.cols(); ++c) {
-    const double norm = A.col(c).norm();
-    if (norm > 0.0) A.col(c) /= norm;
-  }
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
-  qr.setThreshold(1e-10);
-  return qr.householderQ() * Eigen::MatrixXd::Identity(A.rows(), qr.rank());
-}
 
 // The end point's displacement at every unit of `data`, stacked (3 rows a unit), per unit of
 // the term's first m parameters (E), with the other parameters' compensating response
@@ -176,7 +177,7 @@ void EndPointMoves(const Data& data, const CandidateFit& f, const TermGeometryDe
     rigid.block<3, 3>(3 * i, 0).setIdentity();
     rigid.block<3, 3>(3 * i, 3) << 0, p.z(), -p.y(), -p.z(), 0, p.x(), p.y(), -p.x(), 0;
   }
-  const Eigen::MatrixXd Q = SpanBasisOf(rigid);
+  const Eigen::MatrixXd Q = SpanBasis(rigid, /*unit_columns=*/true);
   E -= Q * (Q.transpose() * E);
   *A = E.transpose() * E / n;
   *A_raw = E_raw.transpose() * E_raw / n;
@@ -186,11 +187,7 @@ void EndPointMoves(const Data& data, const CandidateFit& f, const TermGeometryDe
 
 void MeasureDetectionLimit(const Data& data, const CandidateFit& f, double alpha,
                            CandidateScore* c) {
-  const std::string block = ParameterLayout(f.model).blocks().back().name;
-  const TermGeometryDependence* d = nullptr;
-  for (const TermGeometryDependence& t : f.all.result.term_dependence) {
-    if (t.block == block) d = &t;
-  }
+  const TermGeometryDependence* d = TermDependenceOf(f);
   // Over the term's amplitudes, its shape parameters (a warm-up's time constant) held as
   // fitted: a shape acts only through an amplitude, and one the data tell from zero is
   // ErrorTerm::SizeMeasures' business, not a hiding place of its own.

@@ -59,11 +59,16 @@ void AddScreeningSummary(const DiscoveryOptions& o, DiscoveryResult* r) {
   r->reason += "; of " + std::to_string(r->screened.size()) +
                " candidates fitted beside the model the data could see " + std::to_string(seen) +
                ", " + std::to_string(unseen) + " are unidentifiable from them (screened[])";
+  AddHidingPlaces(o, r->screened, "", r);
+}
+
+void AddHidingPlaces(const DiscoveryOptions& o, const std::vector<CandidateScore>& candidates,
+                     const std::string& which, DiscoveryResult* r) {
   // The ones an effect could hide in: blind to a combination of them, or a detection limit
   // above the stated multiple of the noise floor.
   const double limit = o.could_hide_noise_multiple * r->noise.sigma_m;
   std::vector<const CandidateScore*> room;
-  for (const CandidateScore& c : r->screened) {
+  for (const CandidateScore& c : candidates) {
     if (c.detection_limit_m > limit) room.push_back(&c);  // NaN: not computed, never named
   }
   std::stable_sort(room.begin(), room.end(), [](const CandidateScore* a, const CandidateScore* b) {
@@ -82,9 +87,10 @@ void AddScreeningSummary(const DiscoveryOptions& o, DiscoveryResult* r) {
   if (!room.empty()) {
     std::ostringstream k;
     k << o.could_hide_noise_multiple;
-    r->reason += "; an effect of " + std::to_string(room.size()) +
-                 " of them could be there unseen, moving the end point by more than " +
-                 Mm(limit) + " RMS (" + k.str() + " x the noise floor's sigma; the size a test " +
+    r->reason += "; an effect of " + std::to_string(room.size()) + " of " +
+                 (which.empty() ? "them" : which) +
+                 " could be there unseen, moving the end point by more than " + Mm(limit) +
+                 " RMS (" + k.str() + " x the noise floor's sigma; the size a test " +
                  "finds with 80 % power): " + os.str();
   }
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "calib/diagnosis/model_discovery.h"
 
@@ -17,8 +18,16 @@ std::string Mm(double m);
 void StateNoiseVerdict(const DiscoveryOptions& o, DiscoveryResult* r);
 
 /// Appends to r->reason how many screened candidates the data could see and how many are
-/// unidentifiable (Judge: applicable, and identifiable or not).
+/// unidentifiable (Judge: applicable, and identifiable or not), then AddHidingPlaces of them.
 void AddScreeningSummary(const DiscoveryOptions& o, DiscoveryResult* r);
+
+/// Sets r->could_hide to the labels of `candidates` whose detection limit exceeds
+/// DiscoveryOptions::could_hide_noise_multiple times the noise floor's sigma (infinite: blind
+/// to a combination that moves the end point), largest first, and names them with their limits
+/// in r->reason; `which` names the candidates there ("" for "them", after a sentence about
+/// them).
+void AddHidingPlaces(const DiscoveryOptions& o, const std::vector<CandidateScore>& candidates,
+                     const std::string& which, DiscoveryResult* r);
 
 /// The screen's targeted evidence: among the screened candidates the data can see (Judge
 /// does not refuse them as not applicable, not identifiable or a disguise of the geometry,

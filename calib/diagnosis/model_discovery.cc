@@ -293,6 +293,13 @@ void Discover(const Data& data, const RobotModel& start, const std::vector<int>&
     // Step 4: the verdict on what the search added.
     StateSearchVerdict(current_region.Rms(), &r);
   }
+  // A residual left systematic where the last step accepted nothing: where could its cause
+  // hide, beside the model it ends with?
+  if (r.verdict != DiscoveryVerdict::kConsistentWithNoise &&
+      r.verdict != DiscoveryVerdict::kEffectsAdded && !r.steps.empty() &&
+      r.steps.back().accepted < 0) {
+    AddHidingPlaces(o, r.steps.back().candidates, "the last step's candidates", &r);
+  }
   // The discovered model on all the data, and the residual's evidence.
   const Fit final_fit = data.FitOn(current, {}, "discovered model, all data");
   r.model = final_fit.result.model;

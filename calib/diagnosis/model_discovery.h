@@ -374,7 +374,9 @@ struct DiscoveryResult {
   std::vector<CandidateScore> screened;
   /// Of the screened candidates, those the data leave room for (detection limit above
   /// DiscoveryOptions::could_hide_noise_multiple times the noise floor's sigma, or blind to a
-  /// combination of it): their labels, largest limit first, the blind ones first of all.
+  /// combination of it): their labels, largest limit first, the blind ones first of all. After
+  /// unexplained, or partly_explained with a last step that accepted nothing, the same of
+  /// that step's candidates.
   std::vector<std::string> could_hide;
   RobotModel model;               ///< the discovered model, identified on every point
   Transform X_TB = Transform::Identity();  ///< tracker points: the tracker pose

@@ -154,15 +154,6 @@ ObservabilityReport AnalyseJacobian(const Eigen::MatrixXd& J, int n, const std::
   return AnalyseObservability(Jm, names, scales, rank_tolerance, inv);
 }
 
-// Orthonormal basis of the span of A's columns (rank-revealing QR, relative threshold).
-Eigen::MatrixXd SpanBasis(const Eigen::MatrixXd& A) {
-  if (A.cols() == 0) return Eigen::MatrixXd(A.rows(), 0);
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
-  qr.setThreshold(1e-10);
-  const int k = static_cast<int>(qr.rank());
-  return qr.householderQ() * Eigen::MatrixXd::Identity(A.rows(), k);
-}
-
 // TermGeometryDependence of every term block, from the full Jacobian Jp (model columns at the
 // solution, then nuisance).
 std::vector<TermGeometryDependence> TermDependence(const Eigen::MatrixXd& Jp, int n,

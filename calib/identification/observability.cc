@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <limits>
 
+#include <Eigen/QR>
 #include <Eigen/SVD>
 
 #include "calib/common/errors.h"
@@ -202,6 +203,20 @@ double ObservabilityIndexO1(const std::vector<double>& identifiable_singular_val
     log_sum += std::log(s);
   }
   return std::exp(log_sum / m) / std::sqrt(static_cast<double>(m));
+}
+
+Eigen::MatrixXd SpanBasis(const Eigen::MatrixXd& A, bool unit_columns) {
+  if (A.cols() == 0) return Eigen::MatrixXd(A.rows(), 0);
+  Eigen::MatrixXd B = A;
+  if (unit_columns) {
+    for (Eigen::Index c = 0; c < B.cols(); ++c) {
+      const double norm = B.col(c).norm();
+      if (norm > 0.0) B.col(c) /= norm;
+    }
+  }
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(B);
+  qr.setThreshold(1e-10);
+  return qr.householderQ() * Eigen::MatrixXd::Identity(B.rows(), qr.rank());
 }
 
 }  // namespace twin

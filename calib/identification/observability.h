@@ -73,6 +73,12 @@ Eigen::VectorXd GeometricColumnScale(const KinematicModel& model);
 /// empty list or any non-positive value.
 double ObservabilityIndexO1(const std::vector<double>& identifiable_singular_values);
 
+/// Orthonormal basis (columns) of the span of A's columns: a rank-revealing QR with a relative
+/// threshold of 1e-10 of the largest pivot. With `unit_columns`, each column is scaled to unit
+/// length first, so that the cut does not depend on the columns' units (zero columns add
+/// nothing). A with no columns gives a basis with no columns.
+Eigen::MatrixXd SpanBasis(const Eigen::MatrixXd& A, bool unit_columns = false);
+
 /// Readable name of an SI parameter direction (unit-normalized, |coefficients| < 1e-6
 /// dropped), e.g. "0.707 r2.link2.d - 0.707 r2.link3.d"; a single term is just its name.
 std::string NameCombination(const Eigen::VectorXd& direction,

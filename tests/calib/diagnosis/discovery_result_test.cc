@@ -1,6 +1,8 @@
 #include "calib/diagnosis/discovery_result.h"
 
+#include <limits>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -60,6 +62,42 @@ TEST(DiscoveryResult, TheSearchVerdictAndItsReason) {
   discovery::StateSearchVerdict(0.5e-3, &r);
   EXPECT_EQ(r.verdict, DiscoveryVerdict::kUnexplained);
   EXPECT_EQ(r.test_after.p_value, r.test_before.p_value);  // nothing added: the start's test
+}
+
+TEST(DiscoveryResult, TheHidingPlacesAreTheCandidatesWhoseDetectionLimitIsAboveTheStatedMultiple) {
+  // Noise floor 0.01 mm, could_hide_noise_multiple 3: room above 0.03 mm at the end point.
+  DiscoveryResult r = OneEffect();
+  r.effects_added.clear();
+  discovery::StateSearchVerdict(0.5e-3, &r);
+  ASSERT_EQ(r.verdict, DiscoveryVerdict::kUnexplained);
+  DiscoveryOptions o;
+  o.could_hide_noise_multiple = 3.0;
+  const auto candidate = [](const std::string& label, double limit_m) {
+    CandidateScore c;
+    c.label = label;
+    c.detection_limit_m = limit_m;
+    return c;
+  };
+  const std::vector<CandidateScore> candidates{
+      candidate("not computed", std::numeric_limits<double>::quiet_NaN()),
+      candidate("seen", 0.02e-3),                  // below 0.03 mm: the test would find it
+      candidate("roomy", 0.05e-3),                 // above
+      candidate("roomier", 0.08e-3),               // above, larger: named first
+      candidate("blind", std::numeric_limits<double>::infinity())};  // first of all
+  const std::string before = r.reason;
+  discovery::AddHidingPlaces(o, candidates, "the last step's candidates", &r);
+  EXPECT_EQ(r.could_hide, (std::vector<std::string>{"blind", "roomier", "roomy"}));
+  EXPECT_EQ(r.reason,
+            before + "; an effect of 3 of the last step's candidates could be there unseen, "
+                     "moving the end point by more than 0.03 mm RMS (3 x the noise floor's "
+                     "sigma; the size a test finds with 80 % power): blind (unidentifiable: "
+                     "blind to a combination that moves the end point), roomier (up to 0.08 mm), "
+                     "roomy (up to 0.05 mm)");
+  // None above the limit: nothing named, the reason unchanged.
+  DiscoveryResult quiet = OneEffect();
+  discovery::AddHidingPlaces(o, {candidate("seen", 0.02e-3)}, "", &quiet);
+  EXPECT_TRUE(quiet.could_hide.empty());
+  EXPECT_EQ(quiet.reason, OneEffect().reason);
 }
 
 TEST(DiscoveryResult, BriefReportHasTheVerdictNoiseTestAndOneLineAStep) {
