@@ -183,6 +183,49 @@ void EndPointMoves(const Data& data, const CandidateFit& f, const TermGeometryDe
   *A_raw = E_raw.transpose() * E_raw / n;
 }
 
+// The size test's statistic on tracker points with a stated joint noise. The fit weighs each
+// point by its sigma alone (TrackerData::FitOn), while the encoders' noise moves the point
+// along the joint-angle directions (TrackerData::covariance: sigma_i^2 I + sigma_q^2 J J'):
+// noise that a term acting through the joint angles (a transmission error) partly fits, so a
+// statistic scaled by the fit's sigma0 overstates such a term's size. Here the term's
+// columns on its seen directions U (m x k), weighed by 1 / sigma_i and less their span with
+// the other free parameters and a rigid motion of all the points (the tracker's pose), give
+// W = E'E and B = sum_i E_i' (S_i / sigma_i^2) E_i; the fitted theta then has covariance
+// W^-1 B W^-1 (the sandwich of weighted least squares under the points' full covariance), and
+// the statistic is theta_U' W B^-1 W theta_U against the stated noise (the residual test has
+// checked that noise: the screen's alarm reads this only where it passed).
+double TrackerSizeStatistic(const TrackerData& data, const CandidateFit& f,
+                            const TermGeometryDependence& d, const Eigen::MatrixXd& U,
+                            const Eigen::VectorXd& theta) {
+  const RobotModel& model = f.all.result.model;
+  const Eigen::VectorXd params = GetParameters(model);
+  const int n = data.size(), m = static_cast<int>(U.rows()), o = static_cast<int>(d.others.size());
+  Eigen::MatrixXd T(3 * n, m), M(3 * n, o + 6);
+  for (int i = 0; i < n; ++i) {
+    Vector3 p;
+    PointJacobian J;
+    EndPointJacobian(model, params.data(), data.context(i), &p, &J);
+    const double w = 1.0 / data.Sigma(i);
+    T.middleRows(3 * i, 3) = w * J.middleCols(f.first, m);
+    for (int r = 0; r < o; ++r) M.block(3 * i, r, 3, 1) = w * J.col(d.others[r]);
+    M.block<3, 3>(3 * i, o) = w * Matrix3::Identity();
+    M.block<3, 3>(3 * i, o + 3) << 0, p.z(), -p.y(), -p.z(), 0, p.x(), p.y(), -p.x(), 0;
+    M.block<3, 3>(3 * i, o + 3) *= w;
+  }
+  const Eigen::MatrixXd Q = SpanBasis(M, /*unit_columns=*/true);
+  const Eigen::MatrixXd E = (T - Q * (Q.transpose() * T)) * U;
+  const int k = static_cast<int>(U.cols());
+  Eigen::MatrixXd W = Eigen::MatrixXd::Zero(k, k), B = Eigen::MatrixXd::Zero(k, k);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::MatrixXd Ei = E.middleRows(3 * i, 3);
+    const double s = data.Sigma(i);
+    W += Ei.transpose() * Ei;
+    B += Ei.transpose() * (data.covariance()[i] / (s * s)) * Ei;
+  }
+  const Eigen::VectorXd g = W * (U.transpose() * theta);
+  return g.dot(B.ldlt().solve(g));
+}
+
 }  // namespace
 
 void MeasureDetectionLimit(const Data& data, const CandidateFit& f, double alpha,
@@ -227,13 +270,20 @@ void MeasureDetectionLimit(const Data& data, const CandidateFit& f, double alpha
   }
   // The size test on the seen directions, at the fitted amplitudes.
   const Eigen::VectorXd theta = model.term_values.tail(f.added).head(m);
-  const double s0 = f.all.result.sigma0 > 0.0 ? f.all.result.sigma0 : 1.0;
-  double statistic = 0.0;
-  for (int k : seen) {
-    const double along = es.eigenvectors().col(k).dot(theta);
-    statistic += es.eigenvalues()(k) * along * along;
+  const auto* tracker = dynamic_cast<const TrackerData*>(&data);
+  if (tracker != nullptr && tracker->joint_sigma_rad() > 0.0) {
+    Eigen::MatrixXd U(m, seen.size());
+    for (std::size_t k = 0; k < seen.size(); ++k) U.col(k) = es.eigenvectors().col(seen[k]);
+    c->visible_size_statistic = TrackerSizeStatistic(*tracker, f, *d, U, theta);
+  } else {
+    const double s0 = f.all.result.sigma0 > 0.0 ? f.all.result.sigma0 : 1.0;
+    double statistic = 0.0;
+    for (int k : seen) {
+      const double along = es.eigenvectors().col(k).dot(theta);
+      statistic += es.eigenvalues()(k) * along * along;
+    }
+    c->visible_size_statistic = statistic / (s0 * s0);
   }
-  c->visible_size_statistic = statistic / (s0 * s0);
   c->visible_size_dof = static_cast<int>(seen.size());
   c->visible_size_p_value = stats::ChiSquareUpperTail(c->visible_size_statistic,
                                                       c->visible_size_dof);

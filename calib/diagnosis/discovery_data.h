@@ -126,6 +126,9 @@ class TrackerData : public Data {
   double Sigma(int i) const;
   const std::vector<TrackerPoint>& points() const { return points_; }
   const std::vector<Matrix3>& covariance() const { return covariance_; }
+  /// The stated joint noise (DiscoveryOptions::joint_sigma_rad) [rad]; 0: none. The fit
+  /// (FitOn) weighs each point by Sigma(i) alone; covariance() adds this noise.
+  double joint_sigma_rad() const { return o_.joint_sigma_rad; }
 
  private:
   std::vector<TrackerPoint> points_;
