@@ -12,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "calib/common/errors.h"
+#include "calib/common/frames.h"
 #include "calib/diagnosis/cross_validation.h"
 #include "calib/diagnosis/statistics.h"
 #include "calib/identification/dormant_restart.h"
@@ -175,7 +176,7 @@ void EndPointMoves(const Data& data, const CandidateFit& f, const TermGeometryDe
     }
     E.middleRows(3 * i, 3) = e;
     rigid.block<3, 3>(3 * i, 0).setIdentity();
-    rigid.block<3, 3>(3 * i, 3) << 0, p.z(), -p.y(), -p.z(), 0, p.x(), p.y(), -p.x(), 0;
+    rigid.block<3, 3>(3 * i, 3) = -SkewMatrix(p);  // a small turn w moves p by w x p
   }
   const Eigen::MatrixXd Q = SpanBasis(rigid, /*unit_columns=*/true);
   E -= Q * (Q.transpose() * E);
@@ -209,8 +210,7 @@ double TrackerSizeStatistic(const TrackerData& data, const CandidateFit& f,
     T.middleRows(3 * i, 3) = w * J.middleCols(f.first, m);
     for (int r = 0; r < o; ++r) M.block(3 * i, r, 3, 1) = w * J.col(d.others[r]);
     M.block<3, 3>(3 * i, o) = w * Matrix3::Identity();
-    M.block<3, 3>(3 * i, o + 3) << 0, p.z(), -p.y(), -p.z(), 0, p.x(), p.y(), -p.x(), 0;
-    M.block<3, 3>(3 * i, o + 3) *= w;
+    M.block<3, 3>(3 * i, o + 3) = -w * SkewMatrix(p);
   }
   const Eigen::MatrixXd Q = SpanBasis(M, /*unit_columns=*/true);
   const Eigen::MatrixXd E = (T - Q * (Q.transpose() * T)) * U;
