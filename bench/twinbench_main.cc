@@ -541,7 +541,8 @@ void AddIdentifyVerb(CLI::App* app, CliValues* v, Verbs* verbs) {
   identify->add_option("--diagnosis-min-gain", tracker_options.diagnosis_min_gain_percent,
                        "tracker file: smallest held-out gain worth a term [%] (default 5)");
   identify->add_option("--diagnosis-max-effects", tracker_options.diagnosis_max_effects,
-                       "tracker file: at most this many effects added (default 3)");
+                       "tracker file: at most this many effects added (default 10; the search "
+                       "ends on its tests first)");
   identify->add_option("--diagnosis-folds", tracker_options.diagnosis_folds,
                        "tracker file: folds of the cross-validations (default 5)");
   identify->add_option("--encoder-sigma-deg", tracker_options.encoder_sigma_deg,

@@ -1,7 +1,7 @@
 // The `diagnosis:` section of a scenario's procedure (model discovery,
 // docs/explanation/discovery-statistics.md), shared by tracker_calibration and calibration (optical
 // axes):
-//   diagnosis: {enabled: true, alpha: 0.05, min_gain_percent: 5, max_effects: 3, folds: 5,
+//   diagnosis: {enabled: true, alpha: 0.05, min_gain_percent: 5, max_effects: 10, folds: 5,
 //               candidates: [joint_compliance:2, ...], truth_poses: 60, screen: true}
 // Every key optional; candidates are TYPE[:JOINT[:ORDERS]] (term_spec_text.h), checked against
 // the robot's nominal model; truth_poses is the physical-truth scoring's pose count (bench);

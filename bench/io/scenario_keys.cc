@@ -49,7 +49,8 @@ std::vector<ScenarioKey> DiagnosisKeys(bool optical_axes) {
           .Doc("level of the residual test and family-wise level of each step"),
       K("min_gain_percent", T::kNumber).Unit("%").Min(0).Below(100).Default("5")
           .Doc("smallest held-out gain worth a term"),
-      K("max_effects", T::kInteger).Min(0).Max(10).Default("3").Doc("effects added at most"),
+      K("max_effects", T::kInteger).Min(0).Max(10).Default("10")
+          .Doc("effects added at most (the search ends on its tests first)"),
       K("folds", T::kInteger).Min(2).Max(20).Default("5").Doc("K of the cross-validations"),
       K("truth_poses", T::kInteger).Min(10).Max(10000).Default("60")
           .Doc("poses of the physical-truth scoring of the discovered model (bench)"),

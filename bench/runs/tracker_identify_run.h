@@ -26,7 +26,7 @@ struct TrackerIdentifyOptions {
   bool diagnosis = true;                    ///< model discovery after the identification
   double diagnosis_alpha = 0.05;            ///< DiscoveryOptions::alpha
   double diagnosis_min_gain_percent = 5.0;  ///< DiscoveryOptions::min_gain_percent
-  int diagnosis_max_effects = 3;            ///< DiscoveryOptions::max_effects
+  int diagnosis_max_effects = 10;           ///< DiscoveryOptions::max_effects
   int diagnosis_folds = 5;                  ///< DiscoveryOptions::folds
   double encoder_sigma_deg = 0.0;           ///< stated joint reading noise (DiscoveryOptions)
   int jobs = 0;                             ///< parallel candidate evaluations; 0: all cores

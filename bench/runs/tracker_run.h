@@ -19,7 +19,7 @@
 //     enabled: true                  #   false: skip it (as --no-diagnosis)
 //     alpha: 0.05                    #   level of the residual test and of each step
 //     min_gain_percent: 5            #   smallest held-out gain worth a term
-//     max_effects: 3
+//     max_effects: 10
 //     folds: 5
 //     candidates: [joint_compliance:2, transmission_error:1:1]  # default: every term
 //     truth_poses: 60                #   poses of the physical-truth scoring (bench)
