@@ -202,41 +202,47 @@ std::vector<JointVector> SphericalWristIk::Solve(const Transform& X_BE_target) c
   return out;
 }
 
-IkResult SolveIkSphericalWrist(const KinematicModel& model, const Transform& X_BE_target,
-                               const JointVector& q_seed, const IkOptions& options) {
+IkResult SphericalWristIk::Nearest(const Transform& X_BE_target, const JointVector& q_seed,
+                                   const IkOptions& options) const {
   ValidateIkOptions(options);
-  std::string why;
   // The closed form answers to 1e-9 m and rad (Solve's check); a caller asking for less gets
   // the iterative solver.
   const bool closed_form = !options.position_only && options.position_tolerance >= 1e-9 &&
                            options.orientation_tolerance >= 1e-9;
-  const std::optional<SphericalWristIk> ik =
-      closed_form ? SphericalWristIk::For(model, &why) : std::nullopt;
-  if (!ik || q_seed.size() != model.num_joints() || !q_seed.allFinite() ||
-      !WithinLimits(model, q_seed)) {
-    return SolveIk(model, X_BE_target, q_seed, options);
+  if (!closed_form || q_seed.size() != model_.num_joints() || !q_seed.allFinite() ||
+      !WithinLimits(model_, q_seed)) {
+    return SolveIk(model_, X_BE_target, q_seed, options);
   }
   const JointVector* best = nullptr;
   double best_distance = INFINITY;
-  std::vector<JointVector> solutions = ik->Solve(X_BE_target);
+  std::vector<JointVector> solutions = Solve(X_BE_target);
   for (JointVector& q : solutions) {
-    if (!TurnsInsideLimits(model, q_seed, &q)) continue;
+    if (!TurnsInsideLimits(model_, q_seed, &q)) continue;
     const double distance = (q - q_seed).norm();
     if (distance < best_distance) {
       best_distance = distance;
       best = &q;
     }
   }
-  if (!best) return SolveIk(model, X_BE_target, q_seed, options);
+  if (!best) return SolveIk(model_, X_BE_target, q_seed, options);
   IkResult r;
   r.status = IkStatus::kSuccess;
   r.q = *best;
-  const Transform X = EndPose(model, r.q);
+  const Transform X = EndPose(model_, r.q);
   r.position_error = (X.translation() - X_BE_target.translation()).norm();
   r.orientation_error = Eigen::AngleAxisd(X.linear() * X_BE_target.linear().transpose()).angle();
   r.iterations = 0;
   r.starts = 1;
   return r;
+}
+
+IkResult SolveIkSphericalWrist(const KinematicModel& model, const Transform& X_BE_target,
+                               const JointVector& q_seed, const IkOptions& options) {
+  ValidateIkOptions(options);
+  std::string why;
+  const std::optional<SphericalWristIk> ik = SphericalWristIk::For(model, &why);
+  if (!ik) return SolveIk(model, X_BE_target, q_seed, options);
+  return ik->Nearest(X_BE_target, q_seed, options);
 }
 
 }  // namespace twin

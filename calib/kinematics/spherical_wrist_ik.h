@@ -49,6 +49,14 @@ class SphericalWristIk {
   /// about 1e-7 rad of those singularities the answers off them may be missing.
   std::vector<JointVector> Solve(const Transform& X_BE_target) const;
 
+  /// Of Solve's answers, each joint turned by whole turns to its angle inside the limits
+  /// nearest q_seed's, the one nearest q_seed (joint-space distance), with iterations 0 and
+  /// starts 1. SolveIk on the model where the closed form does not serve: position_only,
+  /// tolerances below its 1e-9, a seed that is not a finite vector inside the limits, or no
+  /// answer inside the limits.
+  IkResult Nearest(const Transform& X_BE_target, const JointVector& q_seed,
+                   const IkOptions& options = {}) const;
+
  private:
   explicit SphericalWristIk(const KinematicModel& model) : model_(model) {}
   KinematicModel model_;
@@ -58,13 +66,10 @@ class SphericalWristIk {
   Transform X_BE0_;        // end pose at q = 0
 };
 
-/// SolveIk with the closed form where `model` has a spherical wrist and orientation counts:
-/// of the closed form's solutions, each joint turned by whole turns to its angle inside the
-/// limits nearest q_seed's, those that fit; the nearest to q_seed (joint-space distance) is
-/// returned with iterations 0 and starts 1. Without the structure, for position_only or
-/// tolerances below the closed form's 1e-9, or when no solution fits the limits, it is SolveIk
-/// itself. It prepares the closed form (one forward kinematics) on every call; a caller
-/// solving many targets of one model can keep a SphericalWristIk.
+/// SolveIk with the closed form where `model` has a spherical wrist: SphericalWristIk::For
+/// then Nearest, and SolveIk itself without the structure. It prepares the closed form (one
+/// forward kinematics) on every call; a caller solving many targets of one model keeps a
+/// SphericalWristIk (the pose planner does).
 IkResult SolveIkSphericalWrist(const KinematicModel& model, const Transform& X_BE_target,
                                const JointVector& q_seed, const IkOptions& options = {});
 

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <tuple>
@@ -14,6 +15,7 @@
 #include "calib/common/cpus.h"
 #include "calib/common/errors.h"
 #include "calib/kinematics/forward_kinematics.h"
+#include "calib/kinematics/spherical_wrist_ik.h"
 #include "calib/identification/linearized_identification.h"
 #include "calib/identification/nonlinear_identification.h"
 #include "calib/identification/observability.h"
@@ -88,6 +90,14 @@ struct Planner {
   int dim = 0;             // of one sub-particle
 
   IkOptions ik;            // o.ik; without random restarts where a start pose seeds the IK
+  // The closed forms of the two models where they have a spherical wrist and
+  // o.closed_form_ik (else empty: the iterative solver).
+  std::optional<SphericalWristIk> active_ik, passive_ik;
+
+  IkResult Ik(const KinematicModel& m, const std::optional<SphericalWristIk>& closed,
+              const Transform& X_BE, const JointVector& seed) const {
+    return closed ? closed->Nearest(X_BE, seed, ik) : SolveIk(m, X_BE, seed, ik);
+  }
 
   // Decodes sub-particle x, solves IK for both robots and checks C1-C5 (eq. 25-33).
   Cause Evaluate(const double* x, PlannedAxis* out) const {
@@ -104,8 +114,8 @@ struct Planner {
     X_BpC.linear().col(2) = mu;
     X_BpC.translation() = p_c;
 
-    IkResult ik_a = SolveIk(active, X_BaBp * X_BpC * X_CF,
-                            o.active_ik_seed.size() ? o.active_ik_seed : MidRange(active), ik);
+    IkResult ik_a = Ik(active, active_ik, X_BaBp * X_BpC * X_CF,
+                       o.active_ik_seed.size() ? o.active_ik_seed : MidRange(active));
     if (ik_a.status != IkStatus::kSuccess) return Cause::kActiveIk;
     if (o.active_ik_seed.size()) ik_a.q = NearestTurns(active, ik_a.q, o.active_ik_seed);
     if (Cause c = CheckConfiguration(active, ik_a.q, o, active_trig); c != Cause::kNone) return c;
@@ -130,7 +140,7 @@ struct Planner {
                            .toRotationMatrix();
       const double d_i = D + i * o.distance_step;
       X_BpE.translation() = p_c + d_i * mu;
-      IkResult ik_p = SolveIk(passive, X_BpE, seed, ik);
+      IkResult ik_p = Ik(passive, passive_ik, X_BpE, seed);
       if (ik_p.status != IkStatus::kSuccess) return Cause::kPassiveIk;
       if (o.passive_ik_seed.size()) ik_p.q = NearestTurns(passive, ik_p.q, seed);
       if (Cause c = CheckConfiguration(passive, ik_p.q, o, passive_trig); c != Cause::kNone) {
@@ -386,6 +396,11 @@ PosePlanResult PlanCalibrationPoses(const KinematicModel& active, const Kinemati
   // A start pose seeds the IK to keep each axis in its branch: a random restart would leave it.
   pl.ik = o.ik;
   if (o.active_ik_seed.size() || o.passive_ik_seed.size()) pl.ik.random_restarts = 0;
+  if (o.closed_form_ik) {
+    std::string why;  // without the structure: the iterative solver, nothing to report
+    pl.active_ik = SphericalWristIk::For(pl.active, &why);
+    pl.passive_ik = SphericalWristIk::For(pl.passive, &why);
+  }
   pl.z = Vector3::UnitZ();
   const Vector3 p_BpBa = pl.X_BpBa.translation();
   Vector3 to_bp = -p_BpBa;
