@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <utility>
 
 #include "calib/kinematics/forward_kinematics.h"
 
@@ -202,32 +203,36 @@ std::vector<JointVector> SphericalWristIk::Solve(const Transform& X_BE_target) c
   return out;
 }
 
+bool SphericalWristIk::Serves(const JointVector& q_seed, const IkOptions& options) const {
+  // The closed form answers to 1e-9 m and rad (Solve's check); a caller asking for less gets
+  // the iterative solver.
+  return !options.position_only && options.position_tolerance >= 1e-9 &&
+         options.orientation_tolerance >= 1e-9 && q_seed.size() == model_.num_joints() &&
+         q_seed.allFinite() && WithinLimits(model_, q_seed);
+}
+
+std::vector<JointVector> SphericalWristIk::InsideLimits(const Transform& X_BE_target,
+                                                       const JointVector& q_seed) const {
+  std::vector<std::pair<double, JointVector>> inside;
+  for (JointVector& q : Solve(X_BE_target)) {
+    if (TurnsInsideLimits(model_, q_seed, &q)) inside.emplace_back((q - q_seed).norm(), q);
+  }
+  std::stable_sort(inside.begin(), inside.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<JointVector> out;
+  for (auto& [distance, q] : inside) out.push_back(std::move(q));
+  return out;
+}
+
 IkResult SphericalWristIk::Nearest(const Transform& X_BE_target, const JointVector& q_seed,
                                    const IkOptions& options) const {
   ValidateIkOptions(options);
-  // The closed form answers to 1e-9 m and rad (Solve's check); a caller asking for less gets
-  // the iterative solver.
-  const bool closed_form = !options.position_only && options.position_tolerance >= 1e-9 &&
-                           options.orientation_tolerance >= 1e-9;
-  if (!closed_form || q_seed.size() != model_.num_joints() || !q_seed.allFinite() ||
-      !WithinLimits(model_, q_seed)) {
-    return SolveIk(model_, X_BE_target, q_seed, options);
-  }
-  const JointVector* best = nullptr;
-  double best_distance = INFINITY;
-  std::vector<JointVector> solutions = Solve(X_BE_target);
-  for (JointVector& q : solutions) {
-    if (!TurnsInsideLimits(model_, q_seed, &q)) continue;
-    const double distance = (q - q_seed).norm();
-    if (distance < best_distance) {
-      best_distance = distance;
-      best = &q;
-    }
-  }
-  if (!best) return SolveIk(model_, X_BE_target, q_seed, options);
+  if (!Serves(q_seed, options)) return SolveIk(model_, X_BE_target, q_seed, options);
+  const std::vector<JointVector> inside = InsideLimits(X_BE_target, q_seed);
+  if (inside.empty()) return SolveIk(model_, X_BE_target, q_seed, options);
   IkResult r;
   r.status = IkStatus::kSuccess;
-  r.q = *best;
+  r.q = inside.front();
   const Transform X = EndPose(model_, r.q);
   r.position_error = (X.translation() - X_BE_target.translation()).norm();
   r.orientation_error = Eigen::AngleAxisd(X.linear() * X_BE_target.linear().transpose()).angle();

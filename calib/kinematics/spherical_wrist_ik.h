@@ -49,9 +49,17 @@ class SphericalWristIk {
   /// about 1e-7 rad of those singularities the answers off them may be missing.
   std::vector<JointVector> Solve(const Transform& X_BE_target) const;
 
-  /// Of Solve's answers, each joint turned by whole turns to its angle inside the limits
-  /// nearest q_seed's, the one nearest q_seed (joint-space distance), with iterations 0 and
-  /// starts 1. SolveIk on the model where the closed form does not serve: position_only,
+  /// Solve's answers that fit the limits, each joint turned by whole turns to its angle inside
+  /// the limits nearest q_seed's, nearest q_seed first (joint-space distance). q_seed: one
+  /// finite angle per joint.
+  std::vector<JointVector> InsideLimits(const Transform& X_BE_target,
+                                        const JointVector& q_seed) const;
+
+  /// Whether Nearest answers in closed form for these: orientation counted, tolerances at
+  /// least its 1e-9, and q_seed a finite vector inside the limits.
+  bool Serves(const JointVector& q_seed, const IkOptions& options) const;
+
+  /// The first of InsideLimits (the answer nearest q_seed), with iterations 0 and starts 1. SolveIk on the model where the closed form does not serve: position_only,
   /// tolerances below its 1e-9, a seed that is not a finite vector inside the limits, or no
   /// answer inside the limits.
   IkResult Nearest(const Transform& X_BE_target, const JointVector& q_seed,

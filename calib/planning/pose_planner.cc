@@ -94,9 +94,34 @@ struct Planner {
   // o.closed_form_ik (else empty: the iterative solver).
   std::optional<SphericalWristIk> active_ik, passive_ik;
 
-  IkResult Ik(const KinematicModel& m, const std::optional<SphericalWristIk>& closed,
-              const Transform& X_BE, const JointVector& seed) const {
-    return closed ? closed->Nearest(X_BE, seed, ik) : SolveIk(m, X_BE, seed, ik);
+  // The joints of one robot for end pose X_BE, from `seed`, checked against C1 and C2 into
+  // *q. From the mid-range, the closed form tries its answers inside the limits nearest the
+  // seed (the mid-range, or the board position before on the axis) first and takes the
+  // first that passes (the nearest where it passes), as the iterative solver's random
+  // restarts reach other branches; the cause is the nearest answer's. With a start pose it
+  // takes the nearest alone: the seed's branch, as the iterative solver without restarts. The iterative solver gives one
+  // answer (turned by whole turns to the seed's angles with a start pose).
+  Cause Solve(const KinematicModel& m, const std::optional<SphericalWristIk>& closed,
+              const ChainTrig& trig, const Transform& X_BE, const JointVector& seed,
+              bool start_pose, Cause ik_failed, JointVector* q) const {
+    if (closed && closed->Serves(seed, ik)) {
+      const std::vector<JointVector> answers = closed->InsideLimits(X_BE, seed);
+      Cause nearest = ik_failed;
+      const size_t tried = start_pose ? std::min<size_t>(answers.size(), 1) : answers.size();
+      for (size_t k = 0; k < tried; ++k) {
+        const Cause c = CheckConfiguration(m, answers[k], o, trig);
+        if (c == Cause::kNone) {
+          *q = answers[k];
+          return c;
+        }
+        if (k == 0) nearest = c;
+      }
+      if (!answers.empty()) return nearest;
+    }
+    const IkResult r = SolveIk(m, X_BE, seed, ik);
+    if (r.status != IkStatus::kSuccess) return ik_failed;
+    *q = start_pose ? NearestTurns(m, r.q, seed) : r.q;
+    return CheckConfiguration(m, *q, o, trig);
   }
 
   // Decodes sub-particle x, solves IK for both robots and checks C1-C5 (eq. 25-33).
@@ -114,17 +139,19 @@ struct Planner {
     X_BpC.linear().col(2) = mu;
     X_BpC.translation() = p_c;
 
-    IkResult ik_a = Ik(active, active_ik, X_BaBp * X_BpC * X_CF,
-                       o.active_ik_seed.size() ? o.active_ik_seed : MidRange(active));
-    if (ik_a.status != IkStatus::kSuccess) return Cause::kActiveIk;
-    if (o.active_ik_seed.size()) ik_a.q = NearestTurns(active, ik_a.q, o.active_ik_seed);
-    if (Cause c = CheckConfiguration(active, ik_a.q, o, active_trig); c != Cause::kNone) return c;
+    JointVector q_a;
+    if (Cause c = Solve(active, active_ik, active_trig, X_BaBp * X_BpC * X_CF,
+                        o.active_ik_seed.size() ? o.active_ik_seed : MidRange(active),
+                        o.active_ik_seed.size() > 0, Cause::kActiveIk, &q_a);
+        c != Cause::kNone) {
+      return c;
+    }
     // Camera as the active robot actually reaches it (within IK tolerance).
-    const Transform X_BpC_fk = X_BpBa * EndPose(active, ik_a.q, &active_trig) * X_CF.inverse();
+    const Transform X_BpC_fk = X_BpBa * EndPose(active, q_a, &active_trig) * X_CF.inverse();
 
     out->camera_origin = X_BpC_fk.translation();
     out->direction = X_BpC_fk.linear().col(2);
-    out->q_active = ik_a.q;
+    out->q_active = q_a;
     out->q_passive.assign(o.positions_per_axis, ZeroJoints(passive));
     out->distances.assign(o.positions_per_axis, 0.0);
     JointVector seed = o.passive_ik_seed.size() ? o.passive_ik_seed : MidRange(passive);
@@ -140,22 +167,22 @@ struct Planner {
                            .toRotationMatrix();
       const double d_i = D + i * o.distance_step;
       X_BpE.translation() = p_c + d_i * mu;
-      IkResult ik_p = Ik(passive, passive_ik, X_BpE, seed);
-      if (ik_p.status != IkStatus::kSuccess) return Cause::kPassiveIk;
-      if (o.passive_ik_seed.size()) ik_p.q = NearestTurns(passive, ik_p.q, seed);
-      if (Cause c = CheckConfiguration(passive, ik_p.q, o, passive_trig); c != Cause::kNone) {
+      JointVector q_p;
+      if (Cause c = Solve(passive, passive_ik, passive_trig, X_BpE, seed,
+                          o.passive_ik_seed.size() > 0, Cause::kPassiveIk, &q_p);
+          c != Cause::kNone) {
         return c;
       }
-      const Transform X_BpE_fk = EndPose(passive, ik_p.q, &passive_trig);
+      const Transform X_BpE_fk = EndPose(passive, q_p, &passive_trig);
       const Vector3 n_fk = X_BpE_fk.linear() * o.board_normal_in_E;
       const double visibility = std::acos(std::clamp(n_fk.dot(-out->direction), -1.0, 1.0));
       if (visibility > o.max_visibility_angle) return Cause::kC3;
       const double dist = (X_BpE_fk.translation() - out->camera_origin).norm();
       if (dist < o.min_distance) return Cause::kC4;
       if (dist > o.max_distance) return Cause::kC5;
-      out->q_passive[i] = ik_p.q;
+      out->q_passive[i] = q_p;
       out->distances[i] = d_i;
-      seed = ik_p.q;
+      seed = q_p;
     }
     return Cause::kNone;
   }

@@ -410,8 +410,19 @@ TEST(PosePlannerSeedTest, AStartPoseSeedKeepsFullTurnJointsInItsBranch) {
     }
     return d;
   };
+  // The mid-range plan with the iterative IK, whose random restarts land anywhere in the
+  // limits (the closed form's answers nearest the mid-range all happen to lie within a turn of
+  // this start pose: no contrast). The seeded plan with both.
   PosePlannerOptions o = SmallOptions();
+  o.closed_form_ik = false;
   const PosePlanResult mid = PlanCalibrationPoses(active, passive, BaseToBase(), HandEye(), o);
+  o.active_ik_seed = q_active;
+  o.passive_ik_seed = q_passive;
+  const PosePlanResult iterative =
+      PlanCalibrationPoses(active, passive, BaseToBase(), HandEye(), o);
+  ASSERT_EQ(iterative.status, PosePlannerStatus::kSuccess) << iterative.reason;
+  EXPECT_LT(farthest(iterative), kPi);
+  o.closed_form_ik = true;
   o.active_ik_seed = q_active;
   o.passive_ik_seed = q_passive;
   const PosePlanResult seeded = PlanCalibrationPoses(active, passive, BaseToBase(), HandEye(), o);
