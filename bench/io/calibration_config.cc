@@ -205,6 +205,14 @@ CalibrationConfig ParseCalibrationConfig(const Scenario& sc) {
       }
       o.plan_from_start_pose = v == "start_pose";
     }
+    if (const auto g = pm.Find("ik", false)) {
+      const std::string v = r.String(*g);
+      if (v != "iterative" && v != "closed_form") {
+        r.Fail(*g, "must be iterative (damped least squares) or closed_form (an arm with a "
+                   "spherical wrist), got '" + v + "'");
+      }
+      p.closed_form_ik = v == "closed_form";
+    }
   }
   if (const auto f = m.Find("servo", false)) {
     const YamlMap sm(r, *f, kServoKeys);

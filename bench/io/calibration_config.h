@@ -49,6 +49,10 @@
 //                                      # limits' middle) or start_pose (the joints read when
 //                                      # the procedure starts; for arms whose joints turn a
 //                                      # full turn or more, e.g. a UR's +-360 deg)
+//       ik: iterative                  # the planner's IK: iterative (damped least squares)
+//                                      # or closed_form (an arm with a spherical wrist; the
+//                                      # others stay iterative): other plans, paired study in
+//                                      # docs/results/paired_studies.md
 //     servo: {tolerance_px: 0.1, max_iterations: 10, gain: 1.0,
 //             encoder_readings: 1}     # readings averaged at each aligned pose (at rest)
 //     calibration_axes: 3              # whole axes in the calibration set; the rest validate

@@ -158,7 +158,10 @@ void AddProcedureSections(std::vector<ScenarioSection>* out) {
             .Default("best_fitness").Doc("which PSO run's poses"),
         K("ik_seed", T::kString).OneOf({"mid_range", "start_pose"}).Default("mid_range")
             .Doc("where each axis's IK starts: the joint limits' middle or the joints read "
-                 "when the procedure starts (arms whose joints turn a full turn or more)")}});
+                 "when the procedure starts (arms whose joints turn a full turn or more)"),
+        K("ik", T::kString).OneOf({"iterative", "closed_form"}).Default("iterative")
+            .Doc("the planner's IK: damped least squares, or the closed form of a spherical "
+                 "wrist (other arms: iterative); docs/results/paired_studies.md")}});
   s.push_back(
       {"calibration_servo", "The visual servo's options.",
        {K("tolerance_px", T::kNumber).Unit("px").Min(1e-3).Max(100).Default("0.1")

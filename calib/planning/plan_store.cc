@@ -83,7 +83,7 @@ std::string PlanInputsText(const PlanInputs& in) {
                                    {"passive_ik_seed", &o.passive_ik_seed}}) {
     for (int i = 0; i < seed->size(); ++i) Write(os, std::string(name) + "." + std::to_string(i), (*seed)(i));
   }
-  // Written when on: plans stored before it existed came from the iterative IK.
+  // Written when on (not the default): the keys of the iterative IK's plans stay as they were.
   if (o.closed_form_ik) os << "ik.closed_form 1\n";
   os << "max_draws_per_axis " << o.max_draws_per_axis << "\nredraws_after_update "
      << o.redraws_after_update << '\n';

@@ -276,6 +276,29 @@ TEST(ToldVersusTrue, PlanningRunSelectionIsReadFromTheScenario) {
   }
 }
 
+// The planner's IK from the scenario: iterative by default (its paired study did not accept
+// the closed form as the default), the closed form when asked, and an error naming the key and
+// the value otherwise.
+TEST(ToldVersusTrue, PlannerIkIsReadFromTheScenario) {
+  const std::string paper = ReadFile(kScenarioDir + "/paper_reinovo.yaml");
+  const std::string seed_line = "      seed: 1\n";
+  ASSERT_NE(paper.find(seed_line), std::string::npos);
+  EXPECT_FALSE(ParseCalibrationConfig(Parse(paper)).options.planner.closed_form_ik);
+  EXPECT_TRUE(ParseCalibrationConfig(
+                  Parse(Replaced(paper, seed_line, seed_line + "      ik: closed_form\n")))
+                  .options.planner.closed_form_ik);
+  EXPECT_FALSE(ParseCalibrationConfig(
+                   Parse(Replaced(paper, seed_line, seed_line + "      ik: iterative\n")))
+                   .options.planner.closed_form_ik);
+  try {
+    ParseCalibrationConfig(Parse(Replaced(paper, seed_line, seed_line + "      ik: analytic\n")));
+    ADD_FAILURE() << "no error for an unknown IK";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("ik"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'analytic'"), std::string::npos) << e.what();
+  }
+}
+
 // The encoder readings averaged per aligned pose: the paper scenario states 16, a scenario that
 // does not state it gets one reading (the paper's), and a count below 1 or a fraction is an
 // error naming the key.

@@ -46,7 +46,7 @@ TEST(PlanStoreTest, EveryInputThatChangesThePlanChangesTheText) {
       {"board normal", [](PlanInputs* p) { p->options.board_normal_in_E.x() = 1e-12; }},
       {"active IK start", [](PlanInputs* p) { p->options.active_ik_seed = JointVector::Zero(6); }},
       {"passive IK start", [](PlanInputs* p) { p->options.passive_ik_seed = JointVector::Zero(6); }},
-      {"iterative IK", [](PlanInputs* p) { p->options.closed_form_ik = false; }},
+      {"closed-form IK", [](PlanInputs* p) { p->options.closed_form_ik = true; }},
       {"run selection",
        [](PlanInputs* p) {
          p->options.select_run = PosePlannerOptions::RunSelection::kPredictedError;
@@ -71,12 +71,12 @@ TEST(PlanStoreTest, EveryInputThatChangesThePlanChangesTheText) {
   EXPECT_EQ(base.find("select_run"), std::string::npos);
   // Without IK starts (the mid-range) the text is that of plans made before they existed.
   EXPECT_EQ(base.find("ik_seed."), std::string::npos);
-  // The closed-form IK (on by default) is named, so a plan the iterative IK made before it
-  // existed is not reused for it; the iterative IK's text is that plan's.
-  EXPECT_NE(base.find("ik.closed_form 1\n"), std::string::npos);
-  PlanInputs iterative = Inputs();
-  iterative.options.closed_form_ik = false;
-  EXPECT_EQ(PlanInputsText(iterative).find("closed_form"), std::string::npos);
+  // The closed-form IK is named where on, so the iterative IK's plans (the default, whose text
+  // is that of plans made before it existed) are not reused for it.
+  EXPECT_EQ(base.find("closed_form"), std::string::npos);
+  PlanInputs closed = Inputs();
+  closed.options.closed_form_ik = true;
+  EXPECT_NE(PlanInputsText(closed).find("ik.closed_form 1\n"), std::string::npos);
 }
 
 }  // namespace
