@@ -11,6 +11,7 @@
 #   TRIALS trials is tabled as it is, not run again). SCENARIO: a file of scenarios/ without .yaml.
 #   Exit 0 when every pair is accepted, 1 when one is not, 2 on bad input.
 #   PAIRED_DOC: another file to write than docs/results/paired_studies.md (the script's test).
+#   NOTE: a line printed under the section's header (what ran beside the studies, ...).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [ $# -ge 6 ] || { echo "usage: $0 TITLE BEFORE_BIN AFTER_BIN TRIALS OUT SCENARIO..." >&2; exit 2; }
@@ -67,6 +68,7 @@ status=0
   echo "- command: \`${REUSE:+REUSE=$REUSE }scripts/paired_study_table.sh \"$TITLE\" $BEFORE_BIN $AFTER_BIN $TRIALS $OUT ${SCENARIOS[*]}\`, whose studies are:"
   echo
   for c in "${commands[@]}"; do echo "      $c"; done
+  if [ -n "${NOTE:-}" ]; then echo; echo "$NOTE"; fi
   for sc in "${SCENARIOS[@]}"; do
     echo
     echo "### $sc"
@@ -93,7 +95,8 @@ else
     echo
     echo "Written by \`scripts/paired_study_table.sh\` (newest first). Each section: a change's studies"
     echo "before and after on the same trials, and the acceptance rule of issue 42"
-    echo "(scripts/paired_verdict.py, docs/explanation/studies.md) on each scenario."
+    echo "(scripts/paired_verdict.py, docs/explanation/studies.md) on each scenario. The times are"
+    echo "as the studies ran (two trial processes at a time); other work on the machine shows in them."
     echo
     cat "$section"; } >"$DOC.new"
 fi
