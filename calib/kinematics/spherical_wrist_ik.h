@@ -59,8 +59,8 @@ class SphericalWristIk {
   /// least its 1e-9, and q_seed a finite vector inside the limits.
   bool Serves(const JointVector& q_seed, const IkOptions& options) const;
 
-  /// The first of InsideLimits (the answer nearest q_seed), with iterations 0 and starts 1. SolveIk on the model where the closed form does not serve: position_only,
-  /// tolerances below its 1e-9, a seed that is not a finite vector inside the limits, or no
+  /// The first of InsideLimits (the answer nearest q_seed), with iterations 0 and starts 1.
+  /// SolveIk on the model where the closed form does not serve (Serves is false) or has no
   /// answer inside the limits.
   IkResult Nearest(const Transform& X_BE_target, const JointVector& q_seed,
                    const IkOptions& options = {}) const;

@@ -99,8 +99,9 @@ struct Planner {
   // seed (the mid-range, or the board position before on the axis) first and takes the
   // first that passes (the nearest where it passes), as the iterative solver's random
   // restarts reach other branches; the cause is the nearest answer's. With a start pose it
-  // takes the nearest alone: the seed's branch, as the iterative solver without restarts. The iterative solver gives one
-  // answer (turned by whole turns to the seed's angles with a start pose).
+  // takes the nearest alone: the seed's branch, as the iterative solver without restarts.
+  // The iterative solver gives one answer (turned by whole turns to the seed's angles with a
+  // start pose).
   Cause Solve(const KinematicModel& m, const std::optional<SphericalWristIk>& closed,
               const ChainTrig& trig, const Transform& X_BE, const JointVector& seed,
               bool start_pose, Cause ik_failed, JointVector* q) const {
