@@ -114,6 +114,7 @@ void ToProto(const CameraSpec& c, bpb::CameraSpec* out) {
   out->set_msaa_samples(c.msaa_samples);
   out->set_near_m(c.near_m);
   out->set_far_m(c.far_m);
+  out->set_skybox(c.skybox);
 }
 
 CameraSpec FromProto(const bpb::CameraSpec& c) {
@@ -130,6 +131,7 @@ CameraSpec FromProto(const bpb::CameraSpec& c) {
   out.msaa_samples = c.msaa_samples();
   out.near_m = c.near_m();
   out.far_m = c.far_m();
+  out.skybox = c.has_skybox() ? c.skybox() : true;
   return out;
 }
 

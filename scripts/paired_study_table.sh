@@ -12,6 +12,10 @@
 #   Exit 0 when every pair is accepted, 1 when one is not, 2 on bad input.
 #   PAIRED_DOC: another file to write than docs/results/paired_studies.md (the script's test).
 #   NOTE: a line printed under the section's header (what ran beside the studies, ...).
+#   CONTROL=DIR CONTROL_NOTE=TEXT: a control of the first scenario, a study of TRIALS trials
+#   made by the before build with a change that should not matter (TEXT says which): the rule
+#   run on the before study against it follows the pair's, to show the rule's own scatter.
+#   Its verdict does not change the exit status.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 [ $# -ge 6 ] || { echo "usage: $0 TITLE BEFORE_BIN AFTER_BIN TRIALS OUT SCENARIO..." >&2; exit 2; }
@@ -27,6 +31,13 @@ done
 for sc in "${SCENARIOS[@]}"; do
   [ -f "scenarios/$sc.yaml" ] || { echo "paired_study_table: scenarios/$sc.yaml: not found" >&2; exit 2; }
 done
+if [ -n "${CONTROL:-}" ]; then
+  [ -n "${CONTROL_NOTE:-}" ] || { echo "paired_study_table: CONTROL needs CONTROL_NOTE (what it changes)" >&2; exit 2; }
+  n=0
+  [ -s "$CONTROL/trials.jsonl" ] && n=$(wc -l <"$CONTROL/trials.jsonl")
+  [ "$n" -ge "$TRIALS" ] ||
+    { echo "paired_study_table: CONTROL $CONTROL: $n trials, the pair has $TRIALS" >&2; exit 2; }
+fi
 command -v jq >/dev/null || { echo "paired_study_table: needs jq (scripts/install_deps.sh)" >&2; exit 2; }
 mkdir -p "$OUT"
 
@@ -85,6 +96,17 @@ status=0
     echo "time, before: $(timing "$OUT/${sc}_before")"
     echo "time, after:  $(timing "$OUT/${sc}_after")"
     echo '```'
+    if [ -n "${CONTROL:-}" ] && [ "$sc" = "${SCENARIOS[0]}" ]; then
+      echo
+      echo "#### $sc: control ($CONTROL_NOTE)"
+      echo
+      echo "The rule on the before study against the control: how far the rule moves when"
+      echo "nothing that should matter changed. Its verdict does not count."
+      echo
+      echo '```'
+      scripts/compare_studies.sh "$OUT/${sc}_before" "$CONTROL" "0-$((half - 1))" "$half-$last" 2>&1 || true
+      echo '```'
+    fi
   done
   echo
 } >"$section"

@@ -324,6 +324,10 @@ class ScenarioParser {
       cam.msaa_samples = r_.Integer(*v);
       Locate("camera.msaa_samples", *v);
     }
+    if (const auto v = m.Find("skybox", false)) {
+      cam.skybox = r_.Bool(*v);
+      Locate("camera.skybox", *v);
+    }
     if (const auto v = m.Find("near_mm", false)) {
       cam.near_m = MmToM(r_.Number(*v));
       Locate("camera.near_m", *v);

@@ -43,6 +43,8 @@
 //       cy: 403.95
 //       distortion: [0, 0, 0, 0, 0]        # optional [k1, k2, p1, p2, k3] (default none)
 //       msaa: 4                            # optional samples 0, 1, 2, 4, 8 (default 4)
+//       skybox: true                       # optional: draw the sky behind the scene (default
+//                                          # true; false: black, a quarter less to render)
 //       near_mm: 20                        # optional clipping planes (defaults 20, 5000)
 //       far_mm: 5000
 //     board:                               # required with two robots (refused with one)

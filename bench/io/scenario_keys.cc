@@ -346,6 +346,8 @@ std::vector<ScenarioSection> MakeSections() {
         K("distortion", T::kNumbers).Count(5).Default("none").Doc("[k1, k2, p1, p2, k3]"),
         K("msaa", T::kInteger).OneOfIntegers({0, 1, 2, 4, 8}).Default("4")
             .Doc("anti-aliasing samples"),
+        K("skybox", T::kBoolean).Default("true")
+            .Doc("draw the sky behind the scene (false: black, faster)"),
         K("near_mm", T::kNumber).Unit("mm").Above(0).Default("20").Doc("near clipping plane"),
         K("far_mm", T::kNumber).Unit("mm").Above(0).Default("5000").Doc("far clipping plane")}});
   {

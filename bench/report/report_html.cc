@@ -557,7 +557,8 @@ std::string TimingSection(const json* timing) {
   std::ostringstream o;
   std::vector<std::pair<std::string, double>> stages;
   double sum = 0;
-  for (const char* k : {"intrinsics", "planning", "servoing", "identification", "scoring"}) {
+  for (const char* k :
+       {"intrinsics", "planning", "servoing", "identification", "diagnosis", "scoring"}) {
     if (auto v = Num(Find(timing, k)); v && *v > 0) { stages.emplace_back(k, *v); sum += *v; }
   }
   std::optional<double> total = Num(Find(timing, "total"));
@@ -565,7 +566,8 @@ std::string TimingSection(const json* timing) {
   if (total && *total > sum * 1.0001 && !stages.empty()) stages.emplace_back("other", *total - sum);
   o << "<section><h2>Timing</h2><table>\n";
   Row(o, {"stage", "time [s]", "share [%]"}, true);
-  for (const char* k : {"intrinsics", "planning", "servoing", "identification", "scoring", "total"}) {
+  for (const char* k : {"intrinsics", "planning", "servoing", "identification", "diagnosis",
+                        "scoring", "total"}) {
     const json* v = Find(timing, k);
     if (v == nullptr) continue;
     auto s = Num(v);

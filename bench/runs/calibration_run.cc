@@ -762,10 +762,10 @@ void PrintRunSummary(const CalibrationStageResult& stage, const fs::path& out) {
   }
   const CalibrationTiming& t = stage.timing;
   std::printf("timing [s]: total %.1f = intrinsics %.1f + waiting for the plans %.1f + "
-              "servoing %.1f + identification %.1f + scoring %.1f (planning %.1f in the "
-              "background)\n",
-              t.total, t.intrinsics, t.planning, t.servoing, t.identification, t.scoring,
-              t.planning_compute);
+              "servoing %.1f + identification %.1f + diagnosis %.1f + scoring %.1f (planning %.1f "
+              "in the background)\n",
+              t.total, t.intrinsics, t.planning, t.servoing, t.identification, t.diagnosis,
+              t.scoring, t.planning_compute);
   std::printf("cell: %d frames in %.1f s (GrabImage), %d moves in %.1f s (MoveTo)\n", t.frames,
               t.grab_image, t.moves, t.move_to);
   std::printf("wrote %s/{report.json, report.html, measurements.csv, servo_*.png}\n",

@@ -531,6 +531,7 @@ struct TwinCell::Impl {
       hand_renderer = std::make_unique<OffscreenRenderer>(m.get(), canvas.width, canvas.height,
                                                           spec.camera.msaa_samples);
       hand_renderer->SetClipPlanes(spec.camera.near_m, spec.camera.far_m);
+      hand_renderer->SetSkybox(spec.camera.skybox);
     }
     return *hand_renderer;
   }

@@ -232,6 +232,8 @@ void OffscreenRenderer::SetClipPlanes(double near_m, double far_m) {
   impl_->far_m = far_m;
 }
 
+void OffscreenRenderer::SetSkybox(bool on) { impl_->scene.flags[mjRND_SKYBOX] = on ? 1 : 0; }
+
 cv::Mat OffscreenRenderer::RenderPinhole(const mjModel* model, mjData* data, int camera_id,
                                          const Intrinsics& K) {
   Impl& r = *impl_;

@@ -27,6 +27,10 @@ class OffscreenRenderer {
   /// 0 < near < far.
   void SetClipPlanes(double near_m, double far_m);
 
+  /// Draws the model's skybox behind the scene (the default) or not: the background is then
+  /// black and every frame costs less (the sky is drawn over the whole viewport).
+  void SetSkybox(bool on);
+
   /// Renders MJCF camera `camera_id` as an ideal pinhole with `K` (width/height of K must equal
   /// the renderer's). Returns 8-bit BGR in OpenCV row order.
   cv::Mat RenderPinhole(const mjModel* model, mjData* data, int camera_id, const Intrinsics& K);

@@ -131,6 +131,8 @@ TEST(ProtoConvert, TheTruthComesBackBitForBit) {
   t.camera.X_FC = random_transform();
   t.camera.intrinsics.fx = 834.31 + u(rng);
   t.camera.distortion.k1 = u(rng) * 0.01;
+  t.camera.msaa_samples = 2;
+  t.camera.skybox = !CameraSpec{}.skybox;  // not the default, so a dropped field shows
   t.board.robot = 0;
   t.board.X_FT = random_transform();
   t.board.square_m = 0.0123456789;
@@ -178,6 +180,8 @@ TEST(ProtoConvert, TheTruthComesBackBitForBit) {
   EXPECT_TRUE(same(t.camera.X_FC, b.camera.X_FC));
   EXPECT_EQ(t.camera.intrinsics.fx, b.camera.intrinsics.fx);
   EXPECT_EQ(t.camera.distortion.k1, b.camera.distortion.k1);
+  EXPECT_EQ(b.camera.msaa_samples, 2);
+  EXPECT_EQ(b.camera.skybox, t.camera.skybox);
   EXPECT_EQ(b.board.robot, 0);
   EXPECT_TRUE(same(t.board.X_FT, b.board.X_FT));
   EXPECT_EQ(t.board.square_m, b.board.square_m);
@@ -185,6 +189,13 @@ TEST(ProtoConvert, TheTruthComesBackBitForBit) {
   EXPECT_TRUE(same(t.tracker.X_WT, b.tracker.X_WT));
   EXPECT_EQ(t.tracker.p_FR, b.tracker.p_FR);
   EXPECT_EQ(t.tracker.drift_m_per_s, b.tracker.drift_m_per_s);
+
+  // A truth from before camera.skybox: its images were rendered with the sky.
+  bpb::TwinTruth without_skybox = message;
+  without_skybox.mutable_camera()->clear_skybox();
+  EXPECT_TRUE(FromProto(without_skybox).camera.skybox);
+  without_skybox.mutable_camera()->set_skybox(false);
+  EXPECT_FALSE(FromProto(without_skybox).camera.skybox);
 
   // A truth of the wrong shape is refused.
   bpb::TwinTruth short_of_a_robot = message;

@@ -3,7 +3,8 @@
 trials.jsonl on fixed seeds, the second build's figures a set factor of the first's): equal
 figures give the verdict ACCEPTED and exit 0, 10 % worse ones REJECTED and exit 1; each run puts
 its section above the ones before, which stay; fewer than 40 trials is bad input (exit 2) and
-writes nothing."""
+writes nothing; a control study (CONTROL=DIR) gets its own block whose verdict does not
+count."""
 import os
 import stat
 import subprocess
@@ -52,8 +53,8 @@ class PairedStudyTableTest(unittest.TestCase):
     def tearDown(self):
         self.dir.cleanup()
 
-    def table(self, title, after, trials, out):
-        env = dict(os.environ, PAIRED_DOC=self.doc)
+    def table(self, title, after, trials, out, **extra):
+        env = dict(os.environ, PAIRED_DOC=self.doc, **extra)
         p = subprocess.run(["bash", SCRIPT, title, self.bins["same"], self.bins[after],
                             str(trials), os.path.join(self.dir.name, out), "paper_reinovo",
                             "kuka_kr6r900"], capture_output=True, text=True, env=env)
@@ -77,6 +78,30 @@ class PairedStudyTableTest(unittest.TestCase):
         self.assertIn("mean after/before 1.1000", text[b:a])
         self.assertIn("10 s a trial", text[a:])  # the stand-in's wall_s, 10 x its factor
         self.assertIn("11 s a trial", text[b:a])
+
+    def test_a_control_is_tabled_and_does_not_count(self):
+        code, out = self.table("lever B", "worse", 40, "b")  # its after study: a "worse" control
+        self.assertEqual(code, 1, out)
+        control = os.path.join(self.dir.name, "b", "paper_reinovo_after")
+        code, out = self.table("lever A", "same", 40, "a", CONTROL=control,
+                               CONTROL_NOTE="noise scaled")
+        self.assertEqual(code, 0, out)  # the pair is accepted; the control's REJECTED does not count
+        with open(self.doc) as f:
+            text = f.read()
+        a, b = text.index("## lever A"), text.index("## lever B")
+        c = text.index("#### paper_reinovo: control (noise scaled)")
+        self.assertLess(a, c)
+        self.assertLess(c, text.index("### kuka_kr6r900", a))  # after the first scenario only
+        self.assertEqual(text.count("#### "), 1)
+        self.assertIn("verdict: REJECTED", text[c:b])
+        self.assertIn("mean after/before 1.1000", text[c:b])
+        # A control with fewer trials than the pair, or without its note, is refused.
+        code, out = self.table("lever D", "same", 40, "a", CONTROL=self.dir.name,
+                               CONTROL_NOTE="x")
+        self.assertEqual(code, 2, out)
+        code, out = self.table("lever D", "same", 40, "a", CONTROL=control)
+        self.assertEqual(code, 2, out)
+        self.assertIn("CONTROL_NOTE", out)
 
     def test_fewer_than_forty_trials_is_refused_and_writes_nothing(self):
         code, out = self.table("lever C", "same", 39, "c")

@@ -109,6 +109,7 @@ TEST(ScenarioTest, LoadsTwinDemoInSiUnits) {
   EXPECT_NEAR(cam.intrinsics.cy, 403.95, kExact);
   EXPECT_FALSE(cam.distortion.Any());
   EXPECT_EQ(cam.msaa_samples, 4);
+  EXPECT_TRUE(cam.skybox);  // absent: the sky
   EXPECT_LE(MaxDiff(cam.X_FC.translation(), Vector3(0, 0, 0.05)), kExact);
   EXPECT_LE(MaxDiff(cam.X_FC.linear(), Matrix3::Identity()), kExact);
   EXPECT_EQ(cam.near_m, CameraSpec{}.near_m);  // absent: the struct's defaults, exactly
@@ -230,6 +231,7 @@ TEST(ScenarioErrorTest, PoseNeedsExactlyOneRotation) {
 TEST(ScenarioTest, OptionalSectionsAreConvertedToSi) {
   std::string text = Replaced(DemoText(), "    msaa: 4\n",
                               "    msaa: 0\n"
+                              "    skybox: false\n"
                               "    distortion: [-0.1, 0.02, 0.001, -0.002, 0.003]\n"
                               "    near_mm: 50\n"
                               "    far_mm: 3000\n");
@@ -256,6 +258,7 @@ TEST(ScenarioTest, OptionalSectionsAreConvertedToSi) {
   const Scenario s = Parse(text);
   const CameraSpec& cam = s.twin.camera;
   EXPECT_EQ(cam.msaa_samples, 0);
+  EXPECT_FALSE(cam.skybox);
   EXPECT_EQ(cam.distortion.k1, -0.1);
   EXPECT_EQ(cam.distortion.k2, 0.02);
   EXPECT_EQ(cam.distortion.p1, 0.001);

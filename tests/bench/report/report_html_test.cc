@@ -56,7 +56,7 @@ json SampleReport() {
       }
     },
     "timing_s": {"total": 120.5, "intrinsics": 10.1, "planning": 20.2, "servoing": 70.3,
-                 "identification": 15.0, "scoring": 2.0},
+                 "identification": 15.0, "diagnosis": 2.5, "scoring": 2.0},
     "base_frame": {"installation": "floor", "general": {"e_tran_mm": 0.5, "e_rot_deg": 0.01},
                    "constrained": {"e_tran_mm": 0.3, "e_rot_deg": 0.008},
                    "workflow": {"nominal_kinematics": {"e_tran_mm": 4.2, "e_rot_deg": 0.2},
@@ -95,6 +95,7 @@ TEST(ReportHtml, FullSampleHasRobotPlotsImagesAndTables) {
   EXPECT_NE(html.find("id=\"misaligned\""), std::string::npos);
   EXPECT_NE(html.find("id=\"fitness\""), std::string::npos);
   EXPECT_NE(html.find("id=\"timing\""), std::string::npos);
+  EXPECT_NE(html.find("<tr><td>diagnosis</td><td>2.50</td>"), std::string::npos);  // a stage
   EXPECT_NE(html.find("deviation from nominal [mm]"), std::string::npos);
   EXPECT_NE(html.find("deviation from nominal [deg]"), std::string::npos);
   EXPECT_EQ(Count(html, "<svg"), 5);  // bars, mm panel, deg panel, fitness, timing

@@ -550,6 +550,9 @@ TEST_F(TwinCellTest, RegionPixelsEqualTheWholeFramesPixels) {
   TwinSpec no_msaa = DemoTwinSpec();
   no_msaa.camera.msaa_samples = 0;
   variants.push_back({"no MSAA", no_msaa});
+  TwinSpec no_sky = DemoTwinSpec();
+  no_sky.camera.skybox = false;
+  variants.push_back({"no skybox", no_sky});
   const std::vector<cv::Rect> rects = {{412, 284, 200, 200}, {0, 0, 160, 120},
                                        {333, 211, 257, 181}, {864, 648, 160, 120},
                                        {1, 767, 1023, 1},    {500, 380, 37, 23}};
@@ -607,6 +610,56 @@ TEST_F(TwinCellTest, RegionsAreClippedToTheImage) {
   EXPECT_LE(CompareRegion(full, part, cv::Rect(0, 700, 150, 68)).max, 1.0);
   EXPECT_TRUE(cell.GrabImageRegion(cv::Rect(2000, 0, 10, 10)).empty());
   EXPECT_EQ(cell.GrabImageRegion(cv::Rect(0, 0, 1024, 768)).size(), full.size());
+}
+
+// camera.skybox: without the sky its place is black and the board is untouched: its pixels are
+// the same and the detector finds the same corners. No image noise.
+TEST_F(TwinCellTest, WithoutTheSkyTheBackgroundIsBlackAndTheBoardStays) {
+  TwinSpec with = DemoTwinSpec();
+  with.camera.skybox = true;
+  TwinSpec without = DemoTwinSpec();
+  without.camera.skybox = false;
+  TwinCell a(with), b(without);
+  const cv::Mat sky = a.GrabImage(), black = b.GrabImage();
+  // Share of the pixels black in all channels (the board's black squares are, in both images).
+  const auto black_share = [](const cv::Mat& bgr) {
+    cv::Mat any;
+    cv::transform(bgr, any, cv::Matx13f(1, 1, 1));
+    return 1.0 - static_cast<double>(cv::countNonZero(any)) / static_cast<double>(bgr.total());
+  };
+  std::vector<cv::Point2f> ca, cb;
+  for (const auto& [image, corners] :
+       {std::pair<const cv::Mat*, std::vector<cv::Point2f>*>{&sky, &ca}, {&black, &cb}}) {
+    cv::Mat grey;
+    cv::cvtColor(*image, grey, cv::COLOR_BGR2GRAY);
+    ASSERT_TRUE(cv::findChessboardCorners(grey, cv::Size(3, 3), *corners));
+    cv::cornerSubPix(grey, *corners, cv::Size(5, 5), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
+  }
+  ASSERT_EQ(ca.size(), cb.size());
+  double corner_diff = 0.0;
+  for (std::size_t i = 0; i < ca.size(); ++i) {
+    corner_diff = std::max(corner_diff, static_cast<double>(cv::norm(ca[i] - cb[i])));
+  }
+  // The squares: the inner corners' box, grown by half the corners' spacing (still inside the
+  // outer squares, whatever the view's perspective does to them at this distance).
+  const cv::Rect inner = cv::boundingRect(ca);
+  const int grow = std::max(inner.width, inner.height) / 4;
+  const cv::Rect squares(inner.x - grow, inner.y - grow, inner.width + 2 * grow,
+                         inner.height + 2 * grow);
+  cv::Mat d;
+  cv::absdiff(sky(squares), black(squares), d);
+  double board_max = 0;
+  cv::minMaxLoc(d.reshape(1), nullptr, &board_max);
+  const double sky_black = black_share(sky), black_black = black_share(black);
+  std::printf("[ measured ] black pixels: %.2f %% with the sky, %.2f %% without; the squares' "
+              "%dx%d px: max |diff| %.0f grey levels; corners moved by at most %.2e px\n",
+              100 * sky_black, 100 * black_black, squares.width, squares.height, board_max,
+              corner_diff);
+  // The sky fills the upper part of this view (measured: 62 % of the frame turns black).
+  EXPECT_GE(black_black - sky_black, 0.1);
+  EXPECT_EQ(board_max, 0.0);
+  EXPECT_LE(corner_diff, 0.01);  // the region test's bound
 }
 
 }  // namespace
