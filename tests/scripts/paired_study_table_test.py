@@ -75,7 +75,7 @@ class PairedStudyTableTest(unittest.TestCase):
         self.assertIn("verdict: ACCEPTED", text[a:])
         self.assertIn("verdict: REJECTED", text[b:a])
         self.assertNotIn("ACCEPTED", text[b:a])
-        self.assertIn("mean after/before 1.1000", text[b:a])
+        self.assertIn("mean after / mean before 1.1000", text[b:a])
         self.assertIn("10 s a trial", text[a:])  # the stand-in's wall_s, 10 x its factor
         self.assertIn("11 s a trial", text[b:a])
 
@@ -94,7 +94,7 @@ class PairedStudyTableTest(unittest.TestCase):
         self.assertLess(c, text.index("### kuka_kr6r900", a))  # after the first scenario only
         self.assertEqual(text.count("#### "), 1)
         self.assertIn("verdict: REJECTED", text[c:b])
-        self.assertIn("mean after/before 1.1000", text[c:b])
+        self.assertIn("mean after / mean before 1.1000", text[c:b])
         # A control with fewer trials than the pair, or without its note, is refused.
         code, out = self.table("lever D", "same", 40, "a", CONTROL=self.dir.name,
                                CONTROL_NOTE="x")

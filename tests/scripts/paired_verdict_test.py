@@ -2,7 +2,8 @@
 """scripts/paired_verdict.py on synthetic paired studies whose verdict follows from how they
 are built: the same figures after as before are accepted; every figure 10 % worse, a robot
 newly above 0.6 mm rigid, a seed that stops meeting the targets and too few trials are each
-rejected; trials of the same number on other seeds are bad input (exit 2)."""
+rejected; trials of the same number on other seeds are bad input (exit 2). The rule's ratio of
+the means is not biased where the mean of per-trial ratios (printed beside it) is."""
 import json
 import os
 import random
@@ -48,7 +49,8 @@ class PairedVerdictTest(unittest.TestCase):
         code, out = self.run_verdict(base_study(), base_study())
         self.assertEqual(code, 0, out)
         self.assertIn("verdict: ACCEPTED", out)
-        self.assertIn("mean after/before 1.0000 over 40 trials", out)
+        self.assertIn("mean after / mean before 1.0000 over 40 trials, 95 % upper bound 1.0000",
+                      out)
 
     def test_ten_percent_worse_everywhere_is_rejected(self):
         after = base_study()
@@ -57,12 +59,12 @@ class PairedVerdictTest(unittest.TestCase):
                 r["figures"][k] *= 1.10
         code, out = self.run_verdict(base_study(), after)
         self.assertEqual(code, 1, out)
-        self.assertIn("mean after/before 1.1000", out)
+        self.assertIn("mean after / mean before 1.1000", out)
         self.assertIn("verdict: REJECTED", out)
 
     def test_three_percent_worse_with_scatter_is_accepted(self):
-        # Ratios 1.03 +- 0.02 (uniform, sd 0.0115): the bound is about 1.03 + 1.68 x 0.0115 /
-        # sqrt(40) = 1.033, below 1.05.
+        # Ratios 1.03 +- 0.02 (uniform, sd 0.0115): the ratio of the means is about 1.03 and
+        # its bound about 1.03 + 1.65 x 0.0115 / sqrt(40) = 1.033, below 1.05.
         rng = random.Random(3)
         after = base_study()
         for r in after:
@@ -71,6 +73,27 @@ class PairedVerdictTest(unittest.TestCase):
                 r["figures"][k] *= f
         code, out = self.run_verdict(base_study(), after)
         self.assertEqual(code, 0, out)
+
+    def test_errors_that_swap_between_builds_are_not_a_worse_mean(self):
+        # Errors that swap between the builds: r1 0.1 and 0.2 mm before, 0.2 and 0.1 after. The
+        # per-trial ratios are 2 and 0.5, mean 1.25, shown for information. The means are equal:
+        # the ratio of the means is exactly 1, and its bootstrap bound (resampled pairs) is
+        # above 1. r2 is the same in both: 1, bound 1.
+        before = [record(t, 0.1 if t % 2 else 0.2, 0.15) for t in range(40)]
+        after = [record(t, 0.2 if t % 2 else 0.1, 0.15) for t in range(40)]
+        code, out = self.run_verdict(before, after)
+        line = [l for l in out.splitlines() if l.startswith("r1 rigid:")]
+        self.assertEqual(len(line), 1, out)
+        self.assertIn("mean after / mean before 1.0000 over 40 trials", line[0])
+        self.assertIn("the mean of the per-trial ratios 1.2500", line[0])
+        bound = float(line[0].split("95 % upper bound ")[1].split(" ")[0])
+        self.assertGreater(bound, 1.0)
+        self.assertIn("r2 rigid: mean after / mean before 1.0000 over 40 trials, 95 % upper "
+                      "bound 1.0000 (at most 1.05: yes)", out)
+        # Half the pairs 2x, half 0.5x: the 40-trial bootstrap reaches past 1.05 (about 1.1),
+        # so this scatter is still rejected.
+        self.assertGreater(bound, 1.05)
+        self.assertEqual(code, 1, out)
 
     def test_a_robot_newly_above_0_6_mm_is_rejected(self):
         before, after = base_study(), base_study()
