@@ -405,7 +405,7 @@ TEST(ScenarioErrorTest, UnknownKeyNamesLineAndAllowedKeys) {
   const std::string msg = ParseError(text);
   EXPECT_TRUE(Contains(msg, At(LineOf(text, "    f: 1")) + " scenario.camera.f: unknown key 'f' "
                             "(allowed: robot, hand_eye, resolution, fx, fy, cx, cy, distortion, "
-                            "msaa, near_mm, far_mm)"));
+                            "msaa, skybox, near_mm, far_mm)"));
 }
 
 TEST(ScenarioErrorTest, UnknownKeyInPoseAndAtTheTop) {
