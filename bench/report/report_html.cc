@@ -555,20 +555,23 @@ std::string RobotSection(const std::string& name, const json& r, int index) {
 std::string TimingSection(const json* timing) {
   if (timing == nullptr || !timing->is_object()) return "";
   std::ostringstream o;
+  // The stages of timing_s that add up to its total (report.json), in the run's order.
+  static const std::vector<std::string> kStages = {"intrinsics",     "planning",  "servoing",
+                                                   "identification", "diagnosis", "scoring"};
   std::vector<std::pair<std::string, double>> stages;
   double sum = 0;
-  for (const char* k :
-       {"intrinsics", "planning", "servoing", "identification", "diagnosis", "scoring"}) {
-    if (auto v = Num(Find(timing, k)); v && *v > 0) { stages.emplace_back(k, *v); sum += *v; }
+  for (const std::string& k : kStages) {
+    if (auto v = Num(Find(timing, k.c_str())); v && *v > 0) { stages.emplace_back(k, *v); sum += *v; }
   }
   std::optional<double> total = Num(Find(timing, "total"));
   double denom = total && *total > sum ? *total : sum;
   if (total && *total > sum * 1.0001 && !stages.empty()) stages.emplace_back("other", *total - sum);
   o << "<section><h2>Timing</h2><table>\n";
   Row(o, {"stage", "time [s]", "share [%]"}, true);
-  for (const char* k : {"intrinsics", "planning", "servoing", "identification", "diagnosis",
-                        "scoring", "total"}) {
-    const json* v = Find(timing, k);
+  std::vector<std::string> rows = kStages;
+  rows.push_back("total");
+  for (const std::string& k : rows) {
+    const json* v = Find(timing, k.c_str());
     if (v == nullptr) continue;
     auto s = Num(v);
     Row(o, {k, NumText(v), s && denom > 0 ? FormatReportNumber(100.0 * *s / denom) : "n/a"});
