@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <random>
 #include <sstream>
@@ -42,6 +43,7 @@
 #include "calib/kinematics/forward_kinematics.h"
 #include "calib/kinematics/inverse_kinematics.h"
 #include "calib/model/parameters.h"
+#include "sim/render/gl_context.h"
 #include "sim/world/mujoco_handles.h"
 #include "twinbench_version.h"  // generated: bench/CMakeLists.txt, twinbench_version
 
@@ -766,6 +768,14 @@ int main(int argc, char** argv) {
     return 0;
   }
   try {
+    // The GL back end's name is checked now; whether EGL can honour it, at the first render.
+    if (const char* gl = std::getenv("TWINBENCH_GL")) {
+      try {
+        ParseGlChoice(gl);
+      } catch (const std::invalid_argument& e) {
+        throw InputError(std::string("TWINBENCH_GL=") + gl, e.what());
+      }
+    }
     // Every output path checked, every input noted, before anything runs.
     CheckOutputsBeforeRun(app, verbs, values);
     // The verb.

@@ -70,7 +70,9 @@ set(CPACK_DEBIAN_PACKAGE_RELEASE 1)
 set(CPACK_DEBIAN_PACKAGE_SECTION science)
 set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "libeigen3-dev, libceres-dev, libopencv-dev")
+# libegl1: the GPU render path, opened with dlopen (sim/render/gl_context.h), so shlibdeps cannot
+# see it; without it twinbench renders with OSMesa.
+set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "libeigen3-dev, libceres-dev, libopencv-dev, libegl1")
 set(CPACK_DEBIAN_COMPRESSION_TYPE gzip)
 set(CPACK_STRIP_FILES bin/twinbench)
 set(CPACK_SOURCE_IGNORE_FILES "/build.*/" "/\\\\.git/")

@@ -32,6 +32,10 @@ trap 'rm -f "$TMP"' EXIT
   echo "no longer matches the program. Exit codes: 0 success, 2 bad input or a procedure that"
   echo "refused, 3 acceptance criteria missed (\`run\`), 1 internal error."
   echo
+  echo "Environment: \`TWINBENCH_GL\` chooses the OpenGL back end the twin renders with: \`auto\`"
+  echo "(the default: EGL on a GPU, OSMesa where there is none), \`osmesa\`, \`egl\` or \`egl:N\`"
+  echo "([render on a GPU](../how-to/render-on-a-gpu.md)); any other value is refused with exit 2."
+  echo
   echo "Subcommands:"
   for s in $SUBCOMMANDS; do echo "[\`$s\`](#$s)"; done | paste -sd ' ' | sed 's/ / · /g'
   echo

@@ -9,6 +9,7 @@ PACKAGES=(
   libeigen3-dev libceres-dev libopencv-dev
   libblas3 liblapack3   # the reference BLAS / LAPACK every program links by DT_RPATH (cmake/ReferenceBlas.cmake)
   libmujoco-dev libqhull-dev libosmesa6-dev
+  libegl-dev libegl-mesa0   # the EGL render path (sim/render/gl_context.h): headers; Mesa's EGL for its test
   liburdfdom-dev liburdfdom-headers-dev libconsole-bridge-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev

@@ -386,7 +386,8 @@ json TimingJson(const CalibrationTiming& t) {
                  t.region_frames > 0 ? json(t.region_pixels / t.region_frames) : json(nullptr)},
                 {"grab_image", t.grab_image},
                 {"moves", t.moves},
-                {"move_to", t.move_to}}}};
+                {"move_to", t.move_to},
+                {"renderer", t.renderer.empty() ? json(nullptr) : json(t.renderer)}}}};
 }
 
 }  // namespace

@@ -38,6 +38,7 @@
 #include "calib/model/parameters.h"
 #include "sim/world/mujoco_handles.h"
 #include "sim/cell/twin_cell.h"
+#include "sim/render/gl_context.h"
 
 namespace twin {
 namespace fs = std::filesystem;
@@ -390,6 +391,7 @@ CalibrationTiming StageTiming(Clock::time_point t_start, const OpticalAxisResult
   t.grab_image = timed.grab_s;
   t.moves = timed.moves;
   t.move_to = timed.move_s;
+  if (const std::string gl = GlBackendDescription(); gl != "none") t.renderer = gl;
   return t;
 }
 
@@ -766,8 +768,9 @@ void PrintRunSummary(const CalibrationStageResult& stage, const fs::path& out) {
               "in the background)\n",
               t.total, t.intrinsics, t.planning, t.servoing, t.identification, t.diagnosis,
               t.scoring, t.planning_compute);
-  std::printf("cell: %d frames in %.1f s (GrabImage), %d moves in %.1f s (MoveTo)\n", t.frames,
-              t.grab_image, t.moves, t.move_to);
+  std::printf("cell: %d frames in %.1f s (GrabImage), %d moves in %.1f s (MoveTo)%s%s\n",
+              t.frames, t.grab_image, t.moves, t.move_to,
+              t.renderer.empty() ? "" : "; rendered with ", t.renderer.c_str());
   std::printf("wrote %s/{report.json, report.html, measurements.csv, servo_*.png}\n",
               out.string().c_str());
 }

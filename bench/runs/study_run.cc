@@ -13,6 +13,7 @@
 #include <cerrno>
 #include <climits>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -432,6 +433,8 @@ void StopTrialsOnInterrupt(TrialChildren* children) {
   });
 }
 
+}  // namespace
+
 // One llvmpipe and one OpenCV thread per trial: the processes are the parallelism.
 // A fixed mmap threshold: glibc raises it whenever a thread frees a large block, so whether
 // a later large buffer comes from mmap or from the heap (and how it is aligned) would depend
@@ -444,12 +447,21 @@ void StopTrialsOnInterrupt(TrialChildren* children) {
 // new process, so their sizes move every stack buffer's alignment, and with it (measured:
 // a trial under Slurm differed from the same trial run locally by 1e-6 px in the intrinsics)
 // the result.
+// The GL back end's choice (sim/render/gl_context.h) and where EGL finds its vendor libraries
+// pass through, where set: a trial renders as the study's process was told to.
 std::vector<std::string> TrialEnvironment() {
-  return {"PATH=/usr/local/bin:/usr/bin:/bin", "LANG=C",
-          "LC_ALL=C", "LP_NUM_THREADS=1",
-          "OPENCV_FOR_THREADS_NUM=1",
-          "MALLOC_MMAP_THRESHOLD_=131072"};
+  std::vector<std::string> env = {"PATH=/usr/local/bin:/usr/bin:/bin", "LANG=C",
+                                  "LC_ALL=C", "LP_NUM_THREADS=1",
+                                  "OPENCV_FOR_THREADS_NUM=1",
+                                  "MALLOC_MMAP_THRESHOLD_=131072"};
+  for (const char* name :
+       {"TWINBENCH_GL", "__EGL_VENDOR_LIBRARY_DIRS", "__EGL_VENDOR_LIBRARY_FILENAMES"}) {
+    if (const char* value = std::getenv(name)) env.push_back(std::string(name) + "=" + value);
+  }
+  return env;
 }
+
+namespace {
 
 // Creates the plan cache and links it into the work folder as plans.
 void LinkPlanCache(const WorkFolders& folders) {

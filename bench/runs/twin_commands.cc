@@ -17,6 +17,7 @@
 #include "calib/common/clock.h"
 #include "calib/common/errors.h"
 #include "sim/cell/twin_cell.h"
+#include "sim/render/gl_context.h"
 
 namespace twin {
 namespace {
@@ -85,7 +86,8 @@ int RunRender(const RenderOptions& o) {
     DiscardStaging(staging.string());
     throw;
   }
-  std::printf("%d pose(s) rendered into %s\n", written, o.out_dir.c_str());
+  std::printf("%d pose(s) rendered into %s with %s\n", written, o.out_dir.c_str(),
+              GlBackendDescription().c_str());
   return 0;
 }
 
@@ -107,18 +109,48 @@ double WorkerFps(const TwinSpec& spec, int workers, int frames) {
       sigset_t none;
       sigemptyset(&none);
       pthread_sigmask(SIG_SETMASK, &none, nullptr);
-      TwinCell cell(spec);
-      cell.GrabImage();
-      char c = 1;
-      if (write(ready[1], &c, 1) != 1 || read(go[0], &c, 1) != 1) _exit(3);
-      for (int f = 0; f < frames; ++f) cell.GrabImage();
+      close(ready[0]);
+      close(go[1]);
+      // A worker's error ends the worker, not a copy of the parent's command.
+      try {
+        TwinCell cell(spec);
+        cell.GrabImage();
+        char c = 1;
+        if (write(ready[1], &c, 1) != 1 || read(go[0], &c, 1) != 1) _exit(3);
+        for (int f = 0; f < frames; ++f) cell.GrabImage();
+      } catch (const InputError& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        _exit(2);
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "internal error: benchmark-twin worker: %s\n", e.what());
+        _exit(1);
+      }
       _exit(0);
     }
     children.push_back(pid);
   }
+  // Only the workers hold the ready pipe's write end now: a worker that ends before it is
+  // ready closes its copy, and once all have, read() returns 0 instead of waiting for ever.
+  close(ready[1]);
+  ready[1] = -1;
   char c = 1;
   for (int w = 0; w < workers; ++w) {
-    if (read(ready[0], &c, 1) != 1) throw std::runtime_error("a worker failed to start");
+    if (read(ready[0], &c, 1) != 1) {
+      close(go[1]);  // the workers still waiting for it end (read() returns 0)
+      bool refused = false;
+      for (pid_t pid : children) {
+        int status = 0;
+        waitpid(pid, &status, 0);
+        refused = refused || (WIFEXITED(status) && WEXITSTATUS(status) == 2);
+      }
+      close(ready[0]);
+      close(go[0]);
+      if (refused) {
+        throw InputError("benchmark-twin", "a worker process refused the input (its error is "
+                                           "above)");
+      }
+      throw std::runtime_error("a worker process failed to start");
+    }
   }
   const auto t0 = Clock::now();
   for (int w = 0; w < workers; ++w) {
@@ -131,7 +163,7 @@ double WorkerFps(const TwinSpec& spec, int workers, int frames) {
     ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
   }
   const double seconds = SecondsSince(t0);
-  for (int fd : {ready[0], ready[1], go[0], go[1]}) close(fd);
+  for (int fd : {ready[0], go[0], go[1]}) close(fd);
   if (!ok) throw std::runtime_error("a worker process failed");
   return workers * frames / seconds;
 }
@@ -196,6 +228,7 @@ int RunTwinBenchmark(const TwinBenchmarkOptions& o) {
 
   std::printf("twin benchmark: %s, %dx%d image, %d frames per figure\n", o.scenario.c_str(),
               first.cols, first.rows, o.frames);
+  std::printf("  GL back end: %s\n", GlBackendDescription().c_str());
   std::printf("  GrabImage (render + read-back + flip + effects): %7.2f ms/frame\n", grab_ms);
   std::printf("  bare mjr_render + mjr_readPixels:                %7.2f ms/frame\n", bare_ms);
   std::printf("  GrabImageRegion, %dx%d centred region:          %7.2f ms/frame\n", roi.width,

@@ -77,6 +77,9 @@ struct CalibrationTiming {
   int frames = 0, region_frames = 0, moves = 0;
   double region_pixels = 0;  ///< pixels of all region frames
   double grab_image = 0, move_to = 0;
+  /// The GL back end this process rendered with (GlBackendDescription); "" where it rendered
+  /// nothing (a remote or replayed cell).
+  std::string renderer;
 };
 
 /// The decrease of eq. 46's misaligned error by the calibration [%]; NaN without a before.

@@ -1,7 +1,5 @@
 #include "sim/render/renderer.h"
 
-#include <GL/osmesa.h>
-
 #include <algorithm>
 #include <cmath>
 #include <mutex>
@@ -10,6 +8,8 @@
 #include <vector>
 
 #include <opencv2/imgproc.hpp>
+
+#include "sim/render/gl_context.h"
 
 namespace twin {
 namespace {
@@ -133,8 +133,7 @@ void SetRegionFrustum(mjvGLCamera* cam, const Intrinsics& K, const cv::Rect& roi
 
 struct OffscreenRenderer::Impl {
   int width = 0, height = 0;
-  OSMesaContext osmesa = nullptr;
-  std::vector<unsigned char> window;   // OSMesa's default framebuffer (unused by MuJoCo)
+  std::unique_ptr<GlContext> gl;       // OSMesa or EGL (gl_context.h)
   std::vector<unsigned char> rgb;      // read-back buffer, bottom-up RGB
   mjvScene scene;
   mjrContext context;
@@ -143,20 +142,22 @@ struct OffscreenRenderer::Impl {
   bool made = false;                   // scene and context were made
 
   ~Impl() {
-    if (!osmesa) return;
+    if (!gl) return;
     std::lock_guard<std::mutex> lock(ContextMutex());
-    OSMesaMakeCurrent(osmesa, window.data(), GL_UNSIGNED_BYTE, width, height);
     if (made) {
-      mjr_freeContext(&context);
+      try {
+        gl->MakeCurrent();
+        mjr_freeContext(&context);  // GL objects: needs the context current
+      } catch (const std::runtime_error&) {
+        // Not current (EGL: current on another thread): the context's destruction frees them.
+      }
       mjv_freeScene(&scene);
     }
-    OSMesaDestroyContext(osmesa);
+    gl.reset();
   }
 
   void MakeCurrent() {
-    if (!OSMesaMakeCurrent(osmesa, window.data(), GL_UNSIGNED_BYTE, width, height)) {
-      throw std::runtime_error("OffscreenRenderer: OSMesaMakeCurrent failed");
-    }
+    gl->MakeCurrent();
     mjr_setBuffer(mjFB_OFFSCREEN, &context);
   }
 
@@ -199,17 +200,12 @@ OffscreenRenderer::OffscreenRenderer(const mjModel* model, int width, int height
   Impl& r = *impl_;
   r.width = width;
   r.height = height;
-  r.window.resize(static_cast<size_t>(4) * width * height);
   r.rgb.resize(static_cast<size_t>(3) * width * height);
   mjv_defaultOption(&r.option);
   mjv_defaultScene(&r.scene);
   mjr_defaultContext(&r.context);
   std::lock_guard<std::mutex> lock(ContextMutex());
-  r.osmesa = OSMesaCreateContextExt(OSMESA_RGBA, 24, 8, 0, nullptr);
-  if (!r.osmesa) throw std::runtime_error("OffscreenRenderer: OSMesaCreateContextExt failed");
-  if (!OSMesaMakeCurrent(r.osmesa, r.window.data(), GL_UNSIGNED_BYTE, width, height)) {
-    throw std::runtime_error("OffscreenRenderer: OSMesaMakeCurrent failed");
-  }
+  r.gl = MakeGlContext(width, height);  // current on this thread
   const auto sized = SizedCopy(model, width, height, msaa);
   mjv_makeScene(model, &r.scene, std::max(kMinSceneGeoms, 2 * model->ngeom));
   mjr_makeContext(sized.get(), &r.context, mjFONTSCALE_100);

@@ -1,6 +1,7 @@
-// Off-screen rendering of a MuJoCo scene with OSMesa, with exact pinhole intrinsics (fx, fy,
-// cx, cy in OpenCV's pixel-centre convention). Several renderers may live in one process; each
-// owns its OSMesa context and makes it current for every call. Not thread-safe per instance.
+// Off-screen rendering of a MuJoCo scene with OSMesa or EGL (gl_context.h: chosen once per
+// process, TWINBENCH_GL), with exact pinhole intrinsics (fx, fy, cx, cy in OpenCV's pixel-centre
+// convention). Several renderers may live in one process; each owns its GL context and makes it
+// current for every call. Not thread-safe per instance.
 #pragma once
 
 #include <memory>
@@ -14,7 +15,7 @@ namespace twin {
 
 class OffscreenRenderer {
  public:
-  /// Creates an OSMesa context and MuJoCo render context for `model` with an offscreen
+  /// Creates a GL context (MakeGlContext) and MuJoCo render context for `model` with an offscreen
   /// framebuffer of width x height pixels and `msaa` samples; these override the model's
   /// <global offwidth/offheight> and <quality offsamples> (set on a private copy of the model).
   OffscreenRenderer(const mjModel* model, int width, int height, int msaa);

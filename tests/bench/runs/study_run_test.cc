@@ -9,7 +9,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -17,6 +19,7 @@
 #include <set>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -193,6 +196,48 @@ TEST(StudyCli, StudyResumesAndShardsMergeToTheSameRecords) {
     EXPECT_EQ(ComparablePart(rec), ComparablePart(w.at(t))) << "trial " << t;
   }
   EXPECT_EQ(testing::ReadFile(merged + "/summary.json"), testing::ReadFile(whole + "/summary.json"));
+}
+
+TEST(StudyEnvironment, KeepsOnlyTheGlChoiceAndEglPathsOfTheStudysOwn) {
+  const char* saved = std::getenv("TWINBENCH_GL");
+  const std::string saved_value = saved ? saved : "";
+  unsetenv("TWINBENCH_GL");
+  setenv("TWINBENCH_STUDY_TEST_OTHER", "1", 1);
+  const std::vector<std::string> plain = TrialEnvironment();
+  EXPECT_EQ(plain.size(), 6u);  // the fixed list (study_run.cc: its size is part of the layout)
+  setenv("TWINBENCH_GL", "egl:1", 1);
+  setenv("__EGL_VENDOR_LIBRARY_FILENAMES", "/x/10_nvidia.json", 1);
+  const std::vector<std::string> gl = TrialEnvironment();
+  unsetenv("__EGL_VENDOR_LIBRARY_FILENAMES");
+  unsetenv("TWINBENCH_STUDY_TEST_OTHER");
+  if (saved) {
+    setenv("TWINBENCH_GL", saved_value.c_str(), 1);
+  } else {
+    unsetenv("TWINBENCH_GL");
+  }
+  ASSERT_EQ(gl.size(), 8u);
+  EXPECT_TRUE(std::equal(plain.begin(), plain.end(), gl.begin()));
+  EXPECT_EQ(gl[6], "TWINBENCH_GL=egl:1");
+  EXPECT_EQ(gl[7], "__EGL_VENDOR_LIBRARY_FILENAMES=/x/10_nvidia.json");
+  for (const std::string& e : gl) EXPECT_NE(e.rfind("TWINBENCH_STUDY_TEST_OTHER", 0), 0u) << e;
+}
+
+// A trial renders with the back end the study was told to use: with TWINBENCH_GL=osmesa its
+// report names OSMesa without auto's reason for it (a trial that lost the variable would run
+// auto: OSMesa "; EGL: ..." here, EGL on a GPU).
+TEST(StudyCli, TrialsRenderWithTheStudysGlBackEnd) {
+  const std::string out = Folder("gl");
+  setenv("TWINBENCH_GL", "osmesa", 1);
+  const CliRun r = Twinbench("study " + kSmall + " --trials 1 --jobs 1 --quiet --out " + out);
+  unsetenv("TWINBENCH_GL");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const std::map<int, json> w = ByTrial(Records(out));
+  ASSERT_EQ(w.size(), 1u);
+  const json& timing = w.at(0)["run"]["timing"];
+  ASSERT_TRUE(timing.contains("timing_s.cell.renderer")) << timing.dump();
+  const std::string renderer = timing["timing_s.cell.renderer"];
+  EXPECT_EQ(renderer.rfind("osmesa (", 0), 0u) << renderer;
+  EXPECT_EQ(renderer.find("EGL"), std::string::npos) << renderer;
 }
 
 // Every process whose command line names `dir` (the trials of a study in `dir`).
