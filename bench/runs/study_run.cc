@@ -448,14 +448,17 @@ void StopTrialsOnInterrupt(TrialChildren* children) {
 // a trial under Slurm differed from the same trial run locally by 1e-6 px in the intrinsics)
 // the result.
 // The GL back end's choice (sim/render/gl_context.h) and where EGL finds its vendor libraries
-// pass through, where set: a trial renders as the study's process was told to.
+// and the driver's (LD_LIBRARY_PATH, in some clusters and containers) pass through, where set:
+// a trial renders as the study was told to. They add to the environment's size, so trials are
+// the same bit for bit across nodes (above) where these variables are the same too.
 std::vector<std::string> TrialEnvironment() {
   std::vector<std::string> env = {"PATH=/usr/local/bin:/usr/bin:/bin", "LANG=C",
                                   "LC_ALL=C", "LP_NUM_THREADS=1",
                                   "OPENCV_FOR_THREADS_NUM=1",
                                   "MALLOC_MMAP_THRESHOLD_=131072"};
   for (const char* name :
-       {"TWINBENCH_GL", "__EGL_VENDOR_LIBRARY_DIRS", "__EGL_VENDOR_LIBRARY_FILENAMES"}) {
+       {"TWINBENCH_GL", "__EGL_VENDOR_LIBRARY_DIRS", "__EGL_VENDOR_LIBRARY_FILENAMES",
+        "LD_LIBRARY_PATH"}) {
     if (const char* value = std::getenv(name)) env.push_back(std::string(name) + "=" + value);
   }
   return env;

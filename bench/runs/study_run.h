@@ -48,9 +48,9 @@ void ParseShard(const std::string& text, int* index, int* count);
 /// Throws InputError naming the option (--trials, --jobs, --shard, --out).
 void ValidateStudyOptions(const StudyOptions& options);
 
-/// A trial process' whole environment (`NAME=value` strings): a fixed list, plus TWINBENCH_GL
-/// and EGL's vendor-library paths (__EGL_VENDOR_LIBRARY_DIRS, __EGL_VENDOR_LIBRARY_FILENAMES)
-/// where this process has them.
+/// A trial process' whole environment (`NAME=value` strings): a fixed list, plus TWINBENCH_GL,
+/// EGL's vendor-library paths (__EGL_VENDOR_LIBRARY_DIRS, __EGL_VENDOR_LIBRARY_FILENAMES) and
+/// LD_LIBRARY_PATH, in that order, where this process has them.
 std::vector<std::string> TrialEnvironment();
 
 /// Runs the study (see above). Returns 0 when every trial of the shard is recorded (failed

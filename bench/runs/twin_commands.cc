@@ -98,11 +98,37 @@ namespace {
 // go byte from the other, so the clock covers exactly the rendering of all of them.
 double WorkerFps(const TwinSpec& spec, int workers, int frames) {
   int ready[2], go[2];
-  if (pipe(ready) != 0 || pipe(go) != 0) throw std::runtime_error("pipe failed");
+  if (pipe(ready) != 0) throw std::runtime_error("pipe failed");
+  if (pipe(go) != 0) {
+    close(ready[0]);
+    close(ready[1]);
+    throw std::runtime_error("pipe failed");
+  }
   std::vector<pid_t> children;
+  // Ends the workers still running (a worker waiting for its go byte sees the pipe closed)
+  // and reaps them all; true when one of them refused the input (exit 2).
+  const auto end_workers = [&](bool kill_them) {
+    if (go[1] >= 0) close(go[1]);
+    go[1] = -1;
+    bool refused = false;
+    for (pid_t pid : children) {
+      if (kill_them) kill(pid, SIGTERM);
+      int status = 0;
+      waitpid(pid, &status, 0);
+      refused = refused || (WIFEXITED(status) && WEXITSTATUS(status) == 2);
+    }
+    for (int* fd : {&ready[0], &ready[1], &go[0]}) {
+      if (*fd >= 0) close(*fd);
+      *fd = -1;
+    }
+    return refused;
+  };
   for (int w = 0; w < workers; ++w) {
     const pid_t pid = fork();
-    if (pid < 0) throw std::runtime_error("fork failed");
+    if (pid < 0) {
+      end_workers(true);
+      throw std::runtime_error("fork failed");
+    }
     if (pid == 0) {
       // The parent blocks interrupts for its clean-up thread (bench/io/output_files.h); a
       // worker has no such thread and ends on them.
@@ -116,7 +142,11 @@ double WorkerFps(const TwinSpec& spec, int workers, int frames) {
         TwinCell cell(spec);
         cell.GrabImage();
         char c = 1;
-        if (write(ready[1], &c, 1) != 1 || read(go[0], &c, 1) != 1) _exit(3);
+        const bool told = write(ready[1], &c, 1) == 1;
+        // Ready: this worker's write end closes, so the parent's read() sees the end of the
+        // pipe once every worker has either written or died.
+        close(ready[1]);
+        if (!told || read(go[0], &c, 1) != 1) _exit(3);
         for (int f = 0; f < frames; ++f) cell.GrabImage();
       } catch (const InputError& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
@@ -129,23 +159,15 @@ double WorkerFps(const TwinSpec& spec, int workers, int frames) {
     }
     children.push_back(pid);
   }
-  // Only the workers hold the ready pipe's write end now: a worker that ends before it is
-  // ready closes its copy, and once all have, read() returns 0 instead of waiting for ever.
+  // Only the workers hold the ready pipe's write end now (and no one but them reads go).
   close(ready[1]);
   ready[1] = -1;
+  close(go[0]);
+  go[0] = -1;
   char c = 1;
   for (int w = 0; w < workers; ++w) {
     if (read(ready[0], &c, 1) != 1) {
-      close(go[1]);  // the workers still waiting for it end (read() returns 0)
-      bool refused = false;
-      for (pid_t pid : children) {
-        int status = 0;
-        waitpid(pid, &status, 0);
-        refused = refused || (WIFEXITED(status) && WEXITSTATUS(status) == 2);
-      }
-      close(ready[0]);
-      close(go[0]);
-      if (refused) {
+      if (end_workers(false)) {
         throw InputError("benchmark-twin", "a worker process refused the input (its error is "
                                            "above)");
       }
@@ -154,7 +176,10 @@ double WorkerFps(const TwinSpec& spec, int workers, int frames) {
   }
   const auto t0 = Clock::now();
   for (int w = 0; w < workers; ++w) {
-    if (write(go[1], &c, 1) != 1) throw std::runtime_error("cannot start the workers");
+    if (write(go[1], &c, 1) != 1) {
+      end_workers(true);
+      throw std::runtime_error("cannot start the workers");
+    }
   }
   bool ok = true;
   for (pid_t pid : children) {
@@ -163,7 +188,8 @@ double WorkerFps(const TwinSpec& spec, int workers, int frames) {
     ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
   }
   const double seconds = SecondsSince(t0);
-  for (int fd : {ready[0], go[0], go[1]}) close(fd);
+  children.clear();
+  end_workers(false);  // closes the pipes
   if (!ok) throw std::runtime_error("a worker process failed");
   return workers * frames / seconds;
 }

@@ -31,6 +31,7 @@ struct EglApi {
   PFNEGLGETPROCADDRESSPROC GetProcAddress = nullptr;
   PFNEGLGETERRORPROC GetError = nullptr;
   PFNEGLINITIALIZEPROC Initialize = nullptr;
+  PFNEGLTERMINATEPROC Terminate = nullptr;
   PFNEGLBINDAPIPROC BindAPI = nullptr;
   PFNEGLCHOOSECONFIGPROC ChooseConfig = nullptr;
   PFNEGLCREATECONTEXTPROC CreateContext = nullptr;
@@ -49,13 +50,14 @@ struct EglApi {
     GetProcAddress = reinterpret_cast<PFNEGLGETPROCADDRESSPROC>(sym("eglGetProcAddress"));
     GetError = reinterpret_cast<PFNEGLGETERRORPROC>(sym("eglGetError"));
     Initialize = reinterpret_cast<PFNEGLINITIALIZEPROC>(sym("eglInitialize"));
+    Terminate = reinterpret_cast<PFNEGLTERMINATEPROC>(sym("eglTerminate"));
     BindAPI = reinterpret_cast<PFNEGLBINDAPIPROC>(sym("eglBindAPI"));
     ChooseConfig = reinterpret_cast<PFNEGLCHOOSECONFIGPROC>(sym("eglChooseConfig"));
     CreateContext = reinterpret_cast<PFNEGLCREATECONTEXTPROC>(sym("eglCreateContext"));
     DestroyContext = reinterpret_cast<PFNEGLDESTROYCONTEXTPROC>(sym("eglDestroyContext"));
     MakeCurrent = reinterpret_cast<PFNEGLMAKECURRENTPROC>(sym("eglMakeCurrent"));
     GetCurrentContext = reinterpret_cast<PFNEGLGETCURRENTCONTEXTPROC>(sym("eglGetCurrentContext"));
-    if (!GetProcAddress || !GetError || !Initialize || !BindAPI || !ChooseConfig ||
+    if (!GetProcAddress || !GetError || !Initialize || !Terminate || !BindAPI || !ChooseConfig ||
         !CreateContext || !DestroyContext || !MakeCurrent || !GetCurrentContext) {
       return std::string(kEglLibrary) + " lacks EGL 1.4 entry points";
     }
@@ -81,6 +83,7 @@ struct Backend {
   EGLConfig config = nullptr;
   std::string renderer;      // GL_RENDERER of the first context
   std::string fallback_why;  // auto's reason for OSMesa
+  std::string error_where, error;  // `egl` that EGL cannot honour: every context throws it
 };
 
 std::mutex& BackendMutex() {
@@ -137,6 +140,11 @@ std::string SetUpEgl(const GlChoice& choice, Backend* backend) {
     return "EGL device " + std::to_string(index) + ": eglInitialize failed (" +
            EglErrorText(api.GetError()) + ")";
   }
+  // From here on a failure leaves no display open.
+  const auto fail = [&](const std::string& why) {
+    api.Terminate(display);
+    return why;
+  };
   const EGLint attributes[] = {EGL_RED_SIZE,        8,
                                EGL_GREEN_SIZE,      8,
                                EGL_BLUE_SIZE,       8,
@@ -150,19 +158,19 @@ std::string SetUpEgl(const GlChoice& choice, Backend* backend) {
   EGLConfig config = nullptr;
   EGLint configs = 0;
   if (!api.ChooseConfig(display, attributes, &config, 1, &configs) || configs < 1) {
-    return "EGL device " + std::to_string(index) + ": no RGBA8 + depth 24 OpenGL config";
+    return fail("EGL device " + std::to_string(index) + ": no RGBA8 + depth 24 OpenGL config");
   }
   // A trial context: where it works, so will the renderers'; its GL_RENDERER names the device.
   EGLContext trial = CreateEglContext(api, display, config);
   if (trial == EGL_NO_CONTEXT) {
-    return "EGL device " + std::to_string(index) + ": no OpenGL context (" +
-           EglErrorText(api.GetError()) + ")";
+    return fail("EGL device " + std::to_string(index) + ": no OpenGL context (" +
+                EglErrorText(api.GetError()) + ")");
   }
   if (!api.MakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, trial)) {
     const EGLint error = api.GetError();
     api.DestroyContext(display, trial);
-    return "EGL device " + std::to_string(index) + ": a context without a surface cannot be made "
-           "current (" + EglErrorText(error) + ")";
+    return fail("EGL device " + std::to_string(index) + ": a context without a surface cannot "
+                "be made current (" + EglErrorText(error) + ")");
   }
   using GetStringFn = const unsigned char* (*)(unsigned);
   auto get_string = reinterpret_cast<GetStringFn>(api.GetProcAddress("glGetString"));
@@ -175,32 +183,37 @@ std::string SetUpEgl(const GlChoice& choice, Backend* backend) {
   return "";
 }
 
+// Chooses the back end (see the header). Sets backend->chosen; for an `egl` that EGL cannot
+// honour also backend->error, which MakeGlContext throws now and for every later context.
 void Choose(Backend* backend) {
   const char* env = std::getenv("TWINBENCH_GL");
   const std::string where = std::string("TWINBENCH_GL=") + (env ? env : "");
+  backend->chosen = true;
   GlChoice choice;
   try {
     choice = ParseGlChoice(env ? env : "");
   } catch (const std::invalid_argument& e) {
-    throw InputError(where, e.what());
-  }
-  backend->chosen = true;
-  if (choice.kind == GlChoice::Kind::kOsmesa) return;
-  const std::string why = SetUpEgl(choice, backend);
-  if (!why.empty()) {
-    if (choice.kind == GlChoice::Kind::kEgl) {
-      backend->chosen = false;  // the next renderer tries again and fails the same way
-      throw InputError(where, why);
-    }
-    backend->fallback_why = why;
+    backend->error_where = where;
+    backend->error = e.what();
     return;
   }
+  if (choice.kind == GlChoice::Kind::kOsmesa) return;
+  std::string why = SetUpEgl(choice, backend);
   // From here on MuJoCo's loader finds eglGetProcAddress (see the header): promote libEGL to
-  // the global namespace.
-  if (!dlopen(kEglLibrary, RTLD_NOW | RTLD_GLOBAL | RTLD_NOLOAD)) {
-    throw std::runtime_error(std::string("cannot make ") + kEglLibrary + " global: " + dlerror());
+  // the global namespace. Where that fails, OSMesa still works: libEGL stayed private.
+  if (why.empty() && !dlopen(kEglLibrary, RTLD_NOW | RTLD_GLOBAL | RTLD_NOLOAD)) {
+    why = std::string("cannot make ") + kEglLibrary + " global (" + dlerror() + ")";
+    backend->api.Terminate(backend->display);
   }
-  backend->egl = true;
+  if (why.empty()) {
+    backend->egl = true;
+  } else if (choice.kind == GlChoice::Kind::kEgl) {
+    backend->error_where = where;
+    backend->error = why;
+  } else {
+    backend->fallback_why = why;
+    backend->renderer.clear();  // the GPU's name, from a trial context: OSMesa's comes later
+  }
 }
 
 class OsmesaContext : public GlContext {
@@ -209,7 +222,12 @@ class OsmesaContext : public GlContext {
       : width_(width), height_(height), window_(static_cast<size_t>(4) * width * height) {
     context_ = OSMesaCreateContextExt(OSMESA_RGBA, 24, 8, 0, nullptr);
     if (!context_) throw std::runtime_error("OSMesaCreateContextExt failed");
-    MakeCurrent();
+    try {
+      MakeCurrent();
+    } catch (...) {
+      OSMesaDestroyContext(context_);
+      throw;
+    }
   }
   ~OsmesaContext() override { OSMesaDestroyContext(context_); }
   void MakeCurrent() override {
@@ -217,6 +235,7 @@ class OsmesaContext : public GlContext {
       throw std::runtime_error("OSMesaMakeCurrent failed");
     }
   }
+  void Release() override {}  // OSMesa binds no context to a thread MuJoCo could not reuse
 
  private:
   int width_, height_;
@@ -231,12 +250,15 @@ class EglContext : public GlContext {
     if (context_ == EGL_NO_CONTEXT) {
       throw std::runtime_error("eglCreateContext failed (" + EglErrorText(api_.GetError()) + ")");
     }
-    MakeCurrent();
+    try {
+      MakeCurrent();
+    } catch (...) {
+      api_.DestroyContext(display_, context_);
+      throw;
+    }
   }
   ~EglContext() override {
-    if (api_.GetCurrentContext() == context_) {
-      api_.MakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
-    }
+    Release();
     api_.DestroyContext(display_, context_);
   }
   void MakeCurrent() override {
@@ -244,6 +266,11 @@ class EglContext : public GlContext {
     if (!api_.MakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_)) {
       throw std::runtime_error("eglMakeCurrent failed (" + EglErrorText(api_.GetError()) +
                                "; 0x3002 EGL_BAD_ACCESS: current on another thread)");
+    }
+  }
+  void Release() override {
+    if (api_.GetCurrentContext() == context_) {
+      api_.MakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     }
   }
 
@@ -279,6 +306,7 @@ std::unique_ptr<GlContext> MakeGlContext(int width, int height) {
   std::lock_guard<std::mutex> lock(BackendMutex());
   Backend& backend = TheBackend();
   if (!backend.chosen) Choose(&backend);
+  if (!backend.error.empty()) throw InputError(backend.error_where, backend.error);
   std::unique_ptr<GlContext> context;
   if (backend.egl) {
     context = std::make_unique<EglContext>(backend);

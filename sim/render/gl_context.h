@@ -34,13 +34,16 @@ struct GlChoice {
 GlChoice ParseGlChoice(const std::string& text);
 
 /// One OpenGL context of the process' back end, with no window: MuJoCo draws into its own
-/// offscreen framebuffer. Not thread-safe: a context stays current on the thread that last made
-/// it current, and EGL refuses it to another thread meanwhile (an error, not a wrong image).
+/// offscreen framebuffer. Not thread-safe. EGL binds a context to the thread it is current on
+/// and refuses it to others meanwhile, so a user makes it current for a piece of work and
+/// releases it after (OffscreenRenderer does, per call): then any thread may use it next.
 class GlContext {
  public:
   virtual ~GlContext() = default;
   /// Makes the context current on the calling thread. Throws std::runtime_error when it cannot.
   virtual void MakeCurrent() = 0;
+  /// Makes no context current on the calling thread, where this one is (OSMesa: nothing).
+  virtual void Release() = 0;
 };
 
 /// A new context of the process' back end (chosen at the first call, from TWINBENCH_GL), with

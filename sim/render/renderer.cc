@@ -148,22 +148,34 @@ struct OffscreenRenderer::Impl {
       try {
         gl->MakeCurrent();
         mjr_freeContext(&context);  // GL objects: needs the context current
+        gl->Release();
       } catch (const std::runtime_error&) {
-        // Not current (EGL: current on another thread): the context's destruction frees them.
+        // Cannot be made current: destroying the context below frees its objects with it.
       }
       mjv_freeScene(&scene);
     }
     gl.reset();
   }
 
-  void MakeCurrent() {
-    gl->MakeCurrent();
-    mjr_setBuffer(mjFB_OFFSCREEN, &context);
-  }
+  // The context current on this thread for one call, released after it (gl_context.h: an EGL
+  // context released is free for whichever thread calls next).
+  class Bound {
+   public:
+    explicit Bound(Impl* r) : r_(r) {
+      r_->gl->MakeCurrent();
+      mjr_setBuffer(mjFB_OFFSCREEN, &r_->context);
+    }
+    ~Bound() { r_->gl->Release(); }
+    Bound(const Bound&) = delete;
+    Bound& operator=(const Bound&) = delete;
+
+   private:
+    Impl* r_;
+  };
 
   // mjv_updateScene for camera `cam`, render and read back into `rgb`.
   void RenderToBuffer(const mjModel* m, mjData* d, mjvCamera* cam) {
-    MakeCurrent();
+    const Bound bound(this);
     mjv_updateScene(m, d, &option, nullptr, cam, mjCAT_ALL, &scene);
     RenderScene();
   }
@@ -214,6 +226,7 @@ OffscreenRenderer::OffscreenRenderer(const mjModel* model, int width, int height
   if (r.context.currentBuffer != mjFB_OFFSCREEN) {
     throw std::runtime_error("OffscreenRenderer: no offscreen framebuffer");
   }
+  r.gl->Release();  // each call makes it current again (Impl::Bound)
 }
 
 OffscreenRenderer::~OffscreenRenderer() = default;  // Impl frees the contexts
@@ -242,7 +255,7 @@ cv::Mat OffscreenRenderer::RenderPinhole(const mjModel* model, mjData* data, int
   mjv_defaultCamera(&cam);
   cam.type = mjCAMERA_FIXED;
   cam.fixedcamid = camera_id;
-  r.MakeCurrent();
+  const Impl::Bound bound(&r);
   mjv_updateScene(model, data, &r.option, nullptr, &cam, mjCAT_ALL, &r.scene);
   // mjv_updateScene reset the frustum: replace it in both GL cameras (mono averages them).
   const double near_m = r.near_m > 0 ? r.near_m : r.scene.camera[0].frustum_near;
@@ -278,7 +291,7 @@ cv::Mat OffscreenRenderer::RenderPinholeRegion(const mjModel* model, mjData* dat
   mjv_defaultCamera(&cam);
   cam.type = mjCAMERA_FIXED;
   cam.fixedcamid = camera_id;
-  r.MakeCurrent();
+  const Impl::Bound bound(&r);
   mjv_updateScene(model, data, &r.option, nullptr, &cam, mjCAT_ALL, &r.scene);
   const double near_m = r.near_m > 0 ? r.near_m : r.scene.camera[0].frustum_near;
   const double far_m = r.far_m > 0 ? r.far_m : r.scene.camera[0].frustum_far;

@@ -1,7 +1,8 @@
 // Off-screen rendering of a MuJoCo scene with OSMesa or EGL (gl_context.h: chosen once per
 // process, TWINBENCH_GL), with exact pinhole intrinsics (fx, fy, cx, cy in OpenCV's pixel-centre
-// convention). Several renderers may live in one process; each owns its GL context and makes it
-// current for every call. Not thread-safe per instance.
+// convention). Several renderers may live in one process; each owns its GL context, makes it
+// current for every call and releases it after, so successive calls may come from different
+// threads (serve-cell's). Not thread-safe per instance: one call at a time.
 #pragma once
 
 #include <memory>

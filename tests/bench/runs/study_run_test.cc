@@ -15,10 +15,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <map>
 #include <set>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -198,27 +200,63 @@ TEST(StudyCli, StudyResumesAndShardsMergeToTheSameRecords) {
   EXPECT_EQ(testing::ReadFile(merged + "/summary.json"), testing::ReadFile(whole + "/summary.json"));
 }
 
-TEST(StudyEnvironment, KeepsOnlyTheGlChoiceAndEglPathsOfTheStudysOwn) {
-  const char* saved = std::getenv("TWINBENCH_GL");
-  const std::string saved_value = saved ? saved : "";
-  unsetenv("TWINBENCH_GL");
-  setenv("TWINBENCH_STUDY_TEST_OTHER", "1", 1);
-  const std::vector<std::string> plain = TrialEnvironment();
-  EXPECT_EQ(plain.size(), 6u);  // the fixed list (study_run.cc: its size is part of the layout)
-  setenv("TWINBENCH_GL", "egl:1", 1);
-  setenv("__EGL_VENDOR_LIBRARY_FILENAMES", "/x/10_nvidia.json", 1);
-  const std::vector<std::string> gl = TrialEnvironment();
-  unsetenv("__EGL_VENDOR_LIBRARY_FILENAMES");
-  unsetenv("TWINBENCH_STUDY_TEST_OTHER");
-  if (saved) {
-    setenv("TWINBENCH_GL", saved_value.c_str(), 1);
-  } else {
-    unsetenv("TWINBENCH_GL");
+// Sets or (nullptr) unsets environment variables for its lifetime, then restores them.
+class ScopedEnvironment {
+ public:
+  ScopedEnvironment(std::initializer_list<std::pair<const char*, const char*>> values) {
+    for (const auto& [name, value] : values) {
+      const char* old = std::getenv(name);
+      saved_.push_back({name, old != nullptr, old ? old : ""});
+      if (value) {
+        setenv(name, value, 1);
+      } else {
+        unsetenv(name);
+      }
+    }
   }
-  ASSERT_EQ(gl.size(), 8u);
+  ~ScopedEnvironment() {
+    for (const Saved& s : saved_) {
+      if (s.was_set) {
+        setenv(s.name.c_str(), s.value.c_str(), 1);
+      } else {
+        unsetenv(s.name.c_str());
+      }
+    }
+  }
+
+ private:
+  struct Saved {
+    std::string name;
+    bool was_set;
+    std::string value;
+  };
+  std::vector<Saved> saved_;
+};
+
+TEST(StudyEnvironment, KeepsOnlyTheGlChoiceEglPathsAndLibraryPathOfTheStudysOwn) {
+  std::vector<std::string> plain, gl;
+  {
+    const ScopedEnvironment none({{"TWINBENCH_GL", nullptr},
+                                  {"__EGL_VENDOR_LIBRARY_DIRS", nullptr},
+                                  {"__EGL_VENDOR_LIBRARY_FILENAMES", nullptr},
+                                  {"LD_LIBRARY_PATH", nullptr},
+                                  {"TWINBENCH_STUDY_TEST_OTHER", "1"}});
+    plain = TrialEnvironment();
+  }
+  {
+    const ScopedEnvironment set({{"TWINBENCH_GL", "egl:1"},
+                                 {"__EGL_VENDOR_LIBRARY_DIRS", nullptr},
+                                 {"__EGL_VENDOR_LIBRARY_FILENAMES", "/x/10_nvidia.json"},
+                                 {"LD_LIBRARY_PATH", "/opt/nvidia/lib"},
+                                 {"TWINBENCH_STUDY_TEST_OTHER", "1"}});
+    gl = TrialEnvironment();
+  }
+  EXPECT_EQ(plain.size(), 6u);  // the fixed list (study_run.cc: its size is part of the layout)
+  ASSERT_EQ(gl.size(), 9u);
   EXPECT_TRUE(std::equal(plain.begin(), plain.end(), gl.begin()));
   EXPECT_EQ(gl[6], "TWINBENCH_GL=egl:1");
   EXPECT_EQ(gl[7], "__EGL_VENDOR_LIBRARY_FILENAMES=/x/10_nvidia.json");
+  EXPECT_EQ(gl[8], "LD_LIBRARY_PATH=/opt/nvidia/lib");
   for (const std::string& e : gl) EXPECT_NE(e.rfind("TWINBENCH_STUDY_TEST_OTHER", 0), 0u) << e;
 }
 
@@ -227,9 +265,11 @@ TEST(StudyEnvironment, KeepsOnlyTheGlChoiceAndEglPathsOfTheStudysOwn) {
 // auto: OSMesa "; EGL: ..." here, EGL on a GPU).
 TEST(StudyCli, TrialsRenderWithTheStudysGlBackEnd) {
   const std::string out = Folder("gl");
-  setenv("TWINBENCH_GL", "osmesa", 1);
-  const CliRun r = Twinbench("study " + kSmall + " --trials 1 --jobs 1 --quiet --out " + out);
-  unsetenv("TWINBENCH_GL");
+  CliRun r;
+  {
+    const ScopedEnvironment osmesa({{"TWINBENCH_GL", "osmesa"}});
+    r = Twinbench("study " + kSmall + " --trials 1 --jobs 1 --quiet --out " + out);
+  }
   ASSERT_EQ(r.code, 0) << r.output;
   const std::map<int, json> w = ByTrial(Records(out));
   ASSERT_EQ(w.size(), 1u);
