@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The GL back ends side by side (sim/render/gl_context.h), written to
 # docs/results/render_backends.md with the date, commit, machine and commands: for each of
-# TWINBENCH_GL=osmesa and =egl, `twinbench benchmark-twin` on the scenario and one cached run
+# TWINBENCH_GL=osmesa and =egl, `twinbench benchmark-twin` on the scenario (twice, the back
+# ends alternating, so the table shows the machine's scatter beside the difference) and one cached run
 # of it (its plans made beforehand, not timed), and rendering's share of that run: the run's
 # timing_s.cell.grab_image over timing_s.total (issue 42: at most 10 % on a GPU machine).
 # Where EGL renders on Mesa's software device (no GPU), its figures are llvmpipe's through EGL
@@ -45,12 +46,22 @@ for gl in osmesa egl; do
   backends+=("$gl")
 done
 
-row() {  # row GL: one table row from the benchmark's log and the run's report.json
+# The second round of benchmark-twin, the back ends alternating again.
+for gl in "${backends[@]}"; do
+  echo "TWINBENCH_GL=$gl: benchmark-twin again" >&2
+  TWINBENCH_GL=$gl "$tb" benchmark-twin "$scenario" >"$work/bench2_$gl.log" 2>&1 ||
+    { cat "$work/bench2_$gl.log" >&2; exit 1; }
+done
+
+frame_ms() { sed -n 's/.*GrabImage (render.*: *\([0-9.]*\) ms\/frame/\1/p' "$1"; }
+region_ms() { sed -n 's/.*GrabImageRegion, [0-9]*x[0-9]* centred region: *\([0-9.]*\) ms\/frame/\1/p' "$1"; }
+
+row() {  # row GL: one table row from the benchmark's logs and the run's report.json
   local gl=$1 log="$work/bench_$1.log" report="$work/run_$1/report.json"
   local renderer grab region total grab_s frames share
   renderer="$(sed -n 's/^  GL back end: //p' "$log")"
-  grab="$(sed -n 's/.*GrabImage (render.*: *\([0-9.]*\) ms\/frame/\1/p' "$log")"
-  region="$(sed -n 's/.*GrabImageRegion, [0-9]*x[0-9]* centred region: *\([0-9.]*\) ms\/frame/\1/p' "$log")"
+  grab="$(frame_ms "$log"), $(frame_ms "$work/bench2_$gl.log")"
+  region="$(region_ms "$log"), $(region_ms "$work/bench2_$gl.log")"
   total="$(jq '.timing_s.total' "$report")"
   grab_s="$(jq '.timing_s.cell.grab_image' "$report")"
   frames="$(jq '.timing_s.cell.frames' "$report")"
@@ -77,11 +88,12 @@ tmp="$(mktemp)"
   echo "$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo) GiB, GPUs: $gpus; load average $load_before at the start."
   echo
   echo "Each back end in its own processes (\`TWINBENCH_GL=...\`). The frame times are"
-  echo "\`twinbench benchmark-twin\`'s; the run is one \`twinbench run --plan-cache\` of the scenario"
+  echo "\`twinbench benchmark-twin\`'s, two rounds with the back ends alternating (their spread is"
+  echo "this machine's scatter); the run is one \`twinbench run --plan-cache\` of the scenario"
   echo "with its plans made beforehand (a cached study trial's work), and rendering's share is its"
   echo "\`timing_s.cell.grab_image\` over \`timing_s.total\`."
   echo
-  echo "| TWINBENCH_GL | renderer | frame [ms] | board region [ms] | cached run [s] | frames rendered | rendering's share |"
+  echo "| TWINBENCH_GL | renderer | frame [ms], two rounds | board region [ms], two rounds | cached run [s] | frames rendered | rendering's share |"
   echo "|---|---|---|---|---|---|---|"
   for gl in "${backends[@]}"; do row "$gl"; done
   echo
