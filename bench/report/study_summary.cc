@@ -124,6 +124,19 @@ json SummarizeStudy(const std::vector<json>& records) {
     }
   }
   out["scenario"] = {{"names", names}, {"hashes", hashes}};
+  // The GL back ends the trials rendered with (report timing_s.cell.renderer, kept among the
+  // record's timings): trials drawn by two rasterisers are not one distribution of figures.
+  json renderers = json::object();
+  for (const json* r : sorted) {
+    const auto run = r->find("run");
+    if (run == r->end() || !run->is_object() || !run->contains("timing")) continue;
+    const json& timing = (*run)["timing"];
+    const auto name = timing.find("timing_s.cell.renderer");
+    if (name == timing.end() || !name->is_string()) continue;
+    const std::string key = name->get<std::string>();
+    renderers[key] = renderers.value(key, 0) + 1;
+  }
+  out["renderers"] = renderers;
   out["trials"] = {{"recorded", records.size()},
                    {"ok", ok.size()},
                    {"failed", failures.size()},

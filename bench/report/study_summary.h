@@ -1,6 +1,8 @@
 // The statistics of a Monte Carlo study: summary.json from the records of trials.jsonl
 // (bench/report/trial_record.h). Keys of the summary:
 //   scenario.{names,hashes}     what was studied (one of each unless shards were mixed)
+//   renderers.<back end>        trials per GL back end they rendered with (the records'
+//                               run.timing["timing_s.cell.renderer"]; sim/render/gl_context.h)
 //   trials.{recorded,ok,failed,first,last,failures[]}   failures: {trial, reason}
 //   figures.<key>               over the ok trials, for every figure of the records:
 //                               {n, mean, std, median, p5, p95, min, max, ci95_mean[2]}

@@ -21,6 +21,17 @@ StudySummaryCounts WriteStudySummaryFiles(const std::string& dir,
   WriteFileAtomically((out / "summary.html").string(), RenderStudySummaryHtml(summary, documents));
   StudySummaryCounts counts;
   counts.failed = summary["trials"]["failed"].get<int>();
+  const nlohmann::json& renderers = summary["renderers"];
+  if (renderers.size() > 1) {
+    std::string list;
+    for (const auto& [name, n] : renderers.items()) {
+      list += (list.empty() ? "" : "; ") + name + ": " + std::to_string(n.get<int>()) + " trials";
+    }
+    counts.mixed_renderers_warning =
+        "warning: the trials rendered with " + std::to_string(renderers.size()) +
+        " GL back ends (" + list + "); their figures mix two rasterisers' images. Set "
+        "TWINBENCH_GL the same for every trial (docs/how-to/render-on-a-gpu.md)";
+  }
   return counts;
 }
 

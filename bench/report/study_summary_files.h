@@ -12,6 +12,9 @@ namespace twin {
 /// What the closing lines of `study` and `study-merge` print of the summary.
 struct StudySummaryCounts {
   int failed = 0;  ///< failed trials among the records
+  /// A line for stderr where the trials rendered with more than one GL back end (their figures
+  /// mix two rasterisers' images); empty otherwise.
+  std::string mixed_renderers_warning;
 };
 
 /// Writes `dir`/summary.json and `dir`/summary.html of `records`, each atomically (json first).

@@ -63,8 +63,11 @@ int RunStudyMerge(const StudyMergeOptions& o) {
   const std::string staging = CreateStagingDirectory(o.out_dir);
   try {
     WriteTrialsFile((fs::path(staging) / "trials.jsonl").string(), records);
-    WriteStudySummaryFiles(staging, records);
+    const StudySummaryCounts counts = WriteStudySummaryFiles(staging, records);
     PublishDirectory(staging, o.out_dir);
+    if (!counts.mixed_renderers_warning.empty()) {
+      std::fprintf(stderr, "%s\n", counts.mixed_renderers_warning.c_str());
+    }
   } catch (...) {
     std::error_code ec;
     fs::remove_all(staging, ec);

@@ -605,6 +605,9 @@ void WriteStudySummary(const StudyFolder& folder, const ShardTrials& trials,
   const fs::path& out = folder.out;
   const StudySummaryCounts counts =
       WriteStudySummaryFiles(out.string(), ReadTrialsFile(trials.trials_path).records);
+  if (!counts.mixed_renderers_warning.empty()) {
+    std::fprintf(stderr, "%s\n", counts.mixed_renderers_warning.c_str());
+  }
   std::printf("study: %d trials of shard %s recorded (%d failed); this run: %d trials in %.1f "
               "s, mean trial wall time %.2f s; wrote %s/{trials.jsonl, summary.json, "
               "summary.html}\n",

@@ -93,81 +93,93 @@ int RunRender(const RenderOptions& o) {
 
 namespace {
 
-// Frames per second of `workers` processes, each with its own twin, grabbing `frames` frames
-// after a warm-up frame (shader compilation). Workers report ready on one pipe and start on a
-// go byte from the other, so the clock covers exactly the rendering of all of them.
-double WorkerFps(const TwinSpec& spec, int workers, int frames) {
-  int ready[2], go[2];
-  if (pipe(ready) != 0) throw std::runtime_error("pipe failed");
-  if (pipe(go) != 0) {
-    close(ready[0]);
-    close(ready[1]);
-    throw std::runtime_error("pipe failed");
+// A benchmark worker process: its own twin, a warm-up frame (shader compilation), a byte on
+// `ready_fd`, then `frames` frames once a byte arrives on `go_fd`. Never returns: exit 0 done,
+// 2 refused input, 1 internal error, 3 the parent went away.
+[[noreturn]] void RunWorker(const TwinSpec& spec, int frames, int ready_fd, int go_fd) {
+  // The parent blocks interrupts for its clean-up thread (bench/io/output_files.h); a worker
+  // has no such thread and ends on them.
+  sigset_t none;
+  sigemptyset(&none);
+  pthread_sigmask(SIG_SETMASK, &none, nullptr);
+  // A worker's error ends the worker, not a copy of the parent's command.
+  try {
+    TwinCell cell(spec);
+    cell.GrabImage();
+    char c = 1;
+    const bool told = write(ready_fd, &c, 1) == 1;
+    // Ready: this worker's write end closes, so the parent's read() sees the end of the pipe
+    // once every worker has either written or died.
+    close(ready_fd);
+    if (!told || read(go_fd, &c, 1) != 1) _exit(3);
+    for (int f = 0; f < frames; ++f) cell.GrabImage();
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    _exit(2);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "internal error: benchmark-twin worker: %s\n", e.what());
+    _exit(1);
   }
+  _exit(0);
+}
+
+// The parent's side of the workers: the ready and go pipes and the children. Ending it (End,
+// or the destructor) closes the go pipe, so a worker still waiting for its byte ends, reaps
+// every child and closes the pipes.
+struct Workers {
+  int ready[2] = {-1, -1}, go[2] = {-1, -1};
   std::vector<pid_t> children;
-  // Ends the workers still running (a worker waiting for its go byte sees the pipe closed)
-  // and reaps them all; true when one of them refused the input (exit 2).
-  const auto end_workers = [&](bool kill_them) {
-    if (go[1] >= 0) close(go[1]);
-    go[1] = -1;
+
+  Workers() {
+    if (pipe(ready) != 0 || pipe(go) != 0) {
+      End(false);
+      throw std::runtime_error("pipe failed");
+    }
+  }
+  ~Workers() { End(true); }
+
+  // Returns true when a child ended with exit 2 (refused the input); `kill_them`: SIGTERM first.
+  bool End(bool kill_them) {
     bool refused = false;
+    CloseFd(&go[1]);
     for (pid_t pid : children) {
       if (kill_them) kill(pid, SIGTERM);
       int status = 0;
       waitpid(pid, &status, 0);
       refused = refused || (WIFEXITED(status) && WEXITSTATUS(status) == 2);
     }
-    for (int* fd : {&ready[0], &ready[1], &go[0]}) {
-      if (*fd >= 0) close(*fd);
-      *fd = -1;
-    }
+    children.clear();
+    for (int* fd : {&ready[0], &ready[1], &go[0]}) CloseFd(fd);
     return refused;
-  };
-  for (int w = 0; w < workers; ++w) {
+  }
+  static void CloseFd(int* fd) {
+    if (*fd >= 0) close(*fd);
+    *fd = -1;
+  }
+};
+
+// Frames per second of `workers` processes, each with its own twin, grabbing `frames` frames
+// after a warm-up frame. Workers report ready on one pipe and start on a go byte from the
+// other, so the clock covers exactly the rendering of all of them.
+double WorkerFps(const TwinSpec& spec, int workers, int frames) {
+  Workers w;
+  for (int k = 0; k < workers; ++k) {
     const pid_t pid = fork();
-    if (pid < 0) {
-      end_workers(true);
-      throw std::runtime_error("fork failed");
-    }
+    if (pid < 0) throw std::runtime_error("fork failed");  // ~Workers ends the others
     if (pid == 0) {
-      // The parent blocks interrupts for its clean-up thread (bench/io/output_files.h); a
-      // worker has no such thread and ends on them.
-      sigset_t none;
-      sigemptyset(&none);
-      pthread_sigmask(SIG_SETMASK, &none, nullptr);
-      close(ready[0]);
-      close(go[1]);
-      // A worker's error ends the worker, not a copy of the parent's command.
-      try {
-        TwinCell cell(spec);
-        cell.GrabImage();
-        char c = 1;
-        const bool told = write(ready[1], &c, 1) == 1;
-        // Ready: this worker's write end closes, so the parent's read() sees the end of the
-        // pipe once every worker has either written or died.
-        close(ready[1]);
-        if (!told || read(go[0], &c, 1) != 1) _exit(3);
-        for (int f = 0; f < frames; ++f) cell.GrabImage();
-      } catch (const InputError& e) {
-        std::fprintf(stderr, "error: %s\n", e.what());
-        _exit(2);
-      } catch (const std::exception& e) {
-        std::fprintf(stderr, "internal error: benchmark-twin worker: %s\n", e.what());
-        _exit(1);
-      }
-      _exit(0);
+      close(w.ready[0]);
+      close(w.go[1]);
+      RunWorker(spec, frames, w.ready[1], w.go[0]);
     }
-    children.push_back(pid);
+    w.children.push_back(pid);
   }
   // Only the workers hold the ready pipe's write end now (and no one but them reads go).
-  close(ready[1]);
-  ready[1] = -1;
-  close(go[0]);
-  go[0] = -1;
+  Workers::CloseFd(&w.ready[1]);
+  Workers::CloseFd(&w.go[0]);
   char c = 1;
-  for (int w = 0; w < workers; ++w) {
-    if (read(ready[0], &c, 1) != 1) {
-      if (end_workers(false)) {
+  for (int k = 0; k < workers; ++k) {
+    if (read(w.ready[0], &c, 1) != 1) {
+      if (w.End(false)) {
         throw InputError("benchmark-twin", "a worker process refused the input (its error is "
                                            "above)");
       }
@@ -175,21 +187,17 @@ double WorkerFps(const TwinSpec& spec, int workers, int frames) {
     }
   }
   const auto t0 = Clock::now();
-  for (int w = 0; w < workers; ++w) {
-    if (write(go[1], &c, 1) != 1) {
-      end_workers(true);
-      throw std::runtime_error("cannot start the workers");
-    }
+  for (int k = 0; k < workers; ++k) {
+    if (write(w.go[1], &c, 1) != 1) throw std::runtime_error("cannot start the workers");
   }
   bool ok = true;
-  for (pid_t pid : children) {
+  for (pid_t pid : w.children) {
     int status = 0;
     waitpid(pid, &status, 0);
     ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
   }
   const double seconds = SecondsSince(t0);
-  children.clear();
-  end_workers(false);  // closes the pipes
+  w.children.clear();
   if (!ok) throw std::runtime_error("a worker process failed");
   return workers * frames / seconds;
 }

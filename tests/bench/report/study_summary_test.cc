@@ -1,10 +1,15 @@
 #include "bench/report/study_summary.h"
 
 #include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
+#include "bench/report/study_summary_files.h"
 #include "bench/report/study_summary_html.h"
+#include "bench/report/trial_record.h"
 
 namespace twin {
 namespace {
@@ -111,6 +116,36 @@ TEST(StudySummaryTest, DetectionTableCountsNamedMissedAndFalse) {
   EXPECT_EQ(d["named"], 2);
   EXPECT_EQ(d["missed"], 1);
   EXPECT_EQ(d["false"], 1);
+}
+
+TEST(StudySummaryTest, CountsTrialsPerRendererAndWarnsWhenThereAreTwo) {
+  std::vector<json> records;
+  const char* renderers[] = {"osmesa (llvmpipe)", "egl (NVIDIA H100)", "osmesa (llvmpipe)",
+                             nullptr};
+  for (int t = 0; t < 4; ++t) {
+    json r = Record(t, 0, 0, 1);
+    r["run"] = {{"timing", {{"timing_s.total", 20.0}}}};
+    if (renderers[t]) r["run"]["timing"]["timing_s.cell.renderer"] = renderers[t];
+    records.push_back(r);
+  }
+  const json counts = SummarizeStudy(records)["renderers"];
+  EXPECT_EQ(counts.size(), 2u) << counts.dump();
+  EXPECT_EQ(counts.value("osmesa (llvmpipe)", 0), 2);
+  EXPECT_EQ(counts.value("egl (NVIDIA H100)", 0), 1);
+
+  const std::string dir = ::testing::TempDir() + "/summary_renderers";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::vector<TrialRecord> mixed, one;
+  for (int t = 0; t < 4; ++t) {
+    mixed.push_back(TrialRecord(records[t]));
+    if (t != 1) one.push_back(TrialRecord(records[t]));
+  }
+  const std::string warning = WriteStudySummaryFiles(dir, mixed).mixed_renderers_warning;
+  EXPECT_NE(warning.find("2 GL back ends"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("egl (NVIDIA H100): 1 trials"), std::string::npos) << warning;
+  EXPECT_NE(warning.find("osmesa (llvmpipe): 2 trials"), std::string::npos) << warning;
+  EXPECT_EQ(WriteStudySummaryFiles(dir, one).mixed_renderers_warning, "");
 }
 
 TEST(StudySummaryHtmlTest, ShowsDistributionsCoverageAndEscapes) {
