@@ -7,7 +7,6 @@
 #include <cmath>
 #include <filesystem>
 #include <cstdio>
-#include <cstdlib>
 #include <iostream>
 #include <random>
 #include <sstream>
@@ -769,13 +768,7 @@ int main(int argc, char** argv) {
   }
   try {
     // The GL back end's name is checked now; whether EGL can honour it, at the first render.
-    if (const char* gl = std::getenv("TWINBENCH_GL")) {
-      try {
-        ParseGlChoice(gl);
-      } catch (const std::invalid_argument& e) {
-        throw InputError(std::string("TWINBENCH_GL=") + gl, e.what());
-      }
-    }
+    GlChoiceFromEnvironment();
     // Every output path checked, every input noted, before anything runs.
     CheckOutputsBeforeRun(app, verbs, values);
     // The verb.

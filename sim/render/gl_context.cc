@@ -10,6 +10,7 @@
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "calib/common/errors.h"
@@ -46,27 +47,30 @@ struct EglApi {
   std::string Open() {
     library = dlopen(kEglLibrary, RTLD_NOW | RTLD_LOCAL);
     if (!library) return std::string("cannot open ") + kEglLibrary;
-    auto sym = [this](const char* name) { return dlsym(library, name); };
-    GetProcAddress = reinterpret_cast<PFNEGLGETPROCADDRESSPROC>(sym("eglGetProcAddress"));
-    GetError = reinterpret_cast<PFNEGLGETERRORPROC>(sym("eglGetError"));
-    Initialize = reinterpret_cast<PFNEGLINITIALIZEPROC>(sym("eglInitialize"));
-    Terminate = reinterpret_cast<PFNEGLTERMINATEPROC>(sym("eglTerminate"));
-    BindAPI = reinterpret_cast<PFNEGLBINDAPIPROC>(sym("eglBindAPI"));
-    ChooseConfig = reinterpret_cast<PFNEGLCHOOSECONFIGPROC>(sym("eglChooseConfig"));
-    CreateContext = reinterpret_cast<PFNEGLCREATECONTEXTPROC>(sym("eglCreateContext"));
-    DestroyContext = reinterpret_cast<PFNEGLDESTROYCONTEXTPROC>(sym("eglDestroyContext"));
-    MakeCurrent = reinterpret_cast<PFNEGLMAKECURRENTPROC>(sym("eglMakeCurrent"));
-    GetCurrentContext = reinterpret_cast<PFNEGLGETCURRENTCONTEXTPROC>(sym("eglGetCurrentContext"));
-    if (!GetProcAddress || !GetError || !Initialize || !Terminate || !BindAPI || !ChooseConfig ||
-        !CreateContext || !DestroyContext || !MakeCurrent || !GetCurrentContext) {
-      return std::string(kEglLibrary) + " lacks EGL 1.4 entry points";
-    }
-    QueryDevices =
-        reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(GetProcAddress("eglQueryDevicesEXT"));
-    QueryDeviceString = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(
-        GetProcAddress("eglQueryDeviceStringEXT"));
-    GetPlatformDisplay = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
-        GetProcAddress("eglGetPlatformDisplayEXT"));
+    // Each pointer from dlsym, its type from the member it is stored in.
+    bool all = true;
+    const auto load = [&](auto* fn, const char* name) {
+      *fn = reinterpret_cast<std::remove_pointer_t<decltype(fn)>>(dlsym(library, name));
+      all = all && *fn != nullptr;
+    };
+    load(&GetProcAddress, "eglGetProcAddress");
+    load(&GetError, "eglGetError");
+    load(&Initialize, "eglInitialize");
+    load(&Terminate, "eglTerminate");
+    load(&BindAPI, "eglBindAPI");
+    load(&ChooseConfig, "eglChooseConfig");
+    load(&CreateContext, "eglCreateContext");
+    load(&DestroyContext, "eglDestroyContext");
+    load(&MakeCurrent, "eglMakeCurrent");
+    load(&GetCurrentContext, "eglGetCurrentContext");
+    if (!all) return std::string(kEglLibrary) + " lacks EGL 1.4 entry points";
+    // The extensions' entry points come from eglGetProcAddress.
+    const auto extension = [&](auto* fn, const char* name) {
+      *fn = reinterpret_cast<std::remove_pointer_t<decltype(fn)>>(GetProcAddress(name));
+    };
+    extension(&QueryDevices, "eglQueryDevicesEXT");
+    extension(&QueryDeviceString, "eglQueryDeviceStringEXT");
+    extension(&GetPlatformDisplay, "eglGetPlatformDisplayEXT");
     if (!QueryDevices || !QueryDeviceString || !GetPlatformDisplay) {
       return "EGL lacks device enumeration (EGL_EXT_device_enumeration, EGL_EXT_platform_device)";
     }
@@ -186,15 +190,13 @@ std::string SetUpEgl(const GlChoice& choice, Backend* backend) {
 // Chooses the back end (see the header). Sets backend->chosen; for an `egl` that EGL cannot
 // honour also backend->error, which MakeGlContext throws now and for every later context.
 void Choose(Backend* backend) {
-  const char* env = std::getenv("TWINBENCH_GL");
-  const std::string where = std::string("TWINBENCH_GL=") + (env ? env : "");
   backend->chosen = true;
   GlChoice choice;
   try {
-    choice = ParseGlChoice(env ? env : "");
-  } catch (const std::invalid_argument& e) {
-    backend->error_where = where;
-    backend->error = e.what();
+    choice = GlChoiceFromEnvironment();
+  } catch (const InputError& e) {
+    backend->error_where = e.where();
+    backend->error = e.message();
     return;
   }
   if (choice.kind == GlChoice::Kind::kOsmesa) return;
@@ -208,7 +210,7 @@ void Choose(Backend* backend) {
   if (why.empty()) {
     backend->egl = true;
   } else if (choice.kind == GlChoice::Kind::kEgl) {
-    backend->error_where = where;
+    backend->error_where = GlChoiceWhere();
     backend->error = why;
   } else {
     backend->fallback_why = why;
@@ -300,6 +302,20 @@ GlChoice ParseGlChoice(const std::string& text) {
     return choice;
   }
   throw std::invalid_argument("'" + text + "' is not a GL back end (auto, osmesa, egl or egl:N)");
+}
+
+std::string GlChoiceWhere() {
+  const char* env = std::getenv("TWINBENCH_GL");
+  return std::string("TWINBENCH_GL=") + (env ? env : "");
+}
+
+GlChoice GlChoiceFromEnvironment() {
+  const char* env = std::getenv("TWINBENCH_GL");
+  try {
+    return ParseGlChoice(env ? env : "");
+  } catch (const std::invalid_argument& e) {
+    throw InputError(GlChoiceWhere(), e.what());
+  }
 }
 
 std::unique_ptr<GlContext> MakeGlContext(int width, int height) {

@@ -33,6 +33,12 @@ struct GlChoice {
 /// the accepted ones.
 GlChoice ParseGlChoice(const std::string& text);
 
+/// "TWINBENCH_GL=<its value>", where errors about the choice say they are.
+std::string GlChoiceWhere();
+
+/// ParseGlChoice of TWINBENCH_GL (unset: auto). Throws InputError (where: GlChoiceWhere()).
+GlChoice GlChoiceFromEnvironment();
+
 /// One OpenGL context of the process' back end, with no window: MuJoCo draws into its own
 /// offscreen framebuffer. Not thread-safe. EGL binds a context to the thread it is current on
 /// and refuses it to others meanwhile, so a user makes it current for a piece of work and
