@@ -7,10 +7,13 @@
 # hold, the paired change of each robot's similarity figure.
 # Last, the acceptance rule for a change that moves figures (scripts/paired_verdict.py): its
 # figures and verdict, and its exit status (0 accepted, 1 rejected, 2 bad input).
-# Usage: scripts/compare_studies.sh BEFORE_DIR AFTER_DIR [FIRST-LAST ...]
+# Usage: scripts/compare_studies.sh [--control] BEFORE_DIR AFTER_DIR [FIRST-LAST ...]
 #   (default ranges: 1-20 21-40 41-60); each DIR holds a study's trials.jsonl.
+#   --control: AFTER_DIR is a control study of another estimator seed (paired_verdict.py).
 set -euo pipefail
-[ $# -ge 2 ] || { echo "usage: $0 BEFORE_DIR AFTER_DIR [FIRST-LAST ...]" >&2; exit 2; }
+VERDICT_ARGS=()
+if [ "${1:-}" = --control ]; then VERDICT_ARGS=(--control); shift; fi
+[ $# -ge 2 ] || { echo "usage: $0 [--control] BEFORE_DIR AFTER_DIR [FIRST-LAST ...]" >&2; exit 2; }
 command -v jq >/dev/null || { echo "compare_studies: needs jq (scripts/install_deps.sh)" >&2; exit 2; }
 BEFORE="$1/trials.jsonl"
 AFTER="$2/trials.jsonl"
@@ -73,4 +76,4 @@ join -t $'\t' <(rows "$BEFORE" | awk -F'\t' '{print $1 ":" $2 "\t" $4}' | sort) 
       printf "paired similarity change (after - before) over %d robot calibrations: median %+.4f mm, lower after in %d\n", n, m, lower
     }'
 # The acceptance rule over every paired trial.
-exec python3 "$(dirname "$0")/paired_verdict.py" "$(dirname "$BEFORE")" "$(dirname "$AFTER")"
+exec python3 "$(dirname "$0")/paired_verdict.py" "$(dirname "$BEFORE")" "$(dirname "$AFTER")" ${VERDICT_ARGS[@]+"${VERDICT_ARGS[@]}"}

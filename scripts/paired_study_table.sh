@@ -8,12 +8,18 @@
 # wall time and its plan's compute time (as the studies ran them: contended when other work ran).
 # Usage: [REUSE=1] scripts/paired_study_table.sh TITLE BEFORE_BIN AFTER_BIN TRIALS OUT SCENARIO...
 #   OUT/SCENARIO_before and OUT/SCENARIO_after are the studies (REUSE=1: a study already holding
-#   TRIALS trials is tabled as it is, not run again). SCENARIO: a file of scenarios/ without .yaml.
+#   TRIALS trials is tabled as it is, not run again). SCENARIO: a file of scenarios/ without .yaml,
+#   or BEFORE:AFTER, two such files (the before build runs the first, the after build the
+#   second; a control, with BEFORE_BIN = AFTER_BIN and the second differing in one setting, such
+#   as scenarios/controls/paper_reinovo_reseeded.yaml, whose trials share only their truth seeds
+#   with the first's: compare_studies.sh --control). The studies are OUT/BEFORE_before and
+#   OUT/BEFORE_after, with any / of BEFORE written _.
 #   Exit 0 when every pair is accepted, 1 when one is not, 2 on bad input.
 #   PAIRED_DOC: another file to write than docs/results/paired_studies.md (the script's test).
 #   NOTE: a line printed under the section's header (what ran beside the studies, ...).
 #   CONTROL=DIR CONTROL_NOTE=TEXT: a control of the first scenario, a study of TRIALS trials
-#   made by the before build with a change that should not matter (TEXT says which): the rule
+#   made by the before build with a change that should not matter (TEXT says which; the same
+#   truth seeds, the estimator's may differ): the rule
 #   run on the before study against it follows the pair's, to show the rule's own scatter.
 #   Its verdict does not change the exit status.
 set -euo pipefail
@@ -28,8 +34,15 @@ DOC="${PAIRED_DOC:-docs/results/paired_studies.md}"
 for b in "$BEFORE_BIN" "$AFTER_BIN"; do
   [ -x "$b" ] || { echo "paired_study_table: $b: not an executable" >&2; exit 2; }
 done
+before_of() { echo "${1%%:*}"; }                      # SCENARIO or BEFORE:AFTER -> BEFORE
+after_of() { [[ "$1" == *:* ]] && echo "${1#*:}" || echo "$1"; }
+stem_of() { local b; b=$(before_of "$1"); echo "${b//\//_}"; }  # the studies' folder stem
 for sc in "${SCENARIOS[@]}"; do
-  [ -f "scenarios/$sc.yaml" ] || { echo "paired_study_table: scenarios/$sc.yaml: not found" >&2; exit 2; }
+  [[ "$sc" != *:*:* && "$sc" != :* && "$sc" != *: ]] ||
+    { echo "paired_study_table: '$sc': expected SCENARIO or BEFORE:AFTER" >&2; exit 2; }
+  for f in "$(before_of "$sc")" "$(after_of "$sc")"; do
+    [ -f "scenarios/$f.yaml" ] || { echo "paired_study_table: scenarios/$f.yaml: not found" >&2; exit 2; }
+  done
 done
 if [ -n "${CONTROL:-}" ]; then
   [ -n "${CONTROL_NOTE:-}" ] || { echo "paired_study_table: CONTROL needs CONTROL_NOTE (what it changes)" >&2; exit 2; }
@@ -55,8 +68,8 @@ study() {  # BIN SCENARIO DIR
   fi
 }
 for sc in "${SCENARIOS[@]}"; do
-  study "$BEFORE_BIN" "$sc" "$OUT/${sc}_before"
-  study "$AFTER_BIN" "$sc" "$OUT/${sc}_after"
+  study "$BEFORE_BIN" "$(before_of "$sc")" "$OUT/$(stem_of "$sc")_before"
+  study "$AFTER_BIN" "$(after_of "$sc")" "$OUT/$(stem_of "$sc")_after"
 done
 
 # Mean wall time of a trial as the study ran it, and the compute time of the plan its trials
@@ -82,29 +95,36 @@ status=0
   if [ -n "${NOTE:-}" ]; then echo; echo "$NOTE"; fi
   for sc in "${SCENARIOS[@]}"; do
     echo
-    echo "### $sc"
+    if [[ "$sc" == *:* ]]; then
+      echo "### $(before_of "$sc") (before) against $(after_of "$sc") (after)"
+    else
+      echo "### $sc"
+    fi
     echo
     echo '```'
     last=$((TRIALS - 1))
     half=$((TRIALS / 2))
-    if scripts/compare_studies.sh "$OUT/${sc}_before" "$OUT/${sc}_after" "0-$((half - 1))" "$half-$last" 2>&1; then
+    stem="$OUT/$(stem_of "$sc")"
+    control=()  # BEFORE:AFTER: a control; its trials share the truth seed, not the estimator's
+    [[ "$sc" == *:* ]] && control=(--control)
+    if scripts/compare_studies.sh ${control[@]+"${control[@]}"} "${stem}_before" "${stem}_after" "0-$((half - 1))" "$half-$last" 2>&1; then
       :
     else
       rc=$?
       [ $rc -eq 1 ] && status=1 || status=2
     fi
-    echo "time, before: $(timing "$OUT/${sc}_before")"
-    echo "time, after:  $(timing "$OUT/${sc}_after")"
+    echo "time, before: $(timing "${stem}_before")"
+    echo "time, after:  $(timing "${stem}_after")"
     echo '```'
     if [ -n "${CONTROL:-}" ] && [ "$sc" = "${SCENARIOS[0]}" ]; then
       echo
-      echo "#### $sc: control ($CONTROL_NOTE)"
+      echo "#### $(before_of "$sc"): control ($CONTROL_NOTE)"
       echo
       echo "The rule on the before study against the control: how far the rule moves when"
       echo "nothing that should matter changed. Its verdict does not count."
       echo
       echo '```'
-      scripts/compare_studies.sh "$OUT/${sc}_before" "$CONTROL" "0-$((half - 1))" "$half-$last" 2>&1 || true
+      scripts/compare_studies.sh --control "${stem}_before" "$CONTROL" "0-$((half - 1))" "$half-$last" 2>&1 || true
       echo '```'
     fi
   done

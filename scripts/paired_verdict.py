@@ -22,10 +22,12 @@ scaled the image noise by 1.001, nothing else changed, gave 1.030 with the bound
 paper scenario's r1 rigid RMS, and was rejected by it; the ratio of the means gave 1.012, bound
 1.038 (docs/results/paired_studies.md).
 
-Usage: scripts/paired_verdict.py BEFORE_DIR AFTER_DIR [--min-trials N]
+Usage: scripts/paired_verdict.py BEFORE_DIR AFTER_DIR [--min-trials N] [--control]
   Each DIR holds a study's trials.jsonl (docs/reference/report-json.md). Prints the figures and
   the verdict; exit 0 accepted, 1 rejected or too few paired trials, 2 bad input (a missing
   file, a line that is not JSON, or trials of the same number run on other seeds).
+  --control: the after study is a control that re-draws the estimator's randomness (another
+  estimator seed, scenarios/controls/): paired trials must share their truth seed only.
 Standard library only.
 """
 import json
@@ -121,13 +123,18 @@ def main(argv):
         except (IndexError, ValueError):
             fail("--min-trials: expected a whole number")
         del args[i:i + 2]
+    control = "--control" in args
+    if control:
+        args.remove("--control")
     if len(args) != 2:
-        fail("usage: paired_verdict.py BEFORE_DIR AFTER_DIR [--min-trials N]")
+        fail("usage: paired_verdict.py BEFORE_DIR AFTER_DIR [--min-trials N] [--control]")
     before_path, before = load(args[0])
     after_path, after = load(args[1])
     paired = sorted(set(before) & set(after))
     for t in paired:
         sb, sa = before[t].get("seeds"), after[t].get("seeds")
+        if control and isinstance(sb, dict) and isinstance(sa, dict):
+            sb, sa = sb.get("truth"), sa.get("truth")
         if sb != sa:
             fail("trial %d ran on other seeds: %s %s, %s %s (a paired study runs the same "
                  "trials)" % (t, before_path, json.dumps(sb), after_path, json.dumps(sa)))

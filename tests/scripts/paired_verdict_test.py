@@ -2,7 +2,8 @@
 """scripts/paired_verdict.py on synthetic paired studies whose verdict follows from how they
 are built: the same figures after as before are accepted; every figure 10 % worse, a robot
 newly above 0.6 mm rigid, a seed that stops meeting the targets and too few trials are each
-rejected; trials of the same number on other seeds are bad input (exit 2). The rule's ratio of
+rejected; trials of the same number on other seeds are bad input (exit 2), except that a
+control (--control) may differ in its estimator seeds, never in its truth seeds. The rule's ratio of
 the means is not biased where the mean of per-trial ratios (printed beside it) is."""
 import json
 import os
@@ -16,14 +17,16 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 SCRIPT = os.path.join(ROOT, "scripts", "paired_verdict.py")
 
 
-def record(trial, r1_rigid, r2_rigid, similarity_share=0.4, seed_offset=0, status="ok"):
+def record(trial, r1_rigid, r2_rigid, similarity_share=0.4, seed_offset=0, status="ok",
+           estimator_offset=0):
     figures = {}
     for robot, rigid in (("r1", r1_rigid), ("r2", r2_rigid)):
         figures["robots.%s.truth_position_error_mm.rigid.after.rms" % robot] = rigid
         figures["robots.%s.truth_position_error_mm.similarity.after.rms" % robot] = (
             similarity_share * rigid)
     return {"trial": trial, "status": status, "scenario_hash": "0123456789abcdef",
-            "seeds": {"truth": 7 + trial + seed_offset, "estimator": 7 + trial},
+            "seeds": {"truth": 7 + trial + seed_offset,
+                      "estimator": 7 + trial + estimator_offset},
             "figures": figures if status == "ok" else {}}
 
 
@@ -123,6 +126,21 @@ class PairedVerdictTest(unittest.TestCase):
         after = base_study()
         after[3] = record(3, 0.1, 0.1, seed_offset=1)
         code, out = self.run_verdict(base_study(), after)
+        self.assertEqual(code, 2, out)
+        self.assertIn("trial 3 ran on other seeds", out)
+
+    def test_a_control_may_differ_in_its_estimator_seeds_only(self):
+        reseeded = base_study()
+        reseeded[3] = record(3, 0.1, 0.1, estimator_offset=1000)
+        code, out = self.run_verdict(base_study(), reseeded)
+        self.assertEqual(code, 2, out)  # not a control: every seed must match
+        code, out = self.run_verdict(base_study(), reseeded, "--control")
+        self.assertIn("40 paired trials", out)
+        self.assertNotIn("other seeds", out)
+        self.assertIn(code, (0, 1), out)
+        other_truth = base_study()
+        other_truth[3] = record(3, 0.1, 0.1, seed_offset=1)
+        code, out = self.run_verdict(base_study(), other_truth, "--control")
         self.assertEqual(code, 2, out)
         self.assertIn("trial 3 ran on other seeds", out)
 
