@@ -155,8 +155,10 @@ class ScenarioParser {
       const YamlMap sm(r_, *two, kSeedsKeys);
       if (const auto f = sm.Find("truth", false)) out_.seeds.truth = r_.Unsigned64(*f);
       if (const auto f = sm.Find("estimator", false)) out_.seeds.estimator = r_.Unsigned64(*f);
+      if (const auto f = sm.Find("noise", false)) out_.seeds.noise = r_.Unsigned64(*f);
     }
     out_.twin.seed = out_.seeds.truth;
+    out_.twin.noise_seed = out_.seeds.noise;
   }
 
   Transform PoseFrom(const YamlMap& m) const { return ReadPose(r_, m); }
@@ -624,7 +626,9 @@ void ApplyTrial(int trial, Scenario* scenario) {
   const auto t = static_cast<std::uint64_t>(trial) - static_cast<std::uint64_t>(scenario->trial);
   scenario->seeds.truth += t;
   scenario->seeds.estimator += t;
+  if (scenario->seeds.noise) *scenario->seeds.noise += t;
   scenario->twin.seed = scenario->seeds.truth;
+  scenario->twin.noise_seed = scenario->seeds.noise;
   scenario->trial = trial;
 }
 

@@ -15,6 +15,10 @@
 //                                          # PSO planning unless calibration.planning.seed pins
 //                                          # it, IK restarts, taught points). Trial t of a study
 //                                          # (`twinbench run --trial t`) uses both + t.
+//                                          # seeds.noise (optional, no default): the twin's
+//                                          # draws while it runs (noise, the operator's error)
+//                                          # from this seed instead of truth's: the same truth
+//                                          # measured again; trial t adds t to it too
 //     robots:                              # required: two, or one alone (a laser-tracker
 //                                          # cell, below)
 //       - name: r1                         # unique identifier ([A-Za-z_][A-Za-z0-9_]*), used by
@@ -138,6 +142,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -150,6 +155,9 @@ namespace twin {
 struct ScenarioSeeds {
   std::uint64_t truth = 1;      ///< the twin: geometry draws, effects, noise, the operator
   std::uint64_t estimator = 1;  ///< the estimator's own randomness (views, planning, IK)
+  /// The twin's draws while it runs (noise, the operator's error) apart from `truth`'s
+  /// geometry; absent: they come from `truth` (TwinSpec::noise_seed).
+  std::optional<std::uint64_t> noise;
 };
 
 /// A loaded scenario: the twin cell it describes plus where it came from.

@@ -295,7 +295,12 @@ std::vector<ScenarioSection> MakeSections() {
   s.back().keys[4].tuple = {"robot1", "robot2"};
   s.push_back({"seeds", "The two independent random streams (trial t of a study adds t).",
                {K("truth", T::kUnsigned).Default("1").Doc("the twin's draws"),
-                K("estimator", T::kUnsigned).Default("1").Doc("the estimator's own randomness")}});
+                K("estimator", T::kUnsigned).Default("1").Doc("the estimator's own randomness"),
+                K("noise", T::kUnsigned).Doc(
+                    "optional: the twin's draws while it runs (encoder, image, tracker and "
+                    "temperature noise, the operator's error) from this seed instead of truth's; "
+                    "the same truth measured again (a repeatability study, a paired study's "
+                    "control)")}});
   const auto robot = [](bool first) {
     std::vector<ScenarioKey> keys = {
         K("name", T::kString).Required()

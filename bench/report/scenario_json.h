@@ -9,7 +9,10 @@
 namespace twin {
 
 /// The report's `scenario` key: name, file, seed (the truth seed, as before the split),
-/// seeds.{truth,estimator} and trial.
+/// seeds.{truth,estimator[,noise]} and trial.
 nlohmann::json ScenarioJson(const Scenario& scenario);
+
+/// {truth, estimator} and, where the scenario sets it, noise.
+nlohmann::json SeedsJson(const ScenarioSeeds& seeds);
 
 }  // namespace twin

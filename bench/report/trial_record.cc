@@ -4,6 +4,8 @@
 #include <fstream>
 #include <set>
 
+#include "bench/report/scenario_json.h"
+
 namespace twin {
 namespace {
 
@@ -74,7 +76,7 @@ TrialRecord MakeTrialRecord(const std::string& scenario_hash, const Scenario& sc
   r["scenario_hash"] = scenario_hash;
   r["scenario"] = sc.name;
   r["trial"] = sc.trial;
-  r["seeds"] = {{"truth", sc.seeds.truth}, {"estimator", sc.seeds.estimator}};
+  r["seeds"] = SeedsJson(sc.seeds);
   r["status"] = o.status;
   r["reason"] = o.reason;
   r["exit_code"] = o.exit_code;

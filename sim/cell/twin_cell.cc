@@ -544,11 +544,12 @@ TwinCell::TwinCell(const TwinSpec& spec, const std::string& where) : impl_(new I
   s.where = where;
   s.effects = MakeEffects(spec);
   std::mt19937_64 geometry_rng = Stream(spec.seed, 0);
-  s.encoder_rng = Stream(spec.seed, 1);
-  s.image_rng = Stream(spec.seed, 2);
-  s.operator_rng = Stream(spec.seed, 3);
-  s.tracker_rng = Stream(spec.seed, 4);
-  s.temperature_rng = Stream(spec.seed, 5);
+  const std::uint64_t noise = spec.noise_seed.value_or(spec.seed);
+  s.encoder_rng = Stream(noise, 1);
+  s.image_rng = Stream(noise, 2);
+  s.operator_rng = Stream(noise, 3);
+  s.tracker_rng = Stream(noise, 4);
+  s.temperature_rng = Stream(noise, 5);
   for (int k = 0; k < s.Robots(); ++k) {
     s.models[k] = spec.robots[k].model;
     for (const auto& e : s.effects) e->ApplyToGeometry(k, &s.models[k], &geometry_rng);

@@ -150,6 +150,10 @@ struct TwinSpec {
   std::vector<EffectSpec> effects;
   TrackerSpec tracker;                    ///< a laser tracker, if present
   std::uint64_t seed = 1;                 ///< seed of every random effect
+  /// Seed of the draws made while the cell runs (encoder, image, tracker and temperature noise,
+  /// the operator's error); absent: `seed`. The geometry and the effects' magnitudes always
+  /// come from `seed`, so two cells differing only here are one truth measured twice.
+  std::optional<std::uint64_t> noise_seed;
 
   /// True for a two-robot cell: it has the hand camera and the board (camera, board); a
   /// one-robot cell has neither.

@@ -18,7 +18,7 @@ SCRIPT = os.path.join(ROOT, "scripts", "paired_verdict.py")
 
 
 def record(trial, r1_rigid, r2_rigid, similarity_share=0.4, seed_offset=0, status="ok",
-           estimator_offset=0):
+           estimator_offset=0, exit_code=None):
     figures = {}
     for robot, rigid in (("r1", r1_rigid), ("r2", r2_rigid)):
         figures["robots.%s.truth_position_error_mm.rigid.after.rms" % robot] = rigid
@@ -27,7 +27,8 @@ def record(trial, r1_rigid, r2_rigid, similarity_share=0.4, seed_offset=0, statu
     return {"trial": trial, "status": status, "scenario_hash": "0123456789abcdef",
             "seeds": {"truth": 7 + trial + seed_offset,
                       "estimator": 7 + trial + estimator_offset},
-            "figures": figures if status == "ok" else {}}
+            "exit_code": (0 if status == "ok" else 1) if exit_code is None else exit_code,
+            "figures": figures if status == "ok" or exit_code == 3 else {}}
 
 
 def base_study(n=40):
@@ -128,6 +129,23 @@ class PairedVerdictTest(unittest.TestCase):
         code, out = self.run_verdict(base_study(), after)
         self.assertEqual(code, 2, out)
         self.assertIn("trial 3 ran on other seeds", out)
+
+    def test_a_trial_that_missed_its_scenario_targets_keeps_its_figures(self):
+        # Exit 3: the run reached its report but missed an acceptance target of the scenario
+        # (here r1 rigid 0.4 mm > 0.3); the study records it as failed, with its figures.
+        after = base_study()
+        after[5] = record(5, 0.4, 0.1, status="failed", exit_code=3)
+        code, out = self.run_verdict(base_study(), after)
+        self.assertIn("r1 rigid: mean after / mean before", out)
+        self.assertIn("over 40 trials", out)  # trial 5 is in the ratio, not dropped
+        self.assertIn("newly above 0.6 mm rigid: none", out)  # 0.4 mm crosses nothing
+        self.assertIn("40 before, 39 after (not fewer: NO)", out)  # it misses the targets
+        self.assertEqual(code, 1, out)
+        # A trial that failed without its report (any other exit) has no figures: it crossed.
+        after[5] = record(5, 0.1, 0.1, status="failed")
+        code, out = self.run_verdict(base_study(), after)
+        self.assertIn("trial 5 r1", out)
+        self.assertIn("-> failed", out)
 
     def test_a_control_may_differ_in_its_estimator_seeds_only(self):
         reseeded = base_study()

@@ -742,14 +742,37 @@ TEST(ScenarioSeedsTest, TrialOffsetsBothSeeds) {
   }
 }
 
+TEST(ScenarioSeedsTest, ANoiseSeedIsOptionalAndFollowsTheTrial) {
+  Scenario s = Parse(Replaced(DemoText(), "seed: 7", "seeds: {truth: 11, estimator: 42}"));
+  EXPECT_FALSE(s.seeds.noise.has_value());
+  EXPECT_FALSE(s.twin.noise_seed.has_value());  // the twin's noise comes from the truth seed
+  s = Parse(Replaced(DemoText(), "seed: 7", "seeds: {truth: 11, estimator: 42, noise: 90}"));
+  ASSERT_TRUE(s.seeds.noise.has_value());
+  EXPECT_EQ(*s.seeds.noise, 90u);
+  EXPECT_EQ(s.twin.seed, 11u);  // the geometry still from the truth seed
+  ASSERT_TRUE(s.twin.noise_seed.has_value());
+  EXPECT_EQ(*s.twin.noise_seed, 90u);
+  ApplyTrial(3, &s);
+  EXPECT_EQ(*s.seeds.noise, 93u);
+  EXPECT_EQ(*s.twin.noise_seed, 93u);
+  EXPECT_EQ(s.twin.seed, 14u);
+  try {
+    Parse(Replaced(DemoText(), "seed: 7", "seeds: {truth: 11, noise: -2}"));
+    ADD_FAILURE() << "a negative noise seed was accepted";
+  } catch (const InputError& e) {
+    EXPECT_TRUE(Contains(e.what(), "seeds.noise")) << e.what();
+  }
+}
+
 TEST(ScenarioSeedsTest, SeedAndSeedsTogetherAreRefusedAtTheirLine) {
   const std::string text =
       Replaced(DemoText(), "seed: 7", "seed: 7\n  seeds: {truth: 1, estimator: 2}");
   const std::string e = ParseError(text);
   EXPECT_TRUE(Contains(e, At(LineOf(text, "seeds:")) + " scenario.seeds"));
   EXPECT_TRUE(Contains(e, "not both"));
-  const std::string bad = Replaced(DemoText(), "seed: 7", "seeds: {truth: 1, noise: 2}");
-  EXPECT_TRUE(Contains(ParseError(bad), "noise"));
+  const std::string bad = Replaced(DemoText(), "seed: 7", "seeds: {truth: 1, nosie: 2}");
+  EXPECT_TRUE(Contains(ParseError(bad), "unknown key 'nosie' (allowed: truth, estimator, noise"))
+      << ParseError(bad);
   const std::string negative = Replaced(DemoText(), "seed: 7", "seeds: {truth: -3}");
   EXPECT_TRUE(Contains(ParseError(negative), "scenario.seeds.truth"));
 }

@@ -84,6 +84,12 @@ TEST(TrialRecordTest, RecordCarriesIdentitySeedsStatusAndFigures) {
   EXPECT_EQ(r["trial"], 4);
   EXPECT_EQ(r["seeds"]["truth"], 104);
   EXPECT_EQ(r["seeds"]["estimator"], 204);
+  EXPECT_FALSE(r["seeds"].contains("noise"));  // written only where the scenario sets it
+  Scenario renoised;
+  renoised.name = "study_small";
+  renoised.seeds = {100, 200, 300};
+  ApplyTrial(4, &renoised);  // every seed + 4
+  EXPECT_EQ(MakeTrialRecord("0123456789abcdef", renoised, o).document()["seeds"]["noise"], 304);
   EXPECT_EQ(r["status"], "ok");
   EXPECT_EQ(r["reason"], "");
   EXPECT_EQ(r["figures"]["intrinsics.error_px.cx"], -1.5);

@@ -120,6 +120,39 @@ TEST_F(TwinCellTest, GeometryEffectsMakeTheTrueModel) {
   EXPECT_EQ(TwinCell(spec).Truth().models[0].links[2].dh.d, truth.models[0].links[2].dh.d);
 }
 
+// A noise seed re-draws what the cell draws while it runs (here the image noise), never the
+// geometry: the same truth measured again. Equal to the truth seed it is the default.
+TEST_F(TwinCellTest, ANoiseSeedRedrawsTheNoiseAndKeepsTheTruth) {
+  TwinSpec spec = DemoTwinSpec();
+  spec.effects.push_back(
+      EffectOf("geometry_errors", {{"sigma_length_mm", 0.5}, {"sigma_angle_deg", 0.05}}, -1, -1));
+  spec.effects.push_back(EffectOf("image_noise", {{"sigma_levels", 2.0}}, -1, -1));
+  TwinCell plain(spec);
+  TwinSpec same = spec;
+  same.noise_seed = spec.seed;
+  TwinSpec other = spec;
+  other.noise_seed = spec.seed + 1000;
+  TwinCell same_cell(same), other_cell(other);
+  const TwinTruth truth = plain.Truth();
+  for (const TwinCell* c : {&same_cell, &other_cell}) {
+    for (int k = 0; k < kMaxRobots; ++k) {
+      ASSERT_EQ(c->Truth().models[k].links.size(), truth.models[k].links.size());
+      for (std::size_t i = 0; i < truth.models[k].links.size(); ++i) {
+        EXPECT_EQ(c->Truth().models[k].links[i].dh.a, truth.models[k].links[i].dh.a);
+        EXPECT_EQ(c->Truth().models[k].links[i].dh.d, truth.models[k].links[i].dh.d);
+        EXPECT_EQ(c->Truth().models[k].links[i].dh.alpha, truth.models[k].links[i].dh.alpha);
+      }
+    }
+  }
+  const cv::Mat a = plain.GrabImage(), b = same_cell.GrabImage(), c = other_cell.GrabImage();
+  EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0.0);  // the default's noise, pixel for pixel
+  cv::Mat diff;
+  cv::absdiff(a, c, diff);
+  // sigma 2 grey levels: two independent draws differ in most pixels, by ~2.3 on average.
+  EXPECT_GT(cv::countNonZero(diff.reshape(1)), static_cast<int>(a.total()));
+  EXPECT_GT(cv::mean(diff)[0], 1.0);
+}
+
 TEST_F(TwinCellTest, StartsAtRestAtTheInitialPoseWithTheTrueGeometry) {
   const TwinSpec spec = DemoTwinSpec();
   TwinCell cell(spec);
