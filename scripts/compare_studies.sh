@@ -9,7 +9,8 @@
 # figures and verdict, and its exit status (0 accepted, 1 rejected, 2 bad input).
 # Usage: scripts/compare_studies.sh [--control] BEFORE_DIR AFTER_DIR [FIRST-LAST ...]
 #   (default ranges: 1-20 21-40 41-60); each DIR holds a study's trials.jsonl.
-#   --control: AFTER_DIR is a control study of another estimator seed (paired_verdict.py).
+#   --control: AFTER_DIR is a control study of another noise or estimator seed
+#   (paired_verdict.py --control: trials paired by their truth seed alone).
 set -euo pipefail
 VERDICT_ARGS=()
 if [ "${1:-}" = --control ]; then VERDICT_ARGS=(--control); shift; fi

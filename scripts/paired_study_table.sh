@@ -11,7 +11,7 @@
 #   TRIALS trials is tabled as it is, not run again). SCENARIO: a file of scenarios/ without .yaml,
 #   or BEFORE:AFTER, two such files (the before build runs the first, the after build the
 #   second; a control, with BEFORE_BIN = AFTER_BIN and the second differing in one setting, such
-#   as scenarios/controls/paper_reinovo_reseeded.yaml, whose trials share only their truth seeds
+#   as scenarios/controls/paper_reinovo_renoised.yaml, whose trials share only their truth seeds
 #   with the first's: compare_studies.sh --control). The studies are OUT/BEFORE_before and
 #   OUT/BEFORE_after, with any / of BEFORE written _.
 #   Exit 0 when every pair is accepted, 1 when one is not, 2 on bad input.
@@ -19,7 +19,7 @@
 #   NOTE: a line printed under the section's header (what ran beside the studies, ...).
 #   CONTROL=DIR CONTROL_NOTE=TEXT: a control of the first scenario, a study of TRIALS trials
 #   made by the before build with a change that should not matter (TEXT says which; the same
-#   truth seeds, the estimator's may differ): the rule
+#   truth seeds, the noise and estimator seeds may differ): the rule
 #   run on the before study against it follows the pair's, to show the rule's own scatter.
 #   Its verdict does not change the exit status.
 set -euo pipefail
@@ -105,7 +105,7 @@ status=0
     last=$((TRIALS - 1))
     half=$((TRIALS / 2))
     stem="$OUT/$(stem_of "$sc")"
-    control=()  # BEFORE:AFTER: a control; its trials share the truth seed, not the estimator's
+    control=()  # BEFORE:AFTER: a control; its trials share the truth seed only
     [[ "$sc" == *:* ]] && control=(--control)
     if scripts/compare_studies.sh ${control[@]+"${control[@]}"} "${stem}_before" "${stem}_after" "0-$((half - 1))" "$half-$last" 2>&1; then
       :

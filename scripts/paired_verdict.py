@@ -12,9 +12,9 @@ at least MIN_TRIALS paired trials:
      seed: the same figures on every run);
   2. the share of seeds whose robots all meet the accuracy targets (rigid <= 0.3 mm, similarity
      <= 0.1 mm; a failed trial meets nothing) does not fall;
-  (a trial that missed its scenario's acceptance targets, exit 3, ran to its report: its
-  figures count in 1-3 like any other's)
   3. no robot calibration goes above 0.6 mm rigid that was at or below it before.
+A trial that missed its scenario's acceptance targets (exit 3) ran to its report: its figures
+count in 1-3 like any other's.
 Run it on the paper scenario and on one other arm; a change is accepted where both are.
 
 For information, not in the verdict, it also prints the mean of the per-trial ratios with its
@@ -28,8 +28,8 @@ Usage: scripts/paired_verdict.py BEFORE_DIR AFTER_DIR [--min-trials N] [--contro
   Each DIR holds a study's trials.jsonl (docs/reference/report-json.md). Prints the figures and
   the verdict; exit 0 accepted, 1 rejected or too few paired trials, 2 bad input (a missing
   file, a line that is not JSON, or trials of the same number run on other seeds).
-  --control: the after study is a control that re-draws the estimator's randomness (another
-  estimator seed, scenarios/controls/): paired trials must share their truth seed only.
+  --control: the after study is a control run on another noise or estimator seed
+  (scenarios/controls/): paired trials must share their truth seed only.
 Standard library only.
 """
 import json
