@@ -93,16 +93,12 @@ if [ ${#CLEANS[@]} -gt 0 ]; then
   printf '\n' >> "$section.new"
 fi
 mv "$section.new" "$section"
-if [ -f "$DOC" ]; then
-  { sed -n '1,/^## /{/^## /!p}' "$DOC"; cat "$section"; sed -n '/^## /,$p' "$DOC"; } > "$DOC.new"
-else
-  { echo "# The oracle control of model discovery on the twin"
-    echo
-    echo "Written by \`scripts/discovery_oracle.sh\` (newest first). Each row: a scenario's trials run"
-    echo "as written and with the diagnosis told the injected term; what the columns mean is in"
-    echo "docs/explanation/discovery-statistics.md (\"The oracle control\")."
-    echo
-    cat "$section"; } > "$DOC.new"
-fi
-mv "$DOC.new" "$DOC"
+. scripts/lib/results_doc.sh
+insert_section "$DOC" "$section" <<'INTRO'
+# The oracle control of model discovery on the twin
+
+Written by `scripts/discovery_oracle.sh` (newest first). Each row: a scenario's trials run
+as written and with the diagnosis told the injected term; what the columns mean is in
+docs/explanation/discovery-statistics.md ("The oracle control").
+INTRO
 echo "wrote $DOC" >&2

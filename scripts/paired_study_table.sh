@@ -130,19 +130,15 @@ status=0
   done
   echo
 } >"$section"
-if [ -f "$DOC" ]; then
-  { sed -n '1,/^## /{/^## /!p}' "$DOC"; cat "$section"; sed -n '/^## /,$p' "$DOC"; } >"$DOC.new"
-else
-  { echo "# Paired studies of changes that move figures"
-    echo
-    echo "Written by \`scripts/paired_study_table.sh\` (newest first). Each section: a change's studies"
-    echo "before and after on the same trials, and the acceptance rule of issue 42"
-    echo "(scripts/paired_verdict.py, docs/explanation/studies.md) on each scenario. The times are"
-    echo "as the studies ran (two trial processes at a time); other work on the machine shows in them."
-    echo
-    cat "$section"; } >"$DOC.new"
-fi
-mv "$DOC.new" "$DOC"
+. scripts/lib/results_doc.sh
+insert_section "$DOC" "$section" <<'INTRO'
+# Paired studies of changes that move figures
+
+Written by `scripts/paired_study_table.sh` (newest first). Each section: a change's studies
+before and after on the same trials, and the acceptance rule of issue 42
+(scripts/paired_verdict.py, docs/explanation/studies.md) on each scenario. The times are
+as the studies ran (two trial processes at a time); other work on the machine shows in them.
+INTRO
 rm -f "$section"
 echo "wrote $DOC" >&2
 exit $status

@@ -117,12 +117,14 @@ class GivenTest(unittest.TestCase):
 
 
 class RowTest(unittest.TestCase):
+    def assert_row(self, search, given):
+        r = run(sys.executable, PY, "row", "s", search, given)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertEqual(r.stdout.strip(), EXPECTED_ROW)
+
     def test_the_counts_follow_from_the_built_trials(self):
         with tempfile.TemporaryDirectory() as d:
-            search, given = build_runs(d)
-            r = run(sys.executable, PY, "row", "s", search, given)
-            self.assertEqual(r.returncode, 0, r.stderr)
-            self.assertEqual(r.stdout.strip(), EXPECTED_ROW)
+            self.assert_row(*build_runs(d))
 
     def test_the_level_row_counts_every_candidate_of_every_first_fit(self):
         with tempfile.TemporaryDirectory() as d:
@@ -142,9 +144,7 @@ class RowTest(unittest.TestCase):
                         report = json.load(f)
                     with open(path, "w") as f:
                         json.dump({"diagnosis": report["robots"]["r2"]["diagnosis"]}, f)
-            r = run(sys.executable, PY, "row", "s", search, given)
-            self.assertEqual(r.returncode, 0, r.stderr)
-            self.assertEqual(r.stdout.strip(), EXPECTED_ROW)
+            self.assert_row(search, given)
 
     def test_other_trials_and_more_than_one_told_candidate_are_bad_input(self):
         with tempfile.TemporaryDirectory() as d:
