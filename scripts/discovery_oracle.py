@@ -117,10 +117,14 @@ def diagnoses(runs, robot):
     return out
 
 
+def first_candidates(d):
+    """The candidates fitted beside the starting model: the screen's or step 1's."""
+    return d.get("screened") or [c for c in d.get("candidates", []) if c.get("step") == 1]
+
+
 def first_fit(d):
-    """The identifiable candidates fitted beside the starting model: the screen's or step 1's."""
-    pool = d.get("screened") or [c for c in d.get("candidates", []) if c.get("step") == 1]
-    return [c for c in pool if c.get("identifiable") and c.get("visible_size_test")]
+    """Those of first_candidates with a size test on what the data see."""
+    return [c for c in first_candidates(d) if c.get("identifiable") and c.get("visible_size_test")]
 
 
 def row(a):
@@ -132,8 +136,7 @@ def row(a):
     named = named_joint = named_any = significant = bonferroni = first = blind = 0
     instead = collections.Counter()
     for t in sorted(search):
-        pool = [c for c in (told[t].get("screened") or told[t].get("candidates", []))
-                if c.get("step", 0) <= 1]
+        pool = first_candidates(told[t])
         if len(pool) != 1:
             fail(f"{a.given_runs}/{t}: the given run fitted {len(pool)} candidates, not 1")
         term = pool[0]
